@@ -1,0 +1,339 @@
+"""One PointFilter layer (docs/model-format.md §3) in PyTorch.
+
+Two implementations of the same op, both differentiable w.r.t. points and kernel tables:
+
+* ``impl="torch"``: plain autograd over the gathered neighbour pairs (the reference; runs on
+  CPU and CUDA).
+* ``impl="analytic"``: a ``torch.autograd.Function`` whose backward is the closed form of paper
+  Appendix A (adapted to the scale-aware radius and the normalised subspace sum). It is the
+  shape the C kernels will take.
+* ``impl="c"``: the libdpc kernels; raises ``NotImplementedError`` until the bindings exist.
+
+Memory is O(m · neighbours): candidate pairs are found without grad (a toroidal cell grid for
+subspaces of up to 3 dimensions, chunked all-pairs distances otherwise), only pairs inside the
+radius are kept, and the differentiable interaction is computed on those pairs only.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import torch
+
+# Max number of (i, j) candidates materialised at once in the chunked all-pairs search.
+_PAIR_CHUNK = 1 << 22
+
+
+class FilterConfigError(ValueError):
+    """A filter layer description that does not follow docs/model-format.md."""
+
+
+def mask_dims(mask: int, n: int) -> list[int]:
+    """Dimension indices of a subspace bitmask."""
+    return [k for k in range(n) if (mask >> k) & 1]
+
+
+def check_layer(n: int, kernels: torch.Tensor, subspaces, radius, eps: float, fixed: int) -> None:
+    """Validate a layer against the format's MUSTs (typed error, clear message)."""
+    s = len(subspaces)
+    if kernels.dim() != 2 or kernels.shape[0] != s:
+        raise FilterConfigError(f"kernels must be [s, b] with s = {s} subspaces, got "
+                                f"{tuple(kernels.shape)}")
+    if kernels.shape[1] < 2:
+        raise FilterConfigError(f"need at least 2 kernel bins, got {kernels.shape[1]}")
+    if len(radius) != s:
+        raise FilterConfigError(f"radius needs one entry per subspace ({s}), got {len(radius)}")
+    if len(set(int(m) for m in subspaces)) != s:
+        raise FilterConfigError(f"subspaces must be distinct, got {list(subspaces)}")
+    for mask in subspaces:
+        if int(mask) <= 0 or int(mask) >> n:
+            raise FilterConfigError(f"subspace mask {mask} is empty or uses dims >= n = {n}")
+    for r in radius:
+        if not (0 < float(r) <= 1e6) or not math.isfinite(float(r)):
+            raise FilterConfigError(f"radius must be in (0, 1e6], got {r}")
+    if not (eps >= 0 and math.isfinite(eps)):
+        raise FilterConfigError(f"eps must be finite and >= 0, got {eps}")
+    if fixed < 0 or fixed >> n:
+        raise FilterConfigError(f"fixed mask {fixed} uses dims >= n = {n}")
+
+
+def subspace_geometry(m: int, mask: int, n: int, rho: float, eps: float):
+    """(dims, h_t, r_t, e_t) of one subspace: spacing, radius and cutoff in absolute units."""
+    dims = mask_dims(mask, n)
+    h = float(m) ** (-1.0 / len(dims))
+    return dims, h, min(float(rho) * h, 0.5), float(eps) * h
+
+
+def _wrap_diff(d: torch.Tensor) -> torch.Tensor:
+    # Minimum-image difference in [-1/2, 1/2); floor has zero gradient, so d(δ)/d(x) = 1.
+    return d - torch.floor(d + 0.5)
+
+
+# ----------------------------------------------------------------------------------------
+# Neighbour search (no grad)
+# ----------------------------------------------------------------------------------------
+
+def _pairs_all(xs: torch.Tensor, r: float, e: float):
+    """All pairs (i, j) of one set with e < d < r, by chunked distance computation."""
+    m = xs.shape[0]
+    rows = max(1, _PAIR_CHUNK // max(m, 1))
+    out_i, out_j = [], []
+    for a in range(0, m, rows):
+        b = min(m, a + rows)
+        delta = _wrap_diff(xs[None, :, :] - xs[a:b, None, :])
+        d2 = (delta * delta).sum(-1)
+        ok = (d2 < r * r) & (d2 > e * e)
+        ii, jj = ok.nonzero(as_tuple=True)
+        out_i.append(ii + a)
+        out_j.append(jj)
+    return torch.cat(out_i), torch.cat(out_j)
+
+
+def _pairs_grid(x: torch.Tensor, r: float, e: float, g: int):
+    """Pairs with e < d < r for a whole batch x [B, m, k] via a toroidal grid of g^k cells
+    (side 1/g >= r) per set; indices address the flattened [B·m] points."""
+    bsz, m, k = x.shape
+    dev = x.device
+    xs = x.reshape(bsz * m, k)
+    cell = torch.clamp((xs * g).long(), 0, g - 1)  # [B·m, k]
+    strides = torch.tensor([g ** a for a in range(k)], device=dev)
+    setoff = torch.arange(bsz, device=dev).repeat_interleave(m) * g ** k
+    cid = (cell * strides).sum(-1) + setoff
+    order = torch.argsort(cid, stable=True)
+    counts = torch.bincount(cid, minlength=bsz * g ** k)
+    starts = torch.cumsum(counts, 0) - counts
+    cols = [xs[:, a].contiguous() for a in range(k)]
+    out_i, out_j = [], []
+    ar = torch.arange(bsz * m, device=dev)
+    for off in itertools.product((-1, 0, 1), repeat=k):
+        nb = (cell + torch.tensor(off, device=dev)) % g
+        nid = (nb * strides).sum(-1) + setoff
+        cnt = counts[nid]
+        tot = int(cnt.sum())
+        if tot == 0:
+            continue
+        ii = torch.repeat_interleave(ar, cnt, output_size=tot)
+        # position of each candidate inside its neighbour cell
+        first = torch.cumsum(cnt, 0) - cnt
+        # index_select is much faster than advanced indexing on CPU
+        pos = torch.arange(tot, device=dev) - first.index_select(0, ii)
+        jj = order.index_select(0, (starts.index_select(0, nid)).index_select(0, ii) + pos)
+        d2 = None
+        for col in cols:  # per-column 1-D gathers: faster than [N, k] rows + sum(-1)
+            dc = _wrap_diff(col.index_select(0, jj) - col.index_select(0, ii))
+            d2 = dc * dc if d2 is None else d2 + dc * dc
+        ok = ((d2 < r * r) & (d2 > e * e)).nonzero().squeeze(1)
+        out_i.append(ii.index_select(0, ok))
+        out_j.append(jj.index_select(0, ok))
+    if not out_i:
+        z = torch.zeros(0, dtype=torch.long, device=dev)
+        return z, z
+    return torch.cat(out_i), torch.cat(out_j)
+
+
+@torch.no_grad()
+def find_pairs(x: torch.Tensor, dims: list[int], r: float, e: float):
+    """Ordered pairs (i, j), i ≠ j implied by e ≥ 0, with e < d_t(x_i, x_j) < r over a batch.
+
+    x is [B, m, n]; returned indices address the flattened [B·m] points. Uses a cell grid when
+    it pays (≤ 3 dims, at least 3 cells per axis), else chunked all pairs.
+    """
+    bsz, m, _ = x.shape
+    g = int(math.floor(1.0 / r)) if r > 0 else 0
+    use_grid = len(dims) <= 3 and g >= 3 and m > 64
+    if use_grid:
+        return _pairs_grid(x[:, :, dims], r, e, g)
+    out_i, out_j = [], []
+    for bi in range(bsz):
+        ii, jj = _pairs_all(x[bi][:, dims], r, e)
+        out_i.append(ii + bi * m)
+        out_j.append(jj + bi * m)
+    return torch.cat(out_i), torch.cat(out_j)
+
+
+# ----------------------------------------------------------------------------------------
+# Forward pieces shared by both implementations
+# ----------------------------------------------------------------------------------------
+
+@dataclass
+class _Sub:
+    dims: list[int]
+    h: float
+    r: float
+    e: float
+    ii: torch.Tensor
+    jj: torch.Tensor
+
+
+def _prepare(x: torch.Tensor, subspaces, radius, eps: float):
+    _, m, n = x.shape
+    subs = []
+    for mask, rho in zip(subspaces, radius):
+        dims, h, r, e = subspace_geometry(m, int(mask), n, rho, eps)
+        ii, jj = find_pairs(x.detach(), dims, r, e)
+        subs.append(_Sub(dims, h, r, e, ii, jj))
+    return subs
+
+
+def _scale(n: int, subspaces, fixed: int, dtype, device) -> torch.Tensor:
+    """Per-dimension factor 1/c_k for moving dims, 0 for fixed or uncovered dims."""
+    c = [0] * n
+    for mask in subspaces:
+        for k in mask_dims(int(mask), n):
+            c[k] += 1
+    sc = [(1.0 / c[k]) if c[k] > 0 and not (fixed >> k) & 1 else 0.0 for k in range(n)]
+    return torch.tensor(sc, dtype=dtype, device=device)
+
+
+def _bins(d: torch.Tensor, r: float, b: int):
+    u = d * ((b - 1) / r)
+    q = torch.clamp(torch.floor(u), max=b - 2).long()
+    return q, u - q.to(u.dtype)
+
+
+def _wrap_points(y: torch.Tensor) -> torch.Tensor:
+    y = y - torch.floor(y)
+    # Float rounding can give exactly 1.0 for a tiny negative input: the format maps it to 0.
+    return torch.where(y >= 1.0, torch.zeros_like(y), y)
+
+
+def _as_batch(points: torch.Tensor):
+    if points.dim() == 2:
+        return points[None], True
+    if points.dim() == 3:
+        return points, False
+    raise FilterConfigError(f"points must be [m, n] or [batch, m, n], got {tuple(points.shape)}")
+
+
+# ----------------------------------------------------------------------------------------
+# impl="torch": autograd on gathered pairs
+# ----------------------------------------------------------------------------------------
+
+def _filter_torch(x: torch.Tensor, kernels: torch.Tensor, subspaces, radius, eps, fixed):
+    bsz, m, n = x.shape
+    flat = x.reshape(bsz * m, n)
+    b = kernels.shape[1]
+    scale = _scale(n, subspaces, fixed, x.dtype, x.device)
+    total = torch.zeros_like(flat)
+    for t, sub in enumerate(_prepare(x, subspaces, radius, eps)):
+        if sub.ii.numel() == 0:
+            continue
+        dims = torch.tensor(sub.dims, device=x.device)
+        xd = flat.index_select(1, dims)
+        delta = _wrap_diff(xd.index_select(0, sub.jj) - xd.index_select(0, sub.ii))
+        d = torch.sqrt((delta * delta).sum(-1))
+        q, f = _bins(d.detach(), sub.r, b)
+        # f is recomputed with grad so that dg/dd flows (u − q with q constant)
+        f = d * ((b - 1) / sub.r) - q.to(d.dtype)
+        w = kernels[t]
+        w0, w1 = w.index_select(0, q), w.index_select(0, q + 1)
+        g = w0 + f * (w1 - w0)
+        contrib = (sub.h * g / d)[:, None] * delta
+        acc = torch.zeros(bsz * m, len(sub.dims), dtype=x.dtype, device=x.device)
+        acc = acc.index_add(0, sub.ii, contrib)
+        total = total.index_add(1, dims, acc)
+    return _wrap_points(flat + total * scale).reshape(bsz, m, n)
+
+
+# ----------------------------------------------------------------------------------------
+# impl="analytic": closed-form backward (paper Appendix A)
+# ----------------------------------------------------------------------------------------
+
+class _FilterAnalytic(torch.autograd.Function):
+    """Forward as §3; backward from the closed form (no autograd graph over pairs).
+
+    For a pair (i, j) in subspace t with δ = x_j ⊖ x_i (over D_t), d = |δ|, the contribution to
+    point i is v = h·g(d)·δ/d with g'(d) = (w[q+1] − w[q])·(b−1)/r. With G = ∂L/∂y scaled by
+    1/c_k (0 on fixed dims), a = ∂L/∂δ = h·[g'·(G·δ)·δ/d² + g·(G/d − (G·δ)·δ/d³)];
+    ∂L/∂x_j += a, ∂L/∂x_i −= a; ∂L/∂w[q] += h(1−f)(G·δ)/d, ∂L/∂w[q+1] += h·f·(G·δ)/d.
+    """
+
+    @staticmethod
+    def forward(ctx, x, kernels, subspaces, radius, eps, fixed):
+        bsz, m, n = x.shape
+        b = kernels.shape[1]
+        flat = x.reshape(bsz * m, n)
+        scale = _scale(n, subspaces, fixed, x.dtype, x.device)
+        total = torch.zeros_like(flat)
+        saved = []
+        for t, sub in enumerate(_prepare(x, subspaces, radius, eps)):
+            dims = torch.tensor(sub.dims, device=x.device, dtype=torch.long)
+            xd = flat.index_select(1, dims)
+            delta = _wrap_diff(xd.index_select(0, sub.jj) - xd.index_select(0, sub.ii))
+            d = torch.sqrt((delta * delta).sum(-1))
+            q, f = _bins(d, sub.r, b)
+            w = kernels[t]
+            w0, w1 = w.index_select(0, q), w.index_select(0, q + 1)
+            g = w0 + f * (w1 - w0)
+            contrib = (sub.h * g / d)[:, None] * delta
+            acc = torch.zeros(bsz * m, len(sub.dims), dtype=x.dtype, device=x.device)
+            acc.index_add_(0, sub.ii, contrib)
+            total.index_add_(1, dims, acc)
+            saved.append((sub, dims, delta, d, q, f, g))
+        ctx.saved = saved
+        ctx.meta = (bsz, m, n, b)
+        ctx.save_for_backward(kernels, scale)
+        return _wrap_points(flat + total * scale).reshape(bsz, m, n)
+
+    @staticmethod
+    def backward(ctx, grad_out):
+        kernels, scale = ctx.saved_tensors
+        bsz, m, n, b = ctx.meta
+        gy = grad_out.reshape(bsz * m, n)
+        gx = gy.clone()  # the residual path: y = x + Δ (wrap has unit derivative)
+        gs = gy * scale
+        gk = torch.zeros_like(kernels)
+        for t, (sub, dims, delta, d, q, f, g) in enumerate(ctx.saved):
+            if sub.ii.numel() == 0:
+                continue
+            w = kernels[t]
+            gi = gs.index_select(1, dims).index_select(0, sub.ii)  # ∂L/∂v for each pair
+            gdot = (gi * delta).sum(-1)                             # G·δ
+            dg = (w.index_select(0, q + 1) - w.index_select(0, q)) * ((b - 1) / sub.r)  # g'(d)
+            coef_d = sub.h * (dg * gdot / (d * d) - g * gdot / (d * d * d))
+            a = coef_d[:, None] * delta + (sub.h * g / d)[:, None] * gi
+            accj = torch.zeros(bsz * m, len(sub.dims), dtype=gy.dtype, device=gy.device)
+            accj.index_add_(0, sub.jj, a)
+            accj.index_add_(0, sub.ii, -a)
+            gx.index_add_(1, dims, accj)
+            base = sub.h * gdot / d
+            gk[t].index_add_(0, q, base * (1 - f))
+            gk[t].index_add_(0, q + 1, base * f)
+        return gx.reshape(bsz, m, n), gk, None, None, None, None
+
+
+# ----------------------------------------------------------------------------------------
+# Public entry point
+# ----------------------------------------------------------------------------------------
+
+IMPLS = ("torch", "analytic", "c")
+
+
+def filter_layer(points: torch.Tensor, kernels: torch.Tensor, subspaces, radius,
+                 eps: float = 1e-4, fixed: int = 0, impl: str = "torch") -> torch.Tensor:
+    """Apply one PointFilter layer (docs/model-format.md §3).
+
+    points: [m, n] or [batch, m, n] in [0, 1); kernels: [s, b] (kernel values in units of the
+    subspace's mean spacing); subspaces: s bitmasks; radius: s values ρ_t (in spacings);
+    eps: cutoff in spacings; fixed: bitmask of dims that never move.
+    """
+    x, squeeze = _as_batch(points)
+    check_layer(x.shape[-1], kernels, subspaces, radius, float(eps), int(fixed))
+    if kernels.dtype != x.dtype:
+        raise FilterConfigError(f"kernels dtype {kernels.dtype} != points dtype {x.dtype}")
+    subspaces = tuple(int(s) for s in subspaces)
+    radius = tuple(float(r) for r in radius)
+    if impl == "torch":
+        y = _filter_torch(x, kernels, subspaces, radius, float(eps), int(fixed))
+    elif impl == "analytic":
+        y = _FilterAnalytic.apply(x, kernels, subspaces, radius, float(eps), int(fixed))
+    elif impl == "c":
+        raise NotImplementedError(
+            "filter_layer(impl='c') needs the libdpc training kernels exposed by the dpc "
+            "bindings (forward/backward of one PointFilter layer); they do not exist yet. "
+            "Use impl='torch' (autograd reference) or impl='analytic' (closed-form backward).")
+    else:
+        raise FilterConfigError(f"impl must be one of {IMPLS}, got {impl!r}")
+    return y[0] if squeeze else y
