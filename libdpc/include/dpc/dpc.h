@@ -1,0 +1,186 @@
+/*
+ * dpc.h: the one public header of libdpc, the Deep Point Correlation runtime.
+ *
+ * libdpc loads a trained point-pattern model (an ONNX file, see docs/model-format.md) and
+ * generates point sets with it: uniform random points from a counter-based generator are pushed
+ * through the model's cascade of distance-based point filters.
+ *
+ * Conventions (stated once, they hold for every call):
+ * - Every fallible call returns a dpc_status. DPC_OK is 0. On failure a message describing the
+ *   problem is kept per thread; dpc_last_error() returns it until the next failing call on that
+ *   thread. libdpc never prints, aborts or exits.
+ * - Points are float32, row-major (m, n): point i, dimension k is out[i * n + k], in [0, 1).
+ * - Handles are opaque. dpc_model_free(NULL) is a no-op. Output buffers belong to the caller.
+ * - A loaded model is immutable: any number of threads may call any function on the same model
+ *   at the same time. Results are a pure function of (model file, seed, point count) and are
+ *   bit-identical across runs and thread counts for one build and one ISA path.
+ * - The header is C99 and C++ clean.
+ */
+#ifndef DPC_DPC_H
+#define DPC_DPC_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#if defined(DPC_STATIC_DEFINE)
+#define DPC_API
+#elif defined(_WIN32)
+#ifdef DPC_BUILDING
+#define DPC_API __declspec(dllexport)
+#else
+#define DPC_API __declspec(dllimport)
+#endif
+#else
+#define DPC_API __attribute__((visibility("default")))
+#endif
+
+/* ---------------------------------------------------------------------------------------------
+ * Version
+ * ------------------------------------------------------------------------------------------- */
+
+#define DPC_VERSION_MAJOR 0
+#define DPC_VERSION_MINOR 1
+#define DPC_VERSION_PATCH 0
+#define DPC_VERSION_NUMBER (DPC_VERSION_MAJOR * 10000 + DPC_VERSION_MINOR * 100 + DPC_VERSION_PATCH)
+
+/* The model-file format version this build reads (the "ai.dpc" opset version). */
+#define DPC_FORMAT_VERSION 1
+
+/* Runtime version: DPC_VERSION_NUMBER of the library actually linked. */
+DPC_API unsigned dpc_version_number(void);
+/* Runtime version as a static string, e.g. "0.1.0". */
+DPC_API const char *dpc_version_string(void);
+
+/* ---------------------------------------------------------------------------------------------
+ * Status and errors
+ * ------------------------------------------------------------------------------------------- */
+
+/* Values are pinned: they never change meaning between releases. */
+typedef enum dpc_status {
+    DPC_OK = 0,
+    DPC_ERROR_INVALID_ARGUMENT = 1, /* NULL pointer, zero or out-of-range count, bad option */
+    DPC_ERROR_IO = 2,               /* file could not be opened or read */
+    DPC_ERROR_FORMAT = 3,           /* file is not a valid dpc model (malformed, truncated, hostile) */
+    DPC_ERROR_UNSUPPORTED = 4,      /* valid file or request this build cannot serve (version, ISA) */
+    DPC_ERROR_OUT_OF_MEMORY = 5,    /* an allocation failed */
+    DPC_ERROR_LIMIT = 6,            /* request exceeds a documented limit (e.g. point count) */
+    DPC_ERROR_INTERNAL = 7          /* a bug in libdpc: please report it */
+} dpc_status;
+
+/* Detail of the last failure on the calling thread ("" if none). The string stays valid until the
+ * next libdpc call on this thread. */
+DPC_API const char *dpc_last_error(void);
+/* Static, human-readable name of a status code ("DPC_ERROR_FORMAT", ...). */
+DPC_API const char *dpc_status_string(dpc_status status);
+
+/* ---------------------------------------------------------------------------------------------
+ * Loading a model
+ * ------------------------------------------------------------------------------------------- */
+
+typedef struct dpc_model dpc_model;
+
+/* Which CPU code path runs the filters. AUTO picks the best the CPU supports (cpuid), unless the
+ * environment variable DPC_ISA is "scalar" or "avx2". */
+typedef enum dpc_isa {
+    DPC_ISA_AUTO = 0,
+    DPC_ISA_SCALAR = 1, /* portable reference path */
+    DPC_ISA_AVX2 = 2    /* x86-64 AVX2 + FMA */
+} dpc_isa;
+
+/* Options fixed at load time. Initialise with dpc_load_options_init(). */
+typedef struct dpc_load_options {
+    uint32_t struct_size; /* sizeof(dpc_load_options), set by dpc_load_options_init */
+    dpc_isa isa;          /* default DPC_ISA_AUTO */
+    /* Worker threads one generate call may use: 1 (default) runs on the calling thread only;
+     * 0 means one per online CPU. Output bits do not depend on this. */
+    uint32_t threads;
+} dpc_load_options;
+
+/* Fill *options with the defaults. */
+DPC_API void dpc_load_options_init(dpc_load_options *options);
+
+/* Load a model file. options may be NULL (defaults). On success *out_model is a new handle; on
+ * failure it is set to NULL. */
+DPC_API dpc_status dpc_model_load_file(const char *path, const dpc_load_options *options,
+                                       dpc_model **out_model);
+/* Load a model from memory. The bytes are parsed and not retained after the call returns. */
+DPC_API dpc_status dpc_model_load_memory(const void *data, size_t size,
+                                         const dpc_load_options *options, dpc_model **out_model);
+/* Release a model. NULL is a no-op. No call may use the model during or after this one. */
+DPC_API void dpc_model_free(dpc_model *model);
+
+/* ---------------------------------------------------------------------------------------------
+ * Model information
+ * ------------------------------------------------------------------------------------------- */
+
+#define DPC_MAX_DIMS 64
+
+typedef struct dpc_model_info {
+    uint32_t dims;         /* n: dimensions of each point */
+    uint32_t n_points;     /* m the model was trained for (dpc_generate's count) */
+    uint32_t layers;       /* filter layers in the cascade */
+    uint32_t grid_dims;    /* number of gridded (fixed) dimensions, 0 if none */
+    /* For each gridded dimension g < grid_dims: its index and cell count. A gridded model always
+     * generates exactly the product of grid_shape points. */
+    uint32_t grid_axis[DPC_MAX_DIMS];
+    uint32_t grid_shape[DPC_MAX_DIMS];
+    dpc_isa isa;           /* the ISA path this handle runs (never DPC_ISA_AUTO) */
+    uint32_t threads;      /* worker threads this handle uses (0 resolved to the CPU count) */
+} dpc_model_info;
+
+DPC_API dpc_status dpc_model_get_info(const dpc_model *model, dpc_model_info *out_info);
+
+/* Model name (metadata "dpc.name"), or "" when the file has none. Valid while the model lives. */
+DPC_API const char *dpc_model_name(const dpc_model *model);
+/* Metadata value for key, or NULL if absent. Valid while the model lives. */
+DPC_API const char *dpc_model_metadata(const dpc_model *model, const char *key);
+/* Number of metadata entries, and entry i (0 <= i < count) by key and value. */
+DPC_API size_t dpc_model_metadata_count(const dpc_model *model);
+DPC_API dpc_status dpc_model_metadata_at(const dpc_model *model, size_t index, const char **out_key,
+                                         const char **out_value);
+
+/* ---------------------------------------------------------------------------------------------
+ * Generating point sets
+ * ------------------------------------------------------------------------------------------- */
+
+/* Largest point count one set may have. */
+#define DPC_MAX_POINTS (1u << 26)
+
+/* Floats needed for count sets of n_points points (count * n_points * dims); 0 on overflow. */
+DPC_API size_t dpc_output_size(const dpc_model *model, size_t count, size_t n_points);
+
+/* Generate the model's trained point count (info.n_points) from seed: out holds n_points * dims
+ * floats. Any seed, 0 included, is valid. */
+DPC_API dpc_status dpc_generate(const dpc_model *model, uint64_t seed, float *out);
+
+/* Generate n_points points (0 = the trained count). Radii scale with the point count (see
+ * docs/model-format.md), so counts other than the trained one are served; quality away from the
+ * trained count is measured in docs/models.md. Gridded models accept only their grid's count. */
+DPC_API dpc_status dpc_generate_n(const dpc_model *model, uint64_t seed, size_t n_points, float *out);
+
+/* Generate count independent sets into out (count * n_points * dims floats): set c is exactly
+ * dpc_generate_n(model, seed + c, n_points, ...) (seed arithmetic wraps modulo 2^64). */
+DPC_API dpc_status dpc_generate_batch(const dpc_model *model, uint64_t seed, size_t count,
+                                      size_t n_points, float *out);
+
+/* Run the model's cascade on caller-provided points (in place): points holds n_points * dims
+ * finite floats; gridded dimensions are left as given. */
+DPC_API dpc_status dpc_filter(const dpc_model *model, size_t n_points, float *points);
+
+/* ---------------------------------------------------------------------------------------------
+ * The input generator (documented in docs/model-format.md, "Input points")
+ * ------------------------------------------------------------------------------------------- */
+
+/* Fill out[0 .. n_points * dims) with the uniform input points of seed: value c (row-major index)
+ * is (splitmix64 output number c of the stream seeded by seed) >> 40, times 2^-24. */
+DPC_API dpc_status dpc_uniform(uint64_t seed, size_t n_points, size_t dims, float *out);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* DPC_DPC_H */

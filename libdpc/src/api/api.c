@@ -1,0 +1,305 @@
+/* The only file on the ABI boundary: checks every argument, turns every failure into a status
+ * with a message, and hands valid requests to the model and the backend. */
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "common/error.h"
+#include "common/rng.h"
+#include "cpu/cpu_cascade.h"
+#include "model/model.h"
+
+#define MAX_FLOATS_PER_SET (1ull << 28) /* n_points * dims: 1 GiB of floats */
+
+struct dpc_model {
+    dpc_cascade cascade;
+    dpc_cpu_engine engine;
+};
+
+#define STR2(x) #x
+#define STR(x) STR2(x)
+
+unsigned dpc_version_number(void) { return DPC_VERSION_NUMBER; }
+
+const char *dpc_version_string(void) {
+    return STR(DPC_VERSION_MAJOR) "." STR(DPC_VERSION_MINOR) "." STR(DPC_VERSION_PATCH);
+}
+
+const char *dpc_status_string(dpc_status status) {
+    switch (status) {
+    case DPC_OK: return "DPC_OK";
+    case DPC_ERROR_INVALID_ARGUMENT: return "DPC_ERROR_INVALID_ARGUMENT";
+    case DPC_ERROR_IO: return "DPC_ERROR_IO";
+    case DPC_ERROR_FORMAT: return "DPC_ERROR_FORMAT";
+    case DPC_ERROR_UNSUPPORTED: return "DPC_ERROR_UNSUPPORTED";
+    case DPC_ERROR_OUT_OF_MEMORY: return "DPC_ERROR_OUT_OF_MEMORY";
+    case DPC_ERROR_LIMIT: return "DPC_ERROR_LIMIT";
+    case DPC_ERROR_INTERNAL: return "DPC_ERROR_INTERNAL";
+    }
+    return "DPC_ERROR_UNKNOWN";
+}
+
+void dpc_load_options_init(dpc_load_options *options) {
+    if (!options) return;
+    memset(options, 0, sizeof *options);
+    options->struct_size = (uint32_t)sizeof *options;
+    options->isa = DPC_ISA_AUTO;
+    options->threads = 1;
+}
+
+/* ---- loading ----------------------------------------------------------------------------- */
+
+dpc_status dpc_model_load_memory(const void *data, size_t size, const dpc_load_options *options,
+                                 dpc_model **out_model) {
+    dpc_clear_error();
+    if (!out_model) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "out_model is NULL");
+    *out_model = NULL;
+    if (!data && size) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "data is NULL");
+    dpc_load_options opts;
+    dpc_load_options_init(&opts);
+    if (options) {
+        if (options->struct_size != sizeof opts)
+            return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
+                            "options.struct_size is %u, expected %u: initialise with dpc_load_options_init",
+                            options->struct_size, (unsigned)sizeof opts);
+        opts = *options;
+    }
+    dpc_model *model = (dpc_model *)calloc(1, sizeof *model);
+    if (!model) return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory");
+    dpc_status st = dpc_cpu_engine_init(&model->engine, opts.isa, opts.threads);
+    if (st == DPC_OK) st = dpc_cascade_parse((const uint8_t *)data, size, &model->cascade);
+    if (st != DPC_OK) {
+        free(model);
+        return st;
+    }
+    *out_model = model;
+    return DPC_OK;
+}
+
+dpc_status dpc_model_load_file(const char *path, const dpc_load_options *options, dpc_model **out_model) {
+    dpc_clear_error();
+    if (!out_model) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "out_model is NULL");
+    *out_model = NULL;
+    if (!path) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "path is NULL");
+    FILE *f = fopen(path, "rb");
+    if (!f) return dpc_fail(DPC_ERROR_IO, "cannot open model file '%.300s'", path);
+    long size = -1;
+    if (fseek(f, 0, SEEK_END) == 0) size = ftell(f);
+    if (size < 0 || fseek(f, 0, SEEK_SET) != 0) {
+        fclose(f);
+        return dpc_fail(DPC_ERROR_IO, "cannot read model file '%.300s' (not a regular file?)", path);
+    }
+    if ((unsigned long long)size > DPC_MAX_FILE_BYTES) {
+        fclose(f);
+        return dpc_fail(DPC_ERROR_LIMIT, "model file '%.300s' is larger than 1 GiB", path);
+    }
+    void *buf = malloc(size ? (size_t)size : 1);
+    if (!buf) {
+        fclose(f);
+        return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory reading '%.300s'", path);
+    }
+    size_t got = fread(buf, 1, (size_t)size, f);
+    fclose(f);
+    if (got != (size_t)size) {
+        free(buf);
+        return dpc_fail(DPC_ERROR_IO, "short read of model file '%.300s'", path);
+    }
+    dpc_status st = dpc_model_load_memory(buf, (size_t)size, options, out_model);
+    free(buf);
+    if (st != DPC_OK) {
+        /* Prefix the file name to the reader's message. */
+        char msg[512];
+        snprintf(msg, sizeof msg, "%s", dpc_last_error());
+        return dpc_fail(st, "%.200s: %s", path, msg);
+    }
+    return DPC_OK;
+}
+
+void dpc_model_free(dpc_model *model) {
+    if (!model) return;
+    dpc_cascade_release(&model->cascade);
+    free(model);
+}
+
+/* ---- information ------------------------------------------------------------------------- */
+
+dpc_status dpc_model_get_info(const dpc_model *model, dpc_model_info *out_info) {
+    dpc_clear_error();
+    if (!model || !out_info) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "model or out_info is NULL");
+    const dpc_cascade *c = &model->cascade;
+    memset(out_info, 0, sizeof *out_info);
+    out_info->dims = c->dims;
+    out_info->n_points = c->n_points;
+    out_info->layers = c->n_layers;
+    out_info->grid_dims = c->grid_dims;
+    for (uint32_t g = 0; g < c->grid_dims; g++) {
+        out_info->grid_axis[g] = c->grid_axis[g];
+        out_info->grid_shape[g] = c->grid_shape[g];
+    }
+    out_info->isa = model->engine.isa;
+    out_info->threads = model->engine.threads;
+    return DPC_OK;
+}
+
+const char *dpc_model_name(const dpc_model *model) {
+    if (!model) return "";
+    const char *v = dpc_cascade_meta(&model->cascade, "dpc.name");
+    return v ? v : "";
+}
+
+const char *dpc_model_metadata(const dpc_model *model, const char *key) {
+    if (!model || !key) return NULL;
+    return dpc_cascade_meta(&model->cascade, key);
+}
+
+size_t dpc_model_metadata_count(const dpc_model *model) { return model ? model->cascade.n_meta : 0; }
+
+dpc_status dpc_model_metadata_at(const dpc_model *model, size_t index, const char **out_key,
+                                 const char **out_value) {
+    dpc_clear_error();
+    if (!model || !out_key || !out_value) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "NULL argument");
+    if (index >= model->cascade.n_meta)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "metadata index %zu out of range (%zu entries)", index,
+                        model->cascade.n_meta);
+    *out_key = model->cascade.meta_keys[index];
+    *out_value = model->cascade.meta_values[index];
+    return DPC_OK;
+}
+
+/* ---- generation -------------------------------------------------------------------------- */
+
+static void fill_uniform(uint64_t seed, size_t count, float *out) {
+    const uint64_t state0 = dpc_mix64(seed);
+    for (size_t c = 0; c < count; c++) out[c] = dpc_uniform_at(state0, c);
+}
+
+dpc_status dpc_uniform(uint64_t seed, size_t n_points, size_t dims, float *out) {
+    dpc_clear_error();
+    if (!out) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "out is NULL");
+    if (n_points == 0 || dims == 0) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "n_points and dims must be positive");
+    if (n_points > SIZE_MAX / dims) return dpc_fail(DPC_ERROR_LIMIT, "n_points * dims overflows");
+    fill_uniform(seed, n_points * dims, out);
+    return DPC_OK;
+}
+
+/* Resolve and check the point count of a request. */
+static dpc_status check_count(const dpc_model *model, size_t *n_points) {
+    const dpc_cascade *c = &model->cascade;
+    size_t m = *n_points ? *n_points : c->n_points;
+    if (m > DPC_MAX_POINTS) return dpc_fail(DPC_ERROR_LIMIT, "%zu points requested, at most %u per set", m, DPC_MAX_POINTS);
+    if ((unsigned long long)m * c->dims > MAX_FLOATS_PER_SET)
+        return dpc_fail(DPC_ERROR_LIMIT, "%zu points x %u dims exceeds 2^28 floats per set", m, c->dims);
+    if (c->grid_dims && m != c->n_points)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "gridded model generates exactly %u points, %zu requested",
+                        c->n_points, m);
+    *n_points = m;
+    return DPC_OK;
+}
+
+static void fill_grid(const dpc_cascade *c, size_t m, float *x) {
+    for (size_t i = 0; i < m; i++) {
+        size_t rest = i;
+        for (uint32_t g = 0; g < c->grid_dims; g++) {
+            size_t cell = rest % c->grid_shape[g];
+            rest /= c->grid_shape[g];
+            x[i * c->dims + c->grid_axis[g]] = (float)(((double)cell + 0.5) / c->grid_shape[g]);
+        }
+    }
+}
+
+static dpc_status generate_one(const dpc_model *model, const dpc_cpu_engine *engine, uint64_t seed,
+                               size_t m, float *out) {
+    const dpc_cascade *c = &model->cascade;
+    fill_uniform(seed, m * c->dims, out);
+    fill_grid(c, m, out);
+    return dpc_cpu_filter(c, engine, m, out);
+}
+
+dpc_status dpc_generate_n(const dpc_model *model, uint64_t seed, size_t n_points, float *out) {
+    dpc_clear_error();
+    if (!model || !out) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "model or out is NULL");
+    dpc_status st = check_count(model, &n_points);
+    if (st != DPC_OK) return st;
+    return generate_one(model, &model->engine, seed, n_points, out);
+}
+
+dpc_status dpc_generate(const dpc_model *model, uint64_t seed, float *out) {
+    return dpc_generate_n(model, seed, 0, out);
+}
+
+size_t dpc_output_size(const dpc_model *model, size_t count, size_t n_points) {
+    if (!model) return 0;
+    size_t m = n_points ? n_points : model->cascade.n_points;
+    size_t per = m * model->cascade.dims;
+    if (m && per / m != model->cascade.dims) return 0;
+    if (count && per > SIZE_MAX / count) return 0;
+    return per * count;
+}
+
+/* Batches: with several threads, whole sets go to threads (set c always from seed + c, so the
+ * bits are those of the serial loop). */
+typedef struct batch_job {
+    const dpc_model *model;
+    dpc_cpu_engine engine; /* single-threaded copy */
+    uint64_t seed;
+    size_t count, m, stride, next_step, first;
+    float *out;
+    dpc_status status;
+} batch_job;
+
+static void *batch_worker(void *arg) {
+    batch_job *j = (batch_job *)arg;
+    for (size_t c = j->first; c < j->count && j->status == DPC_OK; c += j->next_step)
+        j->status = generate_one(j->model, &j->engine, j->seed + c, j->m, j->out + c * j->stride);
+    return NULL;
+}
+
+dpc_status dpc_generate_batch(const dpc_model *model, uint64_t seed, size_t count, size_t n_points, float *out) {
+    dpc_clear_error();
+    if (!model || !out) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "model or out is NULL");
+    if (count == 0) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "count must be positive");
+    dpc_status st = check_count(model, &n_points);
+    if (st != DPC_OK) return st;
+    const size_t stride = n_points * model->cascade.dims;
+    if (count > SIZE_MAX / stride) return dpc_fail(DPC_ERROR_LIMIT, "count * n_points * dims overflows");
+    unsigned threads = model->engine.threads;
+    if (threads > count) threads = (unsigned)count;
+    if (threads <= 1 || n_points >= 65536) { /* big sets parallelise inside each set instead */
+        for (size_t c = 0; c < count; c++)
+            if ((st = generate_one(model, &model->engine, seed + c, n_points, out + c * stride)) != DPC_OK) return st;
+        return DPC_OK;
+    }
+    batch_job jobs[64];
+    pthread_t ids[64];
+    int started[64];
+    for (unsigned t = 0; t < threads; t++) {
+        jobs[t] = (batch_job){model, model->engine, seed, count, n_points, stride, threads, t, out, DPC_OK};
+        jobs[t].engine.threads = 1;
+    }
+    for (unsigned t = 1; t < threads; t++) started[t] = pthread_create(&ids[t], NULL, batch_worker, &jobs[t]) == 0;
+    batch_worker(&jobs[0]);
+    for (unsigned t = 1; t < threads; t++) {
+        if (started[t]) pthread_join(ids[t], NULL);
+        else batch_worker(&jobs[t]);
+    }
+    for (unsigned t = 0; t < threads; t++)
+        if (jobs[t].status != DPC_OK)
+            return dpc_fail(jobs[t].status, "generating a set of the batch failed (%s)", dpc_status_string(jobs[t].status));
+    return DPC_OK;
+}
+
+dpc_status dpc_filter(const dpc_model *model, size_t n_points, float *points) {
+    dpc_clear_error();
+    if (!model || !points) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "model or points is NULL");
+    if (n_points == 0) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "n_points must be positive");
+    dpc_status st = check_count(model, &n_points);
+    if (st != DPC_OK) return st;
+    const size_t total = n_points * model->cascade.dims;
+    for (size_t i = 0; i < total; i++)
+        if (!(points[i] >= 0.0f && points[i] < 1.0f))
+            return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "point %zu, dimension %zu is %g: points must lie in [0, 1)",
+                            i / model->cascade.dims, i % model->cascade.dims, (double)points[i]);
+    return dpc_cpu_filter(&model->cascade, &model->engine, n_points, points);
+}

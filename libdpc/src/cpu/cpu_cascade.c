@@ -1,0 +1,293 @@
+/* CPU backend: runs a cascade on one point set in place (docs/model-format.md §3).
+ *
+ * Per layer and subspace, candidates come from a toroidal cell grid over the subspace's dims
+ * (points counting-sorted by cell, coordinates copied structure-of-arrays so each row of
+ * neighbouring cells is one contiguous index range), or from all pairs where the grid does not
+ * pay (few points, high-dimensional subspaces, radius near the domain size). Each point's sum is
+ * computed by exactly one thread in a fixed order, so the bits do not depend on the thread count. */
+#include "cpu/cpu_cascade.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "common/error.h"
+
+#define MAX_RANGES 512u          /* index ranges per point (2 per row of cells) */
+#define PARALLEL_MIN_POINTS 8192 /* below this, threads cost more than they save */
+
+typedef struct workspace {
+    size_t m, n;
+    float *delta;         /* m * n: summed subspace displacements */
+    float *soa;           /* n * m: coordinates of the current subspace, sorted */
+    uint32_t *perm;       /* m: sorted position -> point index */
+    uint32_t *cell_of;    /* m: cell id of each point */
+    uint32_t *cell_start; /* cells + 1 */
+    size_t cell_cap;
+} workspace;
+
+static void workspace_free(workspace *w) {
+    free(w->delta);
+    free(w->soa);
+    free(w->perm);
+    free(w->cell_of);
+    free(w->cell_start);
+}
+
+static dpc_status workspace_init(workspace *w, size_t m, size_t n) {
+    memset(w, 0, sizeof *w);
+    w->m = m;
+    w->n = n;
+    w->cell_cap = 2 * m + 64;
+    w->delta = (float *)malloc(m * n * sizeof(float));
+    w->soa = (float *)malloc(m * n * sizeof(float));
+    w->perm = (uint32_t *)malloc(m * sizeof(uint32_t));
+    w->cell_of = (uint32_t *)malloc(m * sizeof(uint32_t));
+    w->cell_start = (uint32_t *)malloc((w->cell_cap + 1) * sizeof(uint32_t));
+    if (!w->delta || !w->soa || !w->perm || !w->cell_of || !w->cell_start) {
+        workspace_free(w);
+        return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory for a %zu x %zu point set", m, n);
+    }
+    return DPC_OK;
+}
+
+/* ---- a minimal parallel-for over index ranges -------------------------------------------- */
+
+typedef void (*range_fn)(void *ctx, size_t lo, size_t hi);
+
+typedef struct chunk {
+    range_fn fn;
+    void *ctx;
+    size_t lo, hi;
+} chunk;
+
+static void *chunk_main(void *arg) {
+    chunk *c = (chunk *)arg;
+    c->fn(c->ctx, c->lo, c->hi);
+    return NULL;
+}
+
+static void parallel_for(unsigned threads, size_t n, range_fn fn, void *ctx) {
+    if (threads > 64) threads = 64;
+    if (threads <= 1 || n < PARALLEL_MIN_POINTS) {
+        fn(ctx, 0, n);
+        return;
+    }
+    chunk chunks[64];
+    pthread_t ids[64];
+    int started[64];
+    for (unsigned t = 0; t < threads; t++) {
+        chunks[t].fn = fn;
+        chunks[t].ctx = ctx;
+        chunks[t].lo = n * t / threads;
+        chunks[t].hi = n * (t + 1) / threads;
+    }
+    for (unsigned t = 1; t < threads; t++)
+        started[t] = pthread_create(&ids[t], NULL, chunk_main, &chunks[t]) == 0;
+    fn(ctx, chunks[0].lo, chunks[0].hi);
+    for (unsigned t = 1; t < threads; t++) {
+        if (started[t]) pthread_join(ids[t], NULL);
+        else chunk_main(&chunks[t]); /* no thread to be had: do the work here */
+    }
+}
+
+/* ---- one subspace of one layer ----------------------------------------------------------- */
+
+typedef struct sub_pass {
+    const dpc_cpu_engine *engine;
+    workspace *ws;
+    dpc_sub_job job;
+    unsigned dim[DPC_MAX_DIMS]; /* subspace dimension q -> point dimension */
+    float h;                    /* mean spacing of the subspace */
+    int grid;                   /* 0: all pairs */
+    uint32_t G, R;              /* cells per axis, cell offsets searched per axis */
+} sub_pass;
+
+/* Decide between the cell grid and all pairs, and pick the grid resolution. */
+static void plan_grid(sub_pass *p, size_t m) {
+    const unsigned k = p->job.k;
+    p->grid = 0;
+    if (k > 4 || m < 64) return;
+    const double r = p->job.radius;
+    const double reach = k <= 2 ? 2.0 : 1.0; /* cells per radius: finer cells visit less area */
+    double G = floor(reach / r);
+    const double cap = floor(pow(2.0 * (double)m, 1.0 / k)); /* at most ~2m cells */
+    if (G > cap) G = cap;
+    if (G < 3) return;
+    /* Offsets needed to reach any point within r, with slack for rounding at cell edges. */
+    const double R = floor(r * G * (1.0 + 1e-5) + 1e-5) + 1.0;
+    if (2 * R + 1 > G) return;
+    if (pow((2 * R + 1) / G, k) > 0.5) return; /* visits most of the domain: all pairs is faster */
+    double rows = 2 * pow(2 * R + 1, k - 1);
+    if (rows > MAX_RANGES || pow(G, k) > (double)p->ws->cell_cap) return;
+    p->grid = 1;
+    p->G = (uint32_t)G;
+    p->R = (uint32_t)R;
+}
+
+/* Sort points by cell (stable counting sort) and lay out coordinates structure-of-arrays. */
+static void build_layout(sub_pass *p, const float *x) {
+    workspace *ws = p->ws;
+    const size_t m = ws->m, n = ws->n;
+    const unsigned k = p->job.k;
+    if (!p->grid) {
+        for (size_t i = 0; i < m; i++) ws->perm[i] = (uint32_t)i;
+    } else {
+        const uint32_t G = p->G;
+        size_t cells = 1;
+        for (unsigned q = 0; q < k; q++) cells *= G;
+        uint32_t *start = ws->cell_start;
+        memset(start, 0, (cells + 1) * sizeof(uint32_t));
+        for (size_t i = 0; i < m; i++) {
+            uint32_t id = 0;
+            for (unsigned q = k; q-- > 0;) {
+                uint32_t c = (uint32_t)(x[i * n + p->dim[q]] * (float)G);
+                id = id * G + (c < G ? c : G - 1);
+            }
+            ws->cell_of[i] = id;
+            start[id + 1]++;
+        }
+        for (size_t c = 0; c < cells; c++) start[c + 1] += start[c];
+        /* Place with a moving cursor, then restore the starts (cursor ends at the next start). */
+        for (size_t i = 0; i < m; i++) ws->perm[start[ws->cell_of[i]]++] = (uint32_t)i;
+        for (size_t c = cells; c > 0; c--) start[c] = start[c - 1];
+        start[0] = 0;
+    }
+    for (unsigned q = 0; q < k; q++) {
+        float *col = ws->soa + q * m;
+        for (size_t s = 0; s < m; s++) col[s] = x[(size_t)ws->perm[s] * n + p->dim[q]];
+        p->job.coord[q] = col;
+    }
+}
+
+/* Candidate index ranges for a point in cell `id`: rows of 2R+1 cells along axis 0. */
+static unsigned grid_ranges(const sub_pass *p, uint32_t id, uint32_t *ranges) {
+    const unsigned k = p->job.k;
+    const int32_t G = (int32_t)p->G, R = (int32_t)p->R;
+    const uint32_t *start = p->ws->cell_start;
+    int32_t c[DPC_MAX_DIMS], off[DPC_MAX_DIMS];
+    for (unsigned q = 0; q < k; q++) {
+        c[q] = (int32_t)(id % (uint32_t)G);
+        id /= (uint32_t)G;
+        off[q] = -R;
+    }
+    unsigned n = 0;
+    for (;;) {
+        uint32_t base = 0; /* cell id of (0, c1+o1, c2+o2, ...) */
+        for (unsigned q = k; q-- > 1;) {
+            int32_t v = c[q] + off[q];
+            v += v < 0 ? G : v >= G ? -G : 0;
+            base = base * (uint32_t)G + (uint32_t)v;
+        }
+        base *= (uint32_t)G;
+        const int32_t lo = c[0] - R, hi = c[0] + R;
+#define ADD_RANGE(a, b)                                      \
+    do {                                                     \
+        uint32_t s_ = start[base + (a)], e_ = start[base + (b)]; \
+        if (e_ > s_) { ranges[2 * n] = s_; ranges[2 * n + 1] = e_; n++; } \
+    } while (0)
+        if (lo < 0) {
+            ADD_RANGE((uint32_t)(lo + G), (uint32_t)G);
+            ADD_RANGE(0u, (uint32_t)(hi + 1));
+        } else if (hi >= G) {
+            ADD_RANGE((uint32_t)lo, (uint32_t)G);
+            ADD_RANGE(0u, (uint32_t)(hi - G + 1));
+        } else {
+            ADD_RANGE((uint32_t)lo, (uint32_t)(hi + 1));
+        }
+#undef ADD_RANGE
+        unsigned q = 1; /* odometer over axes 1..k-1 */
+        while (q < k && ++off[q] > R) off[q++] = -R;
+        if (q >= k) break;
+    }
+    return n;
+}
+
+static void sub_pass_range(void *ctx, size_t lo, size_t hi) {
+    const sub_pass *p = (const sub_pass *)ctx;
+    workspace *ws = p->ws;
+    const unsigned k = p->job.k;
+    const size_t m = ws->m, n = ws->n;
+    uint32_t ranges[2 * MAX_RANGES];
+    float xi[DPC_MAX_DIMS], acc[DPC_MAX_DIMS];
+    const uint32_t all[2] = {0, (uint32_t)m};
+    for (size_t s = lo; s < hi; s++) {
+        const uint32_t i = ws->perm[s];
+        for (unsigned q = 0; q < k; q++) xi[q] = p->job.coord[q][s];
+        if (p->grid) {
+            unsigned nr = grid_ranges(p, ws->cell_of[i], ranges);
+            p->engine->point(&p->job, xi, ranges, nr, acc);
+        } else {
+            p->engine->point(&p->job, xi, all, 1, acc);
+        }
+        float *d = ws->delta + (size_t)i * n;
+        for (unsigned q = 0; q < k; q++) d[p->dim[q]] += p->h * acc[q];
+    }
+}
+
+/* ---- applying a layer -------------------------------------------------------------------- */
+
+typedef struct apply_pass {
+    float *x;
+    const float *delta;
+    size_t n;
+    float count[DPC_MAX_DIMS]; /* c_k, 0 for dimensions that do not move */
+} apply_pass;
+
+static void apply_range(void *ctx, size_t lo, size_t hi) {
+    const apply_pass *a = (const apply_pass *)ctx;
+    for (size_t i = lo; i < hi; i++)
+        for (size_t d = 0; d < a->n; d++) {
+            if (a->count[d] == 0.0f) continue;
+            float y = a->x[i * a->n + d] + a->delta[i * a->n + d] / a->count[d];
+            y -= floorf(y);
+            a->x[i * a->n + d] = y < 1.0f ? y : 0.0f; /* -tiny wraps to 1 in float: map to 0 */
+        }
+}
+
+static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws, float *x) {
+    const size_t m = ws->m, n = ws->n;
+    memset(ws->delta, 0, m * n * sizeof(float));
+    apply_pass a;
+    memset(&a, 0, sizeof a);
+    for (unsigned t = 0; t < L->n_sub; t++) {
+        if (!(L->masks[t] & ~L->fixed)) continue; /* moves nothing (e.g. the grid's own axes) */
+        sub_pass p;
+        memset(&p, 0, sizeof p);
+        p.engine = e;
+        p.ws = ws;
+        unsigned k = 0;
+        for (unsigned d = 0; d < n; d++)
+            if (L->masks[t] >> d & 1) {
+                p.dim[k++] = d;
+                if (!(L->fixed >> d & 1)) a.count[d] += 1.0f;
+            }
+        p.job.k = k;
+        p.h = (float)pow((double)m, -1.0 / k);
+        float r = L->radius[t] * p.h;
+        p.job.radius = r < 0.5f ? r : 0.5f;
+        p.job.cutoff = L->eps * p.h;
+        p.job.scale = (float)(L->bins - 1) / p.job.radius;
+        p.job.umax = (float)(L->bins - 1);
+        p.job.qmax = (int32_t)L->bins - 2;
+        p.job.w = L->kernels + (size_t)t * L->bins;
+        p.job.dw = L->slopes + (size_t)t * L->bins;
+        plan_grid(&p, m);
+        build_layout(&p, x);
+        parallel_for(e->threads, m, sub_pass_range, &p);
+    }
+    a.x = x;
+    a.delta = ws->delta;
+    a.n = n;
+    parallel_for(e->threads, m, apply_range, &a);
+}
+
+dpc_status dpc_cpu_filter(const dpc_cascade *c, const dpc_cpu_engine *e, size_t m, float *x) {
+    workspace ws;
+    dpc_status st = workspace_init(&ws, m, c->dims);
+    if (st != DPC_OK) return st;
+    for (uint32_t l = 0; l < c->n_layers; l++) run_layer(&c->layers[l], e, &ws, x);
+    workspace_free(&ws);
+    return DPC_OK;
+}

@@ -1,0 +1,54 @@
+/* Run-time ISA choice: the library is compiled for a generic CPU and only the per-ISA kernel
+ * files get ISA flags, so one binary runs everywhere and uses AVX2 where cpuid reports it. */
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "common/error.h"
+#include "cpu/cpu_cascade.h"
+
+static int cpu_has_avx2_fma(void) {
+#if defined(DPC_HAVE_AVX2) && (defined(__x86_64__) || defined(__i386__)) && defined(__GNUC__)
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+#else
+    return 0;
+#endif
+}
+
+dpc_status dpc_cpu_engine_init(dpc_cpu_engine *e, dpc_isa isa, unsigned threads) {
+    if (isa == DPC_ISA_AUTO) {
+        const char *env = getenv("DPC_ISA");
+        if (env && *env && strcmp(env, "auto") != 0) {
+            if (strcmp(env, "scalar") == 0) isa = DPC_ISA_SCALAR;
+            else if (strcmp(env, "avx2") == 0) isa = DPC_ISA_AVX2;
+            else return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
+                                 "environment variable DPC_ISA='%.32s': use auto, scalar or avx2", env);
+        } else {
+            isa = cpu_has_avx2_fma() ? DPC_ISA_AVX2 : DPC_ISA_SCALAR;
+        }
+    }
+    switch (isa) {
+    case DPC_ISA_SCALAR:
+        e->point = dpc_point_scalar;
+        break;
+    case DPC_ISA_AVX2:
+#if defined(DPC_HAVE_AVX2)
+        if (!cpu_has_avx2_fma())
+            return dpc_fail(DPC_ERROR_UNSUPPORTED, "the AVX2 path needs a CPU with AVX2 and FMA");
+        e->point = dpc_point_avx2;
+        break;
+#else
+        return dpc_fail(DPC_ERROR_UNSUPPORTED, "this libdpc was built without the AVX2 path");
+#endif
+    default:
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "unknown ISA %d", (int)isa);
+    }
+    e->isa = isa;
+    if (threads == 0) {
+        long n = sysconf(_SC_NPROCESSORS_ONLN);
+        threads = n > 0 ? (unsigned)n : 1;
+    }
+    e->threads = threads > 64 ? 64 : threads;
+    return DPC_OK;
+}

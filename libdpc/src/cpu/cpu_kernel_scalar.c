@@ -1,0 +1,31 @@
+/* Portable reference path: the formula of docs/model-format.md §3, one pair at a time. */
+#include <math.h>
+
+#include "cpu/cpu_kernels.h"
+
+void dpc_point_scalar(const dpc_sub_job *job, const float *xi, const uint32_t *ranges,
+                      unsigned n_ranges, float *acc) {
+    const unsigned k = job->k;
+    float delta[DPC_MAX_DIMS];
+    for (unsigned q = 0; q < k; q++) acc[q] = 0.0f;
+    for (unsigned r = 0; r < n_ranges; r++) {
+        for (uint32_t j = ranges[2 * r]; j < ranges[2 * r + 1]; j++) {
+            float d2 = 0.0f;
+            for (unsigned q = 0; q < k; q++) {
+                float t = job->coord[q][j] - xi[q];
+                t -= floorf(t + 0.5f); /* minimum-image toroidal difference */
+                delta[q] = t;
+                d2 += t * t;
+            }
+            const float d = sqrtf(d2);
+            if (!(d > job->cutoff && d < job->radius)) continue;
+            float u = d * job->scale;
+            u = u < job->umax ? u : job->umax;
+            int32_t b = (int32_t)u;
+            b = b < job->qmax ? b : job->qmax;
+            const float f = u - (float)b;
+            const float coef = (job->w[b] + f * job->dw[b]) / d;
+            for (unsigned q = 0; q < k; q++) acc[q] += coef * delta[q];
+        }
+    }
+}

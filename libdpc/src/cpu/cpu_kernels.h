@@ -1,0 +1,36 @@
+/* The hot loop of a filter layer, one implementation per ISA, chosen at load time.
+ * A kernel accumulates, for one point x_i, sum_j g(d_ij) * delta_ij / d_ij over candidate
+ * neighbours given as index ranges into structure-of-arrays coordinates (docs/model-format.md §3,
+ * without the final factor h_t). Every ISA computes the same formula; only rounding differs. */
+#ifndef DPC_CPU_KERNELS_H
+#define DPC_CPU_KERNELS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "dpc/dpc.h"
+
+typedef struct dpc_sub_job {
+    unsigned k;                        /* dimensions in the subspace */
+    const float *coord[DPC_MAX_DIMS];  /* coord[q][j]: dimension q of candidate j */
+    float radius;                      /* r_t (absolute) */
+    float cutoff;                      /* e_t (absolute) */
+    float scale;                       /* (b - 1) / r_t */
+    float umax;                        /* b - 1 */
+    int32_t qmax;                      /* b - 2 */
+    const float *w;                    /* kernel table, b values */
+    const float *dw;                   /* w[q+1] - w[q] */
+} dpc_sub_job;
+
+/* ranges[2r], ranges[2r+1]: half-open candidate index range r; acc[0..k) receives the sums. */
+typedef void (*dpc_point_fn)(const dpc_sub_job *job, const float *xi, const uint32_t *ranges,
+                             unsigned n_ranges, float *acc);
+
+void dpc_point_scalar(const dpc_sub_job *job, const float *xi, const uint32_t *ranges,
+                      unsigned n_ranges, float *acc);
+#if defined(DPC_HAVE_AVX2)
+void dpc_point_avx2(const dpc_sub_job *job, const float *xi, const uint32_t *ranges,
+                    unsigned n_ranges, float *acc);
+#endif
+
+#endif

@@ -1,0 +1,20 @@
+"""dpc: point patterns from Deep Point Correlation Design.
+
+    >>> import dpc
+    >>> model = dpc.load("repulsion-2d")          # a bundled model, or a path to a .onnx file
+    >>> pts = model.generate(seed=0)               # (m, n) float32 in [0, 1)
+    >>> sets = model.generate_batch(16, seed=0)    # (16, m, n)
+
+Arrays follow scipy.stats.qmc: C-contiguous ``(m, n)`` points in [0, 1), batches ``(sets, m, n)``.
+"""
+
+from .errors import (DpcError, InternalError, InvalidArgumentError, LimitError, ModelFormatError,
+                     ModelIOError, ModelNotFoundError, OutOfMemoryError, UnsupportedError)
+from ._model import Model, available_models, load, model_path, uniform
+from ._core import __version__  # noqa: F401  (version of the linked libdpc)
+
+__all__ = [
+    "Model", "load", "uniform", "available_models", "model_path",
+    "DpcError", "InvalidArgumentError", "ModelIOError", "ModelFormatError", "UnsupportedError",
+    "OutOfMemoryError", "LimitError", "InternalError", "ModelNotFoundError",
+]
