@@ -1,0 +1,227 @@
+"""Independent float64 reference of the dpc model format (docs/model-format.md, §3 and §5).
+
+This module deliberately shares no code with libdpc or with ``python/dpc``: it reads model files
+with the ``onnx`` package directly, generates the input points with numpy uint64 arithmetic and
+runs the cascade of PointFilter layers (paper Eq. 3–4 with the normalised sum of Fig. 7) in
+float64 with dense pairwise differences. It is slow (O(m²) per subspace) and meant for test-sized
+point sets only.
+
+    model = load_reference("tests/data/model_2d.onnx")
+    x0 = initial_points(model, seed=3, m=model.n_points)   # float32, bit-exact with dpc.uniform
+    y = run_cascade(model, x0)                              # float64, in [0, 1)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+DOMAIN = "ai.dpc"
+DEFAULT_EPS = 1e-4
+
+_U64 = np.uint64
+_GOLDEN = _U64(0x9E3779B97F4A7C15)
+_MIX1 = _U64(0xBF58476D1CE4E5B9)
+_MIX2 = _U64(0x94D049BB133111EB)
+
+
+# ------------------------------------------------------------------------------------------------
+# Model reading (onnx, not libdpc and not dpc.model_file)
+# ------------------------------------------------------------------------------------------------
+
+
+@dataclass
+class RefLayer:
+    subspaces: list[int]          # bitmask per subspace
+    radius: list[float]           # rho_t, in units of the mean spacing h_t
+    kernels: np.ndarray           # float64 [s, b] (the file's float32 values, widened exactly)
+    eps: float = DEFAULT_EPS
+    fixed: int = 0
+
+
+@dataclass
+class RefModel:
+    dims: int
+    n_points: int
+    layers: list[RefLayer]
+    grid_axes: list[int] = field(default_factory=list)
+    grid_shape: list[int] = field(default_factory=list)
+    metadata: dict[str, str] = field(default_factory=dict)
+
+
+def load_reference(path) -> RefModel:
+    """Parse a dpc model file with ``onnx`` and check the parts of §1–§4 the reference relies on."""
+    import onnx
+    from onnx import numpy_helper
+
+    proto = onnx.load(str(Path(path)))
+    versions = {o.domain: o.version for o in proto.opset_import}
+    if versions.get(DOMAIN) != 1:
+        raise ValueError(f"{path}: ai.dpc opset version {versions.get(DOMAIN)}, expected 1")
+    meta = {p.key: p.value for p in proto.metadata_props}
+    dims = int(meta["dpc.dims"])
+    n_points = int(meta["dpc.n_points"])
+    inits = {t.name: numpy_helper.to_array(t) for t in proto.graph.initializer}
+
+    layers = []
+    prev = proto.graph.input[0].name
+    for node in proto.graph.node:
+        if node.domain != DOMAIN or node.op_type != "PointFilter":
+            raise ValueError(f"unexpected node {node.domain}:{node.op_type}")
+        if node.input[0] != prev:
+            raise ValueError("PointFilter nodes do not form a chain")
+        prev = node.output[0]
+        attrs = {a.name: onnx.helper.get_attribute_value(a) for a in node.attribute}
+        kern = np.asarray(inits[node.input[1]])
+        if kern.dtype != np.float32:
+            raise ValueError("kernels must be FLOAT")
+        subspaces = [int(v) for v in attrs["subspaces"]]
+        radius = [float(v) for v in attrs["radius"]]
+        if kern.ndim != 2 or kern.shape[0] != len(subspaces) or len(radius) != len(subspaces):
+            raise ValueError("kernels / subspaces / radius shapes disagree")
+        layers.append(RefLayer(subspaces=subspaces, radius=radius,
+                               kernels=kern.astype(np.float64),
+                               eps=float(attrs.get("eps", DEFAULT_EPS)),
+                               fixed=int(attrs.get("fixed", 0))))
+    if prev != proto.graph.output[0].name:
+        raise ValueError("the last PointFilter does not produce the graph output")
+
+    axes = [int(a) for a in meta.get("dpc.grid_axes", "").split(",") if a.strip()]
+    shape = [int(g) for g in meta.get("dpc.grid_shape", "").split(",") if g.strip()]
+    return RefModel(dims=dims, n_points=n_points, layers=layers, grid_axes=axes,
+                    grid_shape=shape, metadata=meta)
+
+
+# ------------------------------------------------------------------------------------------------
+# Input points (§5)
+# ------------------------------------------------------------------------------------------------
+
+
+def _mix(z: np.ndarray) -> np.ndarray:
+    """The SplitMix64 finaliser on a uint64 array (numpy uint64 arithmetic wraps mod 2^64)."""
+    z = (z ^ (z >> _U64(30))) * _MIX1
+    z = (z ^ (z >> _U64(27))) * _MIX2
+    return z ^ (z >> _U64(31))
+
+
+def splitmix_values(seed: int, count: int) -> np.ndarray:
+    """Values 0 .. count-1 of the stream of seed: mix(mix(seed) + (c + 1) * golden)."""
+    with np.errstate(over="ignore"):
+        state0 = _mix(np.array([int(seed) % (1 << 64)], dtype=_U64))[0]
+        c1 = np.arange(1, count + 1, dtype=_U64)
+        return _mix(state0 + c1 * _GOLDEN)
+
+
+def uniform(seed: int, m: int, n: int) -> np.ndarray:
+    """(m, n) float32: value (i*n + k) >> 40, times 2^-24 (exact in float32)."""
+    top24 = (splitmix_values(seed, m * n) >> _U64(40)).astype(np.float64)
+    return (top24 * 2.0**-24).astype(np.float32).reshape(m, n)
+
+
+def grid_fill(x: np.ndarray, axes: list[int], shape: list[int]) -> np.ndarray:
+    """Overwrite the gridded dimensions with cell centres; the first axis varies fastest."""
+    x = np.array(x, copy=True)
+    i = np.arange(x.shape[0], dtype=np.int64)
+    stride = 1
+    for a, g in zip(axes, shape):
+        cell = (i // stride) % g
+        x[:, a] = ((cell + 0.5) / g).astype(x.dtype)
+        stride *= g
+    return x
+
+
+def initial_points(model: RefModel, seed: int, m: int) -> np.ndarray:
+    """The float32 points dpc_generate_n(model, seed, m) filters."""
+    x = uniform(seed, m, model.dims)
+    if model.grid_axes:
+        x = grid_fill(x, model.grid_axes, model.grid_shape)
+    return x
+
+
+# ------------------------------------------------------------------------------------------------
+# The cascade (§3)
+# ------------------------------------------------------------------------------------------------
+
+
+def toroidal_delta(a: np.ndarray) -> np.ndarray:
+    """delta - floor(delta + 1/2): the per-axis toroidal difference, in [-1/2, 1/2)."""
+    return a - np.floor(a + 0.5)
+
+
+def filter_layer(x: np.ndarray, layer: RefLayer, chunk: int = 256) -> np.ndarray:
+    """One PointFilter in float64: x (m, n) in [0, 1) -> y (m, n) in [0, 1).
+
+    Dense over all pairs, in chunks of ``chunk`` rows i: the toroidal differences of a chunk are
+    computed once for every dimension and shared by the subspaces."""
+    x = np.asarray(x, dtype=np.float64)
+    m, n = x.shape
+    subs = []
+    for t, mask in enumerate(layer.subspaces):
+        dims = [k for k in range(n) if (mask >> k) & 1]
+        h = float(m) ** (-1.0 / len(dims))          # mean spacing h_t = m^(-1/k_t)
+        r = min(layer.radius[t] * h, 0.5)           # receptive radius r_t
+        e = layer.eps * h                           # cut-off e_t
+        subs.append((dims, h, r, e, layer.kernels[t]))
+
+    total = np.zeros((m, n), dtype=np.float64)      # sum over subspaces of Delta_i^t[k]
+    xt = np.ascontiguousarray(x.T)                  # (n, m)
+    for i0 in range(0, m, chunk):
+        i1 = min(i0 + chunk, m)
+        delta = xt[:, None, :] - xt[:, i0:i1, None]  # (n, c, m): x_jk - x_ik
+        tmp = delta + 0.5
+        np.floor(tmp, out=tmp)
+        delta -= tmp                                # toroidal difference, in [-1/2, 1/2)
+        del tmp
+        for dims, h, r, e, w in subs:
+            d2 = delta[dims[0]] ** 2
+            for k in dims[1:]:
+                d2 += delta[k] ** 2
+            d = np.sqrt(d2)
+            ci, j = np.nonzero((d > e) & (d < r))
+            if ci.size == 0:
+                continue
+            dd = d[ci, j]
+            b = w.shape[0]
+            u = dd * (b - 1) / r
+            q = np.minimum(np.floor(u), b - 2).astype(np.int64)
+            f = u - q
+            g = w[q] + f * (w[q + 1] - w[q])        # linear interpolation of the kernel
+            coef = h * g / dd
+            rows = i0 + ci
+            for k in dims:
+                total[:, k] += np.bincount(rows, weights=coef * delta[k][ci, j], minlength=m)
+
+    count = np.zeros(n, dtype=np.int64)             # c_k: subspaces containing dimension k
+    for dims, *_ in subs:
+        count[dims] += 1
+    y = x.copy()
+    for k in range(n):
+        if count[k] > 0 and not (layer.fixed >> k) & 1:
+            y[:, k] += total[:, k] / count[k]       # normalised sum
+    y -= np.floor(y)                                # wrap to [0, 1)
+    y[y >= 1.0] = 0.0
+    return y
+
+
+def run_cascade(model: RefModel, x: np.ndarray, layers: int | None = None) -> np.ndarray:
+    """All layers (or the first ``layers``) on x (m, n): float64 result."""
+    y = np.asarray(x, dtype=np.float64)
+    if y.ndim != 2 or y.shape[1] != model.dims:
+        raise ValueError(f"points must be (m, {model.dims})")
+    for layer in model.layers[:layers]:
+        y = filter_layer(y, layer)
+    return y
+
+
+def generate(model: RefModel, seed: int, m: int | None = None) -> np.ndarray:
+    """Reference of dpc_generate_n: the cascade on initial_points(seed, m), float64."""
+    m = model.n_points if m is None else int(m)
+    return run_cascade(model, initial_points(model, seed, m))
+
+
+def torus_diff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Per-coordinate distance on the unit torus: |a - b| with 0.999… and 0.000… close."""
+    d = np.abs(np.asarray(a, dtype=np.float64) - np.asarray(b, dtype=np.float64))
+    return np.minimum(d, 1.0 - d)
