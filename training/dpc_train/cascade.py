@@ -1,0 +1,154 @@
+"""The filter cascade (paper Sec. 5): l layers whose kernel tables are interpolated across depth
+from l_u unique kernels, subspaces with scale-aware radii, optional gridded dimensions.
+
+The parameters are exactly what a model file stores after expansion: per layer, an [s, b] table
+(docs/model-format.md §2), the subspace masks, radii ρ_t, eps and the fixed mask.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import torch
+
+from .filter import FilterConfigError, check_layer, filter_layer, mask_dims
+
+AXES = "xyzwabcdefghijklmnopqrstuv"
+
+
+def parse_subspace(spec, n: int) -> int:
+    """A swizzle ("xz"), a list of dims ([0, 2]) or an int mask → bitmask (checked against n)."""
+    if isinstance(spec, int):
+        mask = spec
+    elif isinstance(spec, str):
+        mask = 0
+        for c in spec:
+            if c not in AXES:
+                raise FilterConfigError(f"unknown axis letter {c!r} in subspace {spec!r}")
+            mask |= 1 << AXES.index(c)
+    else:
+        mask = 0
+        for k in spec:
+            mask |= 1 << int(k)
+    if mask <= 0 or mask >> n:
+        raise FilterConfigError(f"subspace {spec!r} is empty or uses dims >= n = {n}")
+    return mask
+
+
+@dataclass
+class CascadeSpec:
+    """Architecture of a cascade (everything but the learned kernel values)."""
+
+    dims: int
+    n_points: int
+    layers: int = 32
+    unique_kernels: int = 8
+    bins: int = 32
+    subspaces: list = field(default_factory=lambda: ["xy"])
+    radius: list = field(default_factory=lambda: [4.0])
+    eps: float = 1e-4
+    grid_axes: list = field(default_factory=list)
+    grid_shape: list = field(default_factory=list)
+    init: str = "zero"              # "zero" (identity cascade) or "repulsion"
+    init_sigma: float = 0.85        # repulsion: Gaussian width, in mean spacings
+    init_amplitude: float = 0.05    # repulsion: kernel value at d = 0 (units of spacing)
+
+    def __post_init__(self):
+        if not 1 <= self.dims <= 64:
+            raise FilterConfigError(f"dims must be in 1..64, got {self.dims}")
+        if self.n_points < 2:
+            raise FilterConfigError(f"n_points must be >= 2, got {self.n_points}")
+        if self.layers < 1 or not 1 <= self.unique_kernels <= self.layers:
+            raise FilterConfigError(
+                f"need layers >= 1 and 1 <= unique_kernels <= layers, got layers={self.layers},"
+                f" unique_kernels={self.unique_kernels}")
+        if not 2 <= self.bins <= 65536:
+            raise FilterConfigError(f"bins must be in 2..65536, got {self.bins}")
+        self.masks = [parse_subspace(s, self.dims) for s in self.subspaces]
+        if len(self.radius) != len(self.masks):
+            raise FilterConfigError(f"radius needs one value per subspace ({len(self.masks)}),"
+                                    f" got {len(self.radius)}")
+        if len(self.grid_axes) != len(self.grid_shape):
+            raise FilterConfigError("grid_axes and grid_shape must have the same length")
+        if self.grid_axes:
+            if sorted(set(self.grid_axes)) != list(self.grid_axes) or max(self.grid_axes) >= self.dims:
+                raise FilterConfigError(f"grid_axes must be increasing dims < {self.dims}")
+            if math.prod(self.grid_shape) != self.n_points:
+                raise FilterConfigError(f"prod(grid_shape) = {math.prod(self.grid_shape)} must "
+                                        f"equal n_points = {self.n_points}")
+        if self.init not in ("zero", "repulsion"):
+            raise FilterConfigError(f"init must be 'zero' or 'repulsion', got {self.init!r}")
+        check_layer(self.dims, torch.zeros(len(self.masks), self.bins), self.masks,
+                    self.radius, self.eps, self.fixed)
+
+    @property
+    def fixed(self) -> int:
+        return sum(1 << a for a in self.grid_axes)
+
+
+def repulsion_kernel(bins: int, rho: float, sigma: float, amplitude: float) -> torch.Tensor:
+    """Table of g(d) = −A·exp(−d²/2σ²) at the bin distances d_q = q·ρ/(b−1) (spacing units).
+
+    A local Gaussian repulsion (DESIGN §9): applied a few dozen times from uniform points it
+    already removes most low-frequency energy, so it is a far better start than zero.
+    """
+    d = torch.arange(bins, dtype=torch.float64) * (rho / (bins - 1))
+    return -amplitude * torch.exp(-0.5 * (d / sigma) ** 2)
+
+
+class Cascade(torch.nn.Module):
+    """l filter layers from l_u unique [s, b] kernels, linearly interpolated across depth."""
+
+    def __init__(self, spec: CascadeSpec):
+        super().__init__()
+        self.spec = spec
+        s, b = len(spec.masks), spec.bins
+        theta = torch.zeros(spec.unique_kernels, s, b, dtype=torch.float64)
+        if spec.init == "repulsion":
+            for t, rho in enumerate(spec.radius):
+                theta[:, t] = repulsion_kernel(b, rho, spec.init_sigma, spec.init_amplitude)
+        self.theta = torch.nn.Parameter(theta.float())
+
+    def layer_weights(self) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """(lo, hi, frac): layer i uses (1−frac[i])·θ[lo[i]] + frac[i]·θ[hi[i]]."""
+        lu, l = self.spec.unique_kernels, self.spec.layers
+        pos = torch.arange(l, dtype=torch.float64) * ((lu - 1) / (l - 1) if l > 1 else 0.0)
+        lo = torch.clamp(torch.floor(pos).long(), max=lu - 1)
+        hi = torch.clamp(lo + 1, max=lu - 1)
+        return lo, hi, pos - lo.double()
+
+    def tables(self) -> torch.Tensor:
+        """Per-layer kernel tables [l, s, b] (the values a model file stores)."""
+        lo, hi, frac = self.layer_weights()
+        f = frac.to(self.theta)[:, None, None]
+        return (1 - f) * self.theta[lo] + f * self.theta[hi]
+
+    def forward(self, x: torch.Tensor, impl: str = "torch", return_all: bool = False):
+        sp = self.spec
+        tabs = self.tables().to(x.dtype)
+        outs = []
+        for i in range(sp.layers):
+            x = filter_layer(x, tabs[i], sp.masks, sp.radius, sp.eps, sp.fixed, impl=impl)
+            if return_all:
+                outs.append(x)
+        return outs if return_all else x
+
+    def input_points(self, batch: int, generator: torch.Generator, m: int | None = None,
+                     dtype=torch.float32, device="cpu") -> torch.Tensor:
+        """Uniform random [batch, m, n] points, gridded dims set to cell centres (format §5)."""
+        sp = self.spec
+        m = sp.n_points if m is None else m
+        x = torch.rand(batch, m, sp.dims, generator=generator, dtype=torch.float64)
+        if sp.grid_axes:
+            if m != sp.n_points:
+                raise FilterConfigError("a gridded cascade runs at its trained point count only")
+            idx = torch.arange(m)
+            div = 1
+            for a, gsz in zip(sp.grid_axes, sp.grid_shape):
+                x[:, :, a] = (((idx // div) % gsz).double() + 0.5) / gsz
+                div *= gsz
+        return x.to(dtype=dtype, device=device)
+
+    def dims_of(self, t: int) -> list[int]:
+        return mask_dims(self.spec.masks[t], self.spec.dims)
