@@ -9,6 +9,10 @@ and a taper that makes the last bin 0), so re-running the script reproduces the 
 Points move by a noticeable fraction of the mean spacing in every layer, so the parity tests
 compare a real cascade, not an identity.
 
+variants/ holds the same models encoded differently but equivalently (float_data, packed or
+unpacked repeated fields, reversed field order, batch shape, defaults left out, unknown parts),
+listed in variants/manifest.tsv: the reader must accept each and give the base model's points.
+
 Models (docs/model-format.md):
   model_2d.onnx        2-D, one subspace xy, 4 layers, 1024 points
   model_3d_proj.onnx   3-D, subspaces xy, xz, yz (every dimension shared by two), 3 layers
@@ -176,6 +180,79 @@ def build(spec: ModelSpec):
     return proto
 
 
+def _variants(out: Path) -> list[tuple[str, str, str, bytes]]:
+    """Files that encode a base model differently but equivalently: the reader must accept each
+    one and produce exactly the base model's points. (name, base, why, bytes)."""
+    import copy
+
+    import onnx
+    from onnx import helper
+
+    import pbwire as pb
+
+    def load(name):
+        return onnx.load(str(out / name))
+
+    def kernels_to_float_data(m):
+        for t in m.graph.initializer:
+            w = onnx.numpy_helper.to_array(t)
+            t.ClearField("raw_data")
+            t.float_data.extend(w.reshape(-1).tolist())
+        return m
+
+    v = []
+    m = kernels_to_float_data(load("model_2d.onnx"))
+    v.append(("float_data", "model_2d.onnx", "kernels in float_data (packed) instead of raw_data",
+              pb.encode(m)))
+    v.append(("float_data_unpacked", "model_2d.onnx",
+              "kernels in float_data with one fixed32 field per value", pb.encode(m, packed="none")))
+    m = kernels_to_float_data(load("model_3d_proj.onnx"))
+    v.append(("packed_repeated", "model_3d_proj.onnx",
+              "every repeated scalar packed (attribute ints/floats, tensor dims)",
+              pb.encode(m, packed="all")))
+    v.append(("fields_reversed", "model_3d_mixed.onnx",
+              "every message's fields written in decreasing field-number order",
+              pb.encode(load("model_3d_mixed.onnx"), reverse=True)))
+    m = load("model_2d.onnx")
+    for vi in (m.graph.input[0], m.graph.output[0]):
+        dims = vi.type.tensor_type.shape.dim
+        dims.insert(0, onnx.TensorShapeProto.Dimension(dim_param="batch"))
+    v.append(("batch_shape", "model_2d.onnx", "graph input/output declared [batch, m, n]",
+              m.SerializeToString()))
+    m = load("model_10d.onnx")
+    for node in m.graph.node:
+        eps = [a for a in node.attribute if a.name == "eps"]
+        if eps and eps[0].f == np.float32(1e-4):
+            node.attribute.remove(eps[0])                  # the default
+        node.attribute.append(helper.make_attribute("fixed", 0))
+        node.attribute.append(helper.make_attribute("future_attr", [1.5, 2.5]))
+        node.doc_string = "a PointFilter"
+    m.graph.initializer.append(onnx.numpy_helper.from_array(np.ones((3, 3), np.float32), "unused"))
+    e = m.metadata_props.add()
+    e.key, e.value = "vendor.note", "unknown keys are kept"
+    m.producer_version = "9.9"
+    m.doc_string = "variant with optional and unknown parts"
+    v.append(("extras_and_defaults", "model_10d.onnx",
+              "eps 1e-4 left to its default, fixed=0, unknown attribute/initializer/metadata",
+              m.SerializeToString()))
+    m = load("model_grid_3to1.onnx")
+    m.ir_version = 3
+    keep = [o for o in m.opset_import if o.domain == "ai.dpc"]
+    del m.opset_import[:]
+    m.opset_import.extend(keep)
+    v.append(("ir3_dpc_opset_only", "model_grid_3to1.onnx",
+              "ir_version 3 and no default-domain opset", m.SerializeToString()))
+    m = load("model_2d.onnx")
+    m.ir_version = 13
+    nested = b""
+    for _ in range(3000):
+        nested = pb.field_len(1, nested)
+    v.append(("ir13_unknown_deep_field", "model_2d.onnx",
+              "ir_version 13 and an unknown top-level field 99 nesting 3000 levels deep "
+              "(skipped without recursing)", m.SerializeToString() + pb.field_len(99, nested)))
+    return v
+
+
 def main() -> None:
     import onnx
 
@@ -189,6 +266,14 @@ def main() -> None:
         path = args.out / name
         onnx.save_model(proto, str(path))
         print(f"{path}: {path.stat().st_size} bytes")
+    vdir = args.out / "variants"
+    vdir.mkdir(exist_ok=True)
+    lines = ["# file\tbase model (same points)\thow it differs"]
+    for name, base, why, data in _variants(args.out):
+        (vdir / f"{name}.onnx").write_bytes(data)
+        lines.append(f"{name}.onnx\t{base}\t{why}")
+    (vdir / "manifest.tsv").write_text("\n".join(lines) + "\n")
+    print(f"{vdir}: {len(lines) - 1} variants")
 
 
 if __name__ == "__main__":
