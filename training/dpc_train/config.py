@@ -1,0 +1,148 @@
+"""Training configuration: one TOML file per pattern, backed by dataclasses.
+
+    [pattern]  name, dims, points, grid_axes, grid_shape, description
+    [model]    layers, unique_kernels, bins, subspaces, radius, eps, init, init_sigma,
+               init_amplitude
+    [loss]     name + params (registered) | source (Python code) | file (Python file)
+    [train]    steps, batch, lr, lr_final, seed, device, threads, impl, checkpoint_every,
+               log_every, eval_sets, run_dir
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .cascade import CascadeSpec
+from .filter import IMPLS
+
+
+class ConfigError(ValueError):
+    """A training config that is malformed: unknown keys, wrong types, bad values."""
+
+
+@dataclass
+class PatternConfig:
+    name: str
+    dims: int
+    points: int
+    grid_axes: list = field(default_factory=list)
+    grid_shape: list = field(default_factory=list)
+    description: str = ""
+
+
+@dataclass
+class ModelConfig:
+    layers: int = 32
+    unique_kernels: int = 8
+    bins: int = 32
+    subspaces: list = field(default_factory=lambda: ["xy"])
+    radius: list = field(default_factory=lambda: [4.0])
+    eps: float = 1e-4
+    init: str = "zero"
+    init_sigma: float = 0.85
+    init_amplitude: float = 0.05
+
+
+@dataclass
+class TrainConfig:
+    steps: int = 1000
+    batch: int = 4
+    lr: float = 1e-3
+    lr_final: float = 1e-4     # exponential decay from lr to lr_final over `steps`
+    seed: int = 0
+    device: str = "cpu"
+    threads: int = 1
+    impl: str = "torch"
+    checkpoint_every: int = 50
+    log_every: int = 1
+    eval_sets: int = 16        # sets used for the measured quality at the end / on export
+    run_dir: str = "runs"
+
+
+@dataclass
+class Config:
+    pattern: PatternConfig
+    model: ModelConfig
+    loss: dict
+    train: TrainConfig
+    source_path: str = ""
+
+    def cascade_spec(self) -> CascadeSpec:
+        p, m = self.pattern, self.model
+        return CascadeSpec(dims=p.dims, n_points=p.points, layers=m.layers,
+                           unique_kernels=m.unique_kernels, bins=m.bins,
+                           subspaces=list(m.subspaces), radius=[float(r) for r in m.radius],
+                           eps=m.eps, grid_axes=list(p.grid_axes), grid_shape=list(p.grid_shape),
+                           init=m.init, init_sigma=m.init_sigma, init_amplitude=m.init_amplitude)
+
+    def to_dict(self) -> dict:
+        return {"pattern": dataclasses.asdict(self.pattern),
+                "model": dataclasses.asdict(self.model),
+                "loss": dict(self.loss), "train": dataclasses.asdict(self.train)}
+
+    def base_dir(self) -> Path:
+        return Path(self.source_path).parent if self.source_path else Path.cwd()
+
+
+def _section(cls, data: dict, name: str):
+    known = {f.name: f for f in dataclasses.fields(cls)}
+    unknown = set(data) - set(known)
+    if unknown:
+        raise ConfigError(f"[{name}]: unknown keys {sorted(unknown)}; known: {sorted(known)}")
+    required = [f.name for f in known.values()
+                if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING]
+    missing = [k for k in required if k not in data]
+    if missing:
+        raise ConfigError(f"[{name}]: missing required keys {missing}")
+    for k, v in data.items():
+        f = known[k]
+        want = f.type if isinstance(f.type, str) else f.type.__name__
+        ok = {"int": isinstance(v, int) and not isinstance(v, bool),
+              "float": isinstance(v, (int, float)) and not isinstance(v, bool),
+              "str": isinstance(v, str), "list": isinstance(v, list)}.get(want, True)
+        if not ok:
+            raise ConfigError(f"[{name}] {k} = {v!r}: expected {want}")
+    return cls(**data)
+
+
+def config_from_dict(d: dict, source_path: str = "") -> Config:
+    unknown = set(d) - {"pattern", "model", "loss", "train"}
+    if unknown:
+        raise ConfigError(f"unknown sections {sorted(unknown)}")
+    for sec in ("pattern", "loss"):
+        if sec not in d:
+            raise ConfigError(f"missing section [{sec}]")
+    cfg = Config(pattern=_section(PatternConfig, d["pattern"], "pattern"),
+                 model=_section(ModelConfig, d.get("model", {}), "model"),
+                 loss=dict(d["loss"]),
+                 train=_section(TrainConfig, d.get("train", {}), "train"),
+                 source_path=source_path)
+    t = cfg.train
+    if t.steps < 1 or t.batch < 1 or t.checkpoint_every < 1 or t.log_every < 1:
+        raise ConfigError("[train] steps, batch, checkpoint_every, log_every must be >= 1")
+    if not (t.lr > 0 and t.lr_final > 0):
+        raise ConfigError("[train] lr and lr_final must be > 0")
+    if t.impl not in IMPLS:
+        raise ConfigError(f"[train] impl must be one of {IMPLS}, got {t.impl!r}")
+    if t.threads < 0:
+        raise ConfigError("[train] threads must be >= 0 (0 = torch default)")
+    try:
+        cfg.cascade_spec()  # validates the architecture (typed FilterConfigError → ConfigError)
+    except ValueError as e:
+        raise ConfigError(f"[model]/[pattern]: {e}") from None
+    return cfg
+
+
+def load_config(path: str | Path) -> Config:
+    path = Path(path)
+    try:
+        with open(path, "rb") as f:
+            data = tomllib.load(f)
+    except FileNotFoundError:
+        raise ConfigError(f"config file {path} not found") from None
+    except tomllib.TOMLDecodeError as e:
+        raise ConfigError(f"{path}: invalid TOML: {e}") from None
+    return config_from_dict(data, str(path.resolve()))

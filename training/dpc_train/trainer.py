@@ -1,0 +1,257 @@
+"""The training loop: Adam with exponential learning-rate decay over batches of realisations,
+tqdm progress, atomic checkpoints, resume, per-seed determinism, loss curve (CSV + PNG), and a
+NaN/inf guard."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import os
+import tempfile
+import time
+from pathlib import Path
+
+import torch
+
+from .cascade import Cascade
+from .config import Config, config_from_dict
+from .lossprog import build_loss
+from . import losses as L
+
+CHECKPOINT = "checkpoint.pt"
+
+
+class TrainingError(RuntimeError):
+    """Base class of the trainer's errors."""
+
+
+class TrainingDivergedError(TrainingError):
+    """The loss or a gradient became NaN/inf."""
+
+
+class RunExistsError(TrainingError):
+    """The run folder already holds a checkpoint and neither --resume nor --force was given."""
+
+
+def atomic_write_bytes(path: Path, data: bytes) -> None:
+    """Write data to path so that a crash at any moment leaves either the old or the new file:
+    temp file in the same folder, fsync, then os.replace (atomic on POSIX and Windows)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
+
+def save_checkpoint(path: Path, state: dict) -> None:
+    buf = io.BytesIO()
+    torch.save(state, buf)
+    atomic_write_bytes(path, buf.getvalue())
+
+
+def load_checkpoint(path: str | Path) -> dict:
+    return torch.load(str(path), map_location="cpu", weights_only=False)
+
+
+def step_generator(seed: int, step: int) -> torch.Generator:
+    """The RNG of one step: a pure function of (seed, step), so a resumed run sees exactly the
+    inputs the uninterrupted run would have seen."""
+    return torch.Generator().manual_seed((seed * 1_000_003 + step) % (1 << 63))
+
+
+def measure_quality(model: Cascade, loss_fn, cfg: Config, device="cpu") -> dict:
+    """Loss on `eval_sets` fresh realisations (seeds disjoint from training), plus for 2-D
+    patterns the spectral metrics of DESIGN §9 (E_low, radial peak)."""
+    sp = model.spec
+    n_sets = max(1, cfg.train.eval_sets)
+    g = torch.Generator().manual_seed(0x5EED_0000 + cfg.train.seed)
+    with torch.no_grad():
+        x = model.input_points(n_sets, g, device=device)
+        y = model(x, impl="torch" if cfg.train.impl == "c" else cfg.train.impl)
+        torch.manual_seed(cfg.train.seed)
+        q = {"eval_sets": n_sets, "eval_loss": float(loss_fn(y))}
+        if sp.dims == 2 and not sp.grid_axes:
+            y64 = y.double().cpu()
+            q["E_low_nu<0.5"] = float(L.lowband_energy(y64, 0.5))
+            q["E_low_nu<0.75"] = float(L.lowband_energy(y64, 0.75))
+            rs = L.radspec(y64, nu_max=4.0)
+            i = int(rs.argmax())
+            q["radial_peak"] = float(rs[i])
+            q["radial_peak_nu"] = i / math.sqrt(sp.n_points)
+            # minimum distance relative to the maximal packing distance of m discs
+            dmax = math.sqrt(2 / (math.sqrt(3) * sp.n_points))
+            mins = []
+            for s in y64:  # one set at a time: O(m²) memory
+                d = s[None] - s[:, None]
+                d = d - torch.floor(d + 0.5)
+                dist = d.norm(dim=-1) + torch.eye(sp.n_points, dtype=torch.float64) * 10
+                mins.append(float(dist.min()))
+            q["delta_min"] = sum(mins) / len(mins) / dmax
+    return q
+
+
+class Trainer:
+    """One training run in `run_dir` (checkpoint.pt, loss.csv, loss.png, config.json)."""
+
+    def __init__(self, cfg: Config, run_dir: str | Path | None = None, resume: bool = False,
+                 force: bool = False, progress: bool = True):
+        self.cfg = cfg
+        t = cfg.train
+        self.run_dir = Path(run_dir) if run_dir else Path(t.run_dir) / cfg.pattern.name
+        self.ckpt_path = self.run_dir / CHECKPOINT
+        self.progress = progress
+        if t.threads:
+            torch.set_num_threads(t.threads)
+        if t.device.startswith("cuda") and not torch.cuda.is_available():
+            raise TrainingError(f"device {t.device!r} requested but CUDA is not available")
+        self.device = torch.device(t.device)
+        torch.manual_seed(t.seed)
+        self.model = Cascade(cfg.cascade_spec()).to(self.device)
+        self.loss_fn, self.loss_source = build_loss(cfg.loss, cfg.pattern.points, cfg.pattern.dims,
+                                                    cfg.base_dir())
+        self.opt = torch.optim.Adam(self.model.parameters(), lr=t.lr)
+        gamma = (t.lr_final / t.lr) ** (1.0 / t.steps)
+        self.sched = torch.optim.lr_scheduler.ExponentialLR(self.opt, gamma=gamma)
+        self.step = 0
+        self.wall = 0.0
+        self.history: list[tuple[int, float, float, float]] = []
+        if self.ckpt_path.exists():
+            if resume:
+                self._restore(load_checkpoint(self.ckpt_path))
+            elif not force:
+                raise RunExistsError(f"{self.ckpt_path} exists: pass --resume to continue it or "
+                                     f"--force to start over")
+
+    # -- checkpoints ------------------------------------------------------------------
+    def state(self) -> dict:
+        return {"format": "dpc-train-checkpoint-1", "step": self.step, "wall_time": self.wall,
+                "config": self.cfg.to_dict(), "config_path": self.cfg.source_path,
+                "loss_source": self.loss_source, "model": self.model.state_dict(),
+                "tables": self.model.tables().detach().cpu(),
+                "optimizer": self.opt.state_dict(), "scheduler": self.sched.state_dict(),
+                "history": list(self.history), "torch_version": torch.__version__}
+
+    def _restore(self, st: dict) -> None:
+        saved = st["config"]
+        now = self.cfg.to_dict()
+        for sec in ("pattern", "model", "loss"):
+            if saved[sec] != now[sec]:
+                raise TrainingError(f"cannot resume: [{sec}] differs from the checkpoint's "
+                                    f"({saved[sec]} vs {now[sec]})")
+        self.model.load_state_dict(st["model"])
+        self.opt.load_state_dict(st["optimizer"])
+        self.sched.load_state_dict(st["scheduler"])
+        self.step, self.wall = int(st["step"]), float(st["wall_time"])
+        self.history = [tuple(h) for h in st["history"]]
+
+    def checkpoint(self, final: bool = False) -> None:
+        save_checkpoint(self.ckpt_path, self.state())
+        # the PNG costs ~0.1 s: redraw it at most once a minute, and at the end
+        now = time.monotonic()
+        png = final or now - getattr(self, "_last_png", -1e9) > 60
+        if png:
+            self._last_png = now
+        self.write_curve(png=png)
+
+    def write_curve(self, png: bool = True) -> None:
+        buf = io.StringIO()
+        w = csv.writer(buf)
+        w.writerow(["step", "loss", "lr", "wall_s"])
+        w.writerows(self.history)
+        atomic_write_bytes(self.run_dir / "loss.csv", buf.getvalue().encode())
+        if self.history and png:
+            import matplotlib
+
+            matplotlib.use("Agg")
+            import matplotlib.pyplot as plt
+
+            fig, ax = plt.subplots(figsize=(6, 3.5))
+            ax.plot([h[0] for h in self.history], [h[1] for h in self.history], lw=0.8)
+            ax.set_yscale("log")
+            ax.set_xlabel("step")
+            ax.set_ylabel("loss")
+            ax.set_title(self.cfg.pattern.name)
+            ax.grid(alpha=0.3)
+            fig.tight_layout()
+            png = io.BytesIO()
+            fig.savefig(png, format="png", dpi=100)
+            plt.close(fig)
+            atomic_write_bytes(self.run_dir / "loss.png", png.getvalue())
+
+    # -- loop -------------------------------------------------------------------------
+    def train_step(self) -> float:
+        t = self.cfg.train
+        g = step_generator(t.seed, self.step)
+        x = self.model.input_points(t.batch, g, device=self.device)
+        torch.manual_seed((t.seed * 7_919 + self.step) % (1 << 63))  # Monte Carlo in the loss
+        self.opt.zero_grad(set_to_none=True)
+        y = self.model(x, impl=t.impl)
+        loss = self.loss_fn(y)
+        val = float(loss.detach())
+        if not math.isfinite(val):
+            raise TrainingDivergedError(
+                f"loss is {val} at step {self.step}; stopping. The last good checkpoint is "
+                f"{self.ckpt_path} (step {self._last_ckpt}). Lower [train] lr, check the loss "
+                f"program, or resume from the checkpoint.")
+        loss.backward()
+        grad = self.model.theta.grad
+        if grad is not None and not torch.isfinite(grad).all():
+            raise TrainingDivergedError(
+                f"non-finite kernel gradient at step {self.step} (loss {val}); stopping. The last "
+                f"good checkpoint is {self.ckpt_path} (step {self._last_ckpt}).")
+        self.opt.step()
+        self.sched.step()
+        return val
+
+    def run(self) -> dict:
+        from tqdm import tqdm
+
+        t = self.cfg.train
+        self.run_dir.mkdir(parents=True, exist_ok=True)
+        atomic_write_bytes(self.run_dir / "config.json",
+                           json.dumps(self.cfg.to_dict(), indent=2).encode())
+        self._last_ckpt = self.step
+        bar = tqdm(total=t.steps, initial=self.step, disable=not self.progress, unit="step",
+                   dynamic_ncols=True, desc=self.cfg.pattern.name)
+        try:
+            while self.step < t.steps:
+                t0 = time.perf_counter()
+                lr = self.opt.param_groups[0]["lr"]
+                val = self.train_step()
+                self.step += 1
+                self.wall += time.perf_counter() - t0
+                if self.step % t.log_every == 0 or self.step == t.steps:
+                    self.history.append((self.step, val, lr, round(self.wall, 3)))
+                bar.update(1)
+                bar.set_postfix(loss=f"{val:.4g}", lr=f"{lr:.2g}")
+                if self.step % t.checkpoint_every == 0 or self.step == t.steps:
+                    self.checkpoint(final=self.step == t.steps)
+                    self._last_ckpt = self.step
+        finally:
+            bar.close()
+        quality = measure_quality(self.model, self.loss_fn, self.cfg, self.device)
+        st = self.state()
+        st["quality"] = quality
+        save_checkpoint(self.ckpt_path, st)
+        atomic_write_bytes(self.run_dir / "quality.json", json.dumps(quality, indent=2).encode())
+        return {"run_dir": str(self.run_dir), "steps": self.step, "wall_time": self.wall,
+                "quality": quality}
+
+
+def cascade_from_checkpoint(st: dict) -> tuple[Cascade, Config]:
+    """Rebuild the trained cascade and its config from a checkpoint dict."""
+    cfg = config_from_dict(st["config"], st.get("config_path", ""))
+    model = Cascade(cfg.cascade_spec())
+    model.load_state_dict(st["model"])
+    return model, cfg
