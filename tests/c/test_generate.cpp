@@ -1,0 +1,297 @@
+// Generating point sets: determinism, thread independence, sharing one model between threads,
+// batches, gridded dimensions, counts other than the trained one, ISA paths, equivalent files.
+#include "test_util.h"
+
+#include <algorithm>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+using namespace dpct;
+
+namespace {
+
+// Input points of dpc_generate_n(model, seed, n): uniform, then gridded dims set to cell centres.
+std::vector<float> input_points(const dpc_model_info &info, uint64_t seed, size_t n) {
+    std::vector<float> x(n * info.dims);
+    EXPECT_EQ(dpc_uniform(seed, n, info.dims, x.data()), DPC_OK);
+    for (size_t i = 0; i < n; i++) {
+        size_t rest = i;
+        for (uint32_t g = 0; g < info.grid_dims; g++) {
+            size_t cell = rest % info.grid_shape[g];
+            rest /= info.grid_shape[g];
+            x[i * info.dims + info.grid_axis[g]] = (float)((cell + 0.5) / info.grid_shape[g]);
+        }
+    }
+    return x;
+}
+
+bool is_grid_axis(const dpc_model_info &info, uint32_t k) {
+    for (uint32_t g = 0; g < info.grid_dims; g++)
+        if (info.grid_axis[g] == k) return true;
+    return false;
+}
+
+// Mean toroidal displacement over the non-gridded coordinates.
+double mean_move(const dpc_model_info &info, const std::vector<float> &a, const std::vector<float> &b) {
+    double sum = 0;
+    size_t cnt = 0;
+    for (size_t i = 0; i < a.size(); i++) {
+        if (is_grid_axis(info, (uint32_t)(i % info.dims))) continue;
+        sum += torus_diff(a[i], b[i]);
+        cnt++;
+    }
+    return cnt ? sum / cnt : 0.0;
+}
+
+void expect_unit_cube(const std::vector<float> &x) {
+    for (size_t i = 0; i < x.size(); i++) {
+        ASSERT_TRUE(x[i] >= 0.0f && x[i] < 1.0f) << "coordinate " << i << " = " << x[i];
+    }
+}
+
+class PerModel : public ::testing::TestWithParam<std::string> {
+  protected:
+    std::string path() const { return model_path(GetParam()); }
+};
+
+std::string param_name(const ::testing::TestParamInfo<std::string> &p) { return p.param; }
+
+}  // namespace
+
+TEST_P(PerModel, SameSeedSameBits) {
+    ModelPtr a = load(path()), b = load(path());
+    ASSERT_TRUE(a && b);
+    for (uint64_t seed : {0ull, 1ull, 123456789ull, ~0ull}) {
+        std::vector<float> x = generate(a.get(), seed);
+        EXPECT_EQ(x, generate(a.get(), seed)) << "seed " << seed << ": second call differs";
+        EXPECT_EQ(x, generate(b.get(), seed)) << "seed " << seed << ": second handle differs";
+        expect_unit_cube(x);
+    }
+    EXPECT_NE(generate(a.get(), 1), generate(a.get(), 2)) << "seeds 1 and 2 give the same set";
+}
+
+TEST_P(PerModel, PointsMoveNoticeably) {
+    // The test models push points by a fraction of the spacing: a cascade that did nothing (or
+    // almost nothing) would make the other tests meaningless.
+    ModelPtr m = load(path());
+    ASSERT_TRUE(m);
+    dpc_model_info info = info_of(m.get());
+    std::vector<float> x0 = input_points(info, 7, info.n_points);
+    std::vector<float> y = generate(m.get(), 7);
+    EXPECT_GT(mean_move(info, x0, y), 1e-3) << "mean displacement of the free coordinates";
+}
+
+TEST_P(PerModel, GenerateIsFilterOfTheDocumentedInput) {
+    // docs/model-format.md §5: dpc_generate filters uniform(seed) with gridded dims overwritten.
+    ModelPtr m = load(path());
+    ASSERT_TRUE(m);
+    dpc_model_info info = info_of(m.get());
+    for (uint64_t seed : {3ull, 99ull}) {
+        std::vector<float> x = input_points(info, seed, info.n_points);
+        ASSERT_EQ(dpc_filter(m.get(), info.n_points, x.data()), DPC_OK) << dpc_last_error();
+        EXPECT_EQ(x, generate(m.get(), seed)) << "seed " << seed;
+    }
+}
+
+TEST_P(PerModel, ThreadCountDoesNotChangeBits) {
+    std::vector<dpc_isa> isas = {DPC_ISA_SCALAR};
+    for (dpc_isa v : vector_isas()) isas.push_back(v);
+    for (dpc_isa isa : isas) {
+        ModelPtr one = load(path(), isa, 1);
+        ASSERT_TRUE(one);
+        dpc_model_info info = info_of(one.get());
+        std::vector<size_t> counts = {0};
+        if (!info.grid_dims) counts.push_back(1500);
+        for (uint32_t threads : {2u, 8u, 0u}) {
+            ModelPtr many = load(path(), isa, threads);
+            ASSERT_TRUE(many);
+            for (size_t n : counts)
+                for (uint64_t seed : {5ull, 6ull})
+                    EXPECT_EQ(generate(one.get(), seed, n), generate(many.get(), seed, n))
+                        << isa_name(isa) << ", 1 vs " << threads << " threads, n " << n << ", seed " << seed;
+        }
+    }
+}
+
+TEST_P(PerModel, EightThreadsSharingOneModelGiveTheSerialResults) {
+    for (uint32_t handle_threads : {1u, 2u}) {
+        ModelPtr m = load(path(), DPC_ISA_AUTO, handle_threads);
+        ASSERT_TRUE(m);
+        const int T = 8, per_thread = 3;
+        std::vector<std::vector<float>> serial(T * per_thread);
+        for (int s = 0; s < T * per_thread; s++) serial[s] = generate(m.get(), 1000 + s);
+        std::vector<std::vector<float>> parallel(T * per_thread);
+        std::vector<int> failures(T, 0);
+        std::vector<std::thread> pool;
+        dpc_model_info info = info_of(m.get());
+        for (int t = 0; t < T; t++)
+            pool.emplace_back([&, t] {
+                for (int r = 0; r < per_thread; r++) {
+                    int s = t + T * r;  // interleave seeds between threads
+                    std::vector<float> out((size_t)info.n_points * info.dims);
+                    if (dpc_generate(m.get(), 1000 + s, out.data()) != DPC_OK) failures[t]++;
+                    parallel[s] = std::move(out);
+                }
+            });
+        for (auto &th : pool) th.join();
+        for (int t = 0; t < T; t++) EXPECT_EQ(failures[t], 0) << "thread " << t;
+        for (int s = 0; s < T * per_thread; s++)
+            EXPECT_EQ(serial[s], parallel[s]) << "seed " << 1000 + s << ", handle threads " << handle_threads;
+    }
+}
+
+TEST_P(PerModel, BatchEqualsPerSeedGenerate) {
+    ModelPtr m = load(path(), DPC_ISA_AUTO, 2);
+    ASSERT_TRUE(m);
+    dpc_model_info info = info_of(m.get());
+    std::vector<size_t> counts = {0};
+    if (!info.grid_dims) counts.push_back(600);
+    for (size_t n : counts) {
+        size_t m_pts = n ? n : info.n_points;
+        for (uint64_t seed : {10ull, ~0ull - 1}) {  // the second wraps: seeds 2^64-2, 2^64-1, 0, 1
+            const size_t count = 4;
+            ASSERT_EQ(dpc_output_size(m.get(), count, m_pts), count * m_pts * info.dims);
+            std::vector<float> batch(count * m_pts * info.dims, -1.0f);
+            ASSERT_EQ(dpc_generate_batch(m.get(), seed, count, n, batch.data()), DPC_OK) << dpc_last_error();
+            for (size_t c = 0; c < count; c++) {
+                std::vector<float> one = generate(m.get(), seed + c, n);  // uint64 wraps
+                std::vector<float> part(batch.begin() + c * one.size(), batch.begin() + (c + 1) * one.size());
+                EXPECT_EQ(part, one) << "set " << c << " of the batch from seed " << seed << ", n " << n;
+            }
+        }
+    }
+}
+
+TEST_P(PerModel, OtherPointCounts) {
+    ModelPtr m = load(path());
+    ASSERT_TRUE(m);
+    dpc_model_info info = info_of(m.get());
+    EXPECT_EQ(generate(m.get(), 4, 0), generate(m.get(), 4, info.n_points)) << "0 means the trained count";
+    if (info.grid_dims) GTEST_SKIP() << "gridded models generate only their grid's count (tested in test_api)";
+    for (size_t n : {777u, 1500u, 3000u}) {
+        std::vector<float> y = generate(m.get(), 4, n);
+        ASSERT_EQ(y.size(), n * info.dims);
+        expect_unit_cube(y);
+        EXPECT_EQ(y, generate(m.get(), 4, n)) << n << " points: not deterministic";
+        EXPECT_GT(mean_move(info, input_points(info, 4, n), y), 1e-3) << n << " points did not move";
+    }
+}
+
+TEST_P(PerModel, OnePointIsNotMoved) {
+    // With m = 1 the only pair is j = i (d = 0, below the cut-off): the output is the input.
+    ModelPtr m = load(path());
+    ASSERT_TRUE(m);
+    dpc_model_info info = info_of(m.get());
+    if (info.grid_dims) GTEST_SKIP() << "a gridded model has exactly its grid's count";
+    for (uint64_t seed : {0ull, 8ull}) EXPECT_EQ(generate(m.get(), seed, 1), input_points(info, seed, 1));
+    for (size_t n : {2u, 3u, 17u}) expect_unit_cube(generate(m.get(), 8, n));
+}
+
+TEST_P(PerModel, EveryIsaAgreesWithScalar) {
+    std::vector<dpc_isa> isas = vector_isas();
+    if (isas.empty()) GTEST_SKIP() << "this CPU has no vector ISA path libdpc supports (AVX2+FMA)";
+    ModelPtr scalar = load(path(), DPC_ISA_SCALAR);
+    ASSERT_TRUE(scalar);
+    EXPECT_EQ(info_of(scalar.get()).isa, DPC_ISA_SCALAR);
+    dpc_model_info info = info_of(scalar.get());
+    std::vector<size_t> counts = {0};
+    if (!info.grid_dims) counts.push_back(1500);
+    for (dpc_isa isa : isas) {
+        ModelPtr vec = load(path(), isa);
+        ASSERT_TRUE(vec);
+        EXPECT_EQ(info_of(vec.get()).isa, isa);
+        double worst = 0;
+        for (size_t n : counts)
+            for (uint64_t seed : {0ull, 1ull, 2ull, 77ull}) {
+                double d = max_torus_diff(generate(scalar.get(), seed, n), generate(vec.get(), seed, n));
+                EXPECT_LE(d, 1e-5) << isa_name(isa) << " vs scalar, seed " << seed << ", n " << n;
+                worst = std::max(worst, d);
+            }
+        RecordProperty("max_abs_diff_" + isa_name(isa), std::to_string(worst));
+        std::printf("[ info ] %s: %s vs scalar, max |diff| %.3g\n", GetParam().c_str(), isa_name(isa).c_str(), worst);
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(TestModels, PerModel, ::testing::ValuesIn(model_names()), param_name);
+
+TEST(Isa, UnsupportedIsaIsReported) {
+    dpc_load_options o;
+    dpc_load_options_init(&o);
+    o.isa = DPC_ISA_AVX2;
+    dpc_model *m = nullptr;
+    dpc_status st = dpc_model_load_file(model_path("model_2d").c_str(), &o, &m);
+    ModelPtr hold(m);
+    if (cpu_has_avx2_fma()) {
+        EXPECT_EQ(st, DPC_OK) << "the CPU has AVX2 and FMA: " << dpc_last_error();
+        if (m) {
+            EXPECT_EQ(info_of(m).isa, DPC_ISA_AVX2);
+        }
+    } else {
+        EXPECT_EQ(st, DPC_ERROR_UNSUPPORTED) << "AVX2 requested on a CPU without it";
+        EXPECT_EQ(m, nullptr);
+        GTEST_SKIP() << "CPU lacks AVX2/FMA: checked that DPC_ISA_AVX2 is refused";
+    }
+}
+
+// ---- gridded dimensions ----------------------------------------------------------------------
+
+TEST(Grid, GriddedDimsAreCellCentresAndNeverMove) {
+    ModelPtr m = load(model_path("model_grid_3to1"));
+    ASSERT_TRUE(m);
+    for (uint64_t seed : {0ull, 1ull, 31337ull}) {
+        std::vector<float> y = generate(m.get(), seed);
+        ASSERT_EQ(y.size(), 1024u * 3);
+        for (size_t i = 0; i < 1024; i++) {
+            // §5: the first grid axis varies fastest; centres (cell + 0.5) / 32 are exact floats.
+            ASSERT_EQ(y[i * 3 + 0], ((float)(i % 32) + 0.5f) / 32.0f) << "point " << i;
+            ASSERT_EQ(y[i * 3 + 1], ((float)(i / 32) + 0.5f) / 32.0f) << "point " << i;
+        }
+    }
+}
+
+TEST(Grid, FilterLeavesGivenGriddedValuesAlone) {
+    ModelPtr m = load(model_path("model_grid_3to1"));
+    ASSERT_TRUE(m);
+    std::vector<float> x(1024 * 3);
+    ASSERT_EQ(dpc_uniform(5, 1024, 3, x.data()), DPC_OK);  // gridded dims NOT on cell centres
+    std::vector<float> y = x;
+    ASSERT_EQ(dpc_filter(m.get(), 1024, y.data()), DPC_OK) << dpc_last_error();
+    size_t moved = 0;
+    for (size_t i = 0; i < 1024; i++) {
+        ASSERT_EQ(y[i * 3 + 0], x[i * 3 + 0]);
+        ASSERT_EQ(y[i * 3 + 1], x[i * 3 + 1]);
+        moved += y[i * 3 + 2] != x[i * 3 + 2];
+    }
+    EXPECT_GT(moved, 900u) << "the value dimension should move";
+}
+
+// ---- equivalent encodings (tests/data/variants) ---------------------------------------------
+
+TEST(Variants, EquivalentFilesGiveTheSameBits) {
+    std::ifstream manifest(data_path("variants/manifest.tsv"));
+    ASSERT_TRUE(manifest) << "variants/manifest.tsv missing";
+    std::string line;
+    int checked = 0;
+    while (std::getline(manifest, line)) {
+        if (line.empty() || line[0] == '#') continue;
+        std::istringstream ss(line);
+        std::string file, base, why;
+        std::getline(ss, file, '\t');
+        std::getline(ss, base, '\t');
+        std::getline(ss, why);
+        SCOPED_TRACE(file + " (" + why + ")");
+        ModelPtr v = load(data_path("variants/" + file));
+        ModelPtr b = load(data_path(base));
+        ASSERT_TRUE(v && b);
+        dpc_model_info vi = info_of(v.get()), bi = info_of(b.get());
+        EXPECT_EQ(vi.dims, bi.dims);
+        EXPECT_EQ(vi.n_points, bi.n_points);
+        EXPECT_EQ(vi.layers, bi.layers);
+        EXPECT_EQ(vi.grid_dims, bi.grid_dims);
+        for (uint64_t seed : {0ull, 12ull}) EXPECT_EQ(generate(v.get(), seed), generate(b.get(), seed));
+        checked++;
+    }
+    EXPECT_GE(checked, 8);
+}
