@@ -1,0 +1,318 @@
+"""Baseline point sets behind one interface, for comparisons with dpc models.
+
+    >>> from dpc import baselines
+    >>> baselines.available()                       # names
+    >>> sets = baselines.generate("sobol", 1024, dims=2, count=16, seed=0)   # (16, 1024, 2)
+
+Every baseline has ``generate_batch(count, n_points, dims, seed)`` returning float64
+``(count, m, n)`` in [0, 1); set c is a pure function of ``seed + c`` (as for dpc models).
+
+Synthetic: ``white`` (uniform random), ``jitter`` (one uniform point per cell of a k^n grid),
+``sobol`` and ``halton`` (scrambled, scipy.stats.qmc), ``lhs`` (Latin hypercube), ``poisson-disk``
+(scipy's PoissonDisk), ``rank1`` (Korobov rank-1 lattice) and ``fibonacci`` (2-D Fibonacci
+lattice), both with a uniform random shift (Cranley-Patterson rotation).
+
+Reference: ``ref-bnot``, ``ref-jitter``, ``ref-step``, ``ref-staircase``: the point sets
+published by the paper's authors (vendored under ``dpc/data/deepsampling/pcf``, BSD-3-Clause,
+see the LICENSE and README there); only the (m, n) they exist for, and at most as many sets.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import re
+import warnings
+from dataclasses import dataclass
+from importlib import resources
+from typing import Callable
+
+import numpy as np
+from scipy.stats import qmc
+
+from .errors import InvalidArgumentError
+
+
+def _rng(seed: int) -> np.random.Generator:
+    return np.random.default_rng(int(seed))
+
+
+def _check_seed(seed) -> int:
+    s = int(seed)
+    if s < 0:
+        raise InvalidArgumentError(f"seed must be >= 0, got {seed}")
+    return s
+
+
+def _qmc_engine(cls, dims: int, rng: np.random.Generator, **kw):
+    # scipy >= 1.15 takes rng=, older releases seed= (same meaning for a Generator).
+    try:
+        return cls(dims, rng=rng, **kw)
+    except TypeError:
+        return cls(dims, seed=rng, **kw)
+
+
+# ---------------------------------------------------------------- synthetic samplers
+def _white(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
+    return rng.random((m, n))
+
+
+def _jitter(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
+    k = round(m ** (1.0 / n))
+    if k ** n != m:
+        lo, hi = math.floor(m ** (1.0 / n)), math.ceil(m ** (1.0 / n))
+        raise InvalidArgumentError(
+            f"jitter needs m = k^{n} points; nearest: {max(lo, 1) ** n} or {hi ** n}")
+    cells = np.stack(np.meshgrid(*([np.arange(k)] * n), indexing="ij"), axis=-1).reshape(-1, n)
+    return (cells + rng.random((m, n))) / k
+
+
+def _sobol(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
+    eng = _qmc_engine(qmc.Sobol, n, rng, scramble=True)
+    with warnings.catch_warnings():
+        # scipy warns when m is not a power of two (the balance properties then hold only for
+        # the leading power-of-two prefix); the first m points are still a valid baseline.
+        warnings.simplefilter("ignore", UserWarning)
+        return eng.random(m)
+
+
+def _halton(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
+    return _qmc_engine(qmc.Halton, n, rng, scramble=True).random(m)
+
+
+def _lhs(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
+    return _qmc_engine(qmc.LatinHypercube, n, rng).random(m)
+
+
+def _poisson_disk(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
+    # scipy grows the set outwards from a seed point, so taking its first m points would leave
+    # part of the square empty. Instead fill the whole cube at a radius small enough to give
+    # at least m points, then drop the surplus (a few percent) at random.
+    from .analysis._common import max_packing_distance
+    radius = 0.71 * max_packing_distance(m, n)  # ~5% surplus in 2-D, more in 3-D
+    for _ in range(60):
+        pts = _qmc_engine(qmc.PoissonDisk, n, rng, radius=radius).fill_space()
+        if len(pts) >= m:
+            keep = np.sort(rng.choice(len(pts), size=m, replace=False))
+            return pts[keep]
+        radius *= 0.97
+    raise InvalidArgumentError(f"poisson-disk could not place {m} points in {n}-D")
+
+
+@functools.lru_cache(maxsize=64)
+def korobov_generator(m: int, n: int) -> tuple[int, ...]:
+    """Generating vector z = (1, a, a^2, ...) mod m of a Korobov rank-1 lattice, with a chosen
+    to minimise the classical figure of merit P_2 (Sloan & Joe 1994):
+    P_2(z) = -1 + (1/m) sum_i prod_j (1 + 2 pi^2 B_2({i z_j / m})), B_2(x) = x^2 - x + 1/6.
+    Candidates: every a in [2, m/2] coprime to m (at most 1,024, evenly spread)."""
+    if m < 4 or n == 1:
+        return tuple([1] * n)
+    cands = np.array([a for a in range(2, m // 2 + 1) if math.gcd(a, m) == 1], dtype=np.int64)
+    if cands.size == 0:
+        return tuple([1] * n)
+    if cands.size > 1024:
+        cands = cands[np.linspace(0, cands.size - 1, 1024).round().astype(int)]
+    i = np.arange(m, dtype=np.int64)
+    best, best_a = math.inf, 1
+    for a in cands:
+        z = [pow(int(a), j, m) for j in range(n)]
+        prod = np.ones(m)
+        for zj in z:
+            x = (i * zj % m) / m
+            prod *= 1.0 + 2.0 * math.pi ** 2 * (x * x - x + 1.0 / 6.0)
+        p2 = prod.mean() - 1.0
+        if p2 < best:
+            best, best_a = p2, int(a)
+    return tuple(pow(best_a, j, m) for j in range(n))
+
+
+def _lattice(m: int, z, rng: np.random.Generator) -> np.ndarray:
+    i = np.arange(m, dtype=np.int64)[:, None]
+    pts = (i * np.asarray(z, dtype=np.int64)[None, :] % m) / m
+    pts = pts + rng.random(len(z))          # Cranley-Patterson rotation
+    return pts - np.floor(pts)
+
+
+def _rank1(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
+    return _lattice(m, korobov_generator(m, n), rng)
+
+
+def fibonacci_numbers(limit: int) -> list[int]:
+    """Fibonacci numbers 1, 2, 3, 5, 8, ... up to ``limit``."""
+    out, a, b = [], 1, 2
+    while a <= limit:
+        out.append(a)
+        a, b = b, a + b
+    return out
+
+
+def nearest_fibonacci(m: int) -> int:
+    """The Fibonacci number closest to m (the smaller one on a tie)."""
+    fib = fibonacci_numbers(2 * max(int(m), 2))
+    return min(fib, key=lambda f: (abs(f - m), f))
+
+
+def _fibonacci(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
+    if n != 2:
+        raise InvalidArgumentError(f"the Fibonacci lattice is 2-D, got dims = {n}")
+    fib = fibonacci_numbers(2 * max(m, 2))
+    if m not in fib or m < 3:
+        below = max([f for f in fib if f < m] or [3])
+        above = min(f for f in fib if f > m)
+        raise InvalidArgumentError(
+            f"the Fibonacci lattice needs a Fibonacci number of points >= 3; nearest: {below} or {above}")
+    k = fib.index(m)
+    return _lattice(m, (1, fib[k - 1]), rng)
+
+
+@dataclass(frozen=True)
+class Baseline:
+    """A synthetic sampler: ``make(m, n, rng) -> (m, n)``."""
+    name: str
+    description: str
+    make: Callable[[int, int, np.random.Generator], np.ndarray]
+
+    def generate(self, n_points: int, dims: int = 2, seed: int = 0) -> np.ndarray:
+        """One set (m, n) from ``seed``."""
+        return self.generate_batch(1, n_points, dims, seed)[0]
+
+    def generate_batch(self, count: int, n_points: int | None, dims: int | None = 2,
+                       seed: int = 0) -> np.ndarray:
+        """``count`` sets (count, m, n); set c from seed ``seed + c``."""
+        if n_points is None:
+            raise InvalidArgumentError(f"{self.name} needs a number of points")
+        m, n, c = int(n_points), int(2 if dims is None else dims), int(count)
+        s = _check_seed(seed)
+        if m < 1 or n < 1 or c < 1:
+            raise InvalidArgumentError(
+                f"count, points and dims must be positive, got {count}, {n_points}, {dims}")
+        out = np.empty((c, m, n))
+        for i in range(c):
+            out[i] = self.make(m, n, _rng(s + i))
+        # Guard the unit torus: shifted lattices and rounding can land exactly on 1.0.
+        out[out >= 1.0] = 0.0
+        return out
+
+
+# ---------------------------------------------------------------- the authors' point sets
+_REF_DIR = re.compile(r"^(?:test-)?pcf-([a-z]+)-d(\d+)-n(\d+)$")
+
+
+def _ref_root():
+    return resources.files("dpc") / "data" / "deepsampling" / "pcf"
+
+
+@functools.lru_cache(maxsize=1)
+def _reference_index() -> dict[tuple[str, int, int], tuple[str, ...]]:
+    """(pattern, dims, m) -> sorted file names relative to the pcf folder."""
+    index: dict[tuple[str, int, int], list[str]] = {}
+    root = _ref_root()
+    if not root.is_dir():
+        return {}
+    for folder in sorted(root.iterdir(), key=lambda p: p.name):
+        match = _REF_DIR.match(folder.name)
+        if not match or not folder.is_dir():
+            continue
+        key = (match[1], int(match[2]), int(match[3]))
+        files = sorted(f.name for f in folder.iterdir() if f.name.endswith(".txt"))
+        index.setdefault(key, []).extend(f"{folder.name}/{f}" for f in files)
+    return {k: tuple(v) for k, v in index.items()}
+
+
+@functools.lru_cache(maxsize=32)
+def reference_sets(pattern: str, n_points: int, dims: int = 2) -> np.ndarray:
+    """All of the authors' sets of ``pattern`` (bnot, jitter, step, staircase) with m points in
+    n dims: float64 (sets, m, n). Read-only array (cached)."""
+    key = (pattern, int(dims), int(n_points))
+    files = _reference_index().get(key)
+    if not files:
+        have = ", ".join(f"{p} d={d} m={m}" for p, d, m in sorted(_reference_index()))
+        raise InvalidArgumentError(
+            f"no reference sets for {pattern} with dims={dims}, m={n_points}; available: {have}")
+    root = _ref_root()
+    sets = []
+    for name in files:
+        pts = np.loadtxt(str(root / name), ndmin=2)
+        if pts.shape != (key[2], key[1]):
+            raise InvalidArgumentError(f"reference file {name} has shape {pts.shape}")
+        sets.append(pts)
+    arr = np.stack(sets)
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True)
+class ReferenceBaseline:
+    """The authors' published sets of one pattern."""
+    name: str
+    pattern: str
+    description: str
+
+    def available(self) -> list[tuple[int, int, int]]:
+        """(m, dims, number of sets) for which sets exist."""
+        return sorted((m, d, len(f)) for (p, d, m), f in _reference_index().items()
+                      if p == self.pattern)
+
+    def generate(self, n_points: int | None = None, dims: int | None = None,
+                 seed: int = 0) -> np.ndarray:
+        return self.generate_batch(1, n_points, dims, seed)[0]
+
+    def generate_batch(self, count: int, n_points: int | None = None, dims: int | None = None,
+                       seed: int = 0) -> np.ndarray:
+        """``count`` distinct published sets, set c being number (seed + c) mod sets.
+        ``n_points``/``dims`` may be omitted where only one collection fits."""
+        s = _check_seed(seed)
+        fits = [(m, d, k) for m, d, k in self.available()
+                if (n_points is None or m == int(n_points)) and (dims is None or d == int(dims))]
+        if len(fits) != 1:
+            have = ", ".join(f"m={m} dims={d} ({k} sets)" for m, d, k in self.available())
+            want = "ambiguous" if fits else "not available"
+            raise InvalidArgumentError(
+                f"{self.name}: m={n_points}, dims={dims} is {want}; published: {have}")
+        m, d, k = fits[0]
+        if not 1 <= int(count) <= k:
+            raise InvalidArgumentError(f"{self.name} has {k} sets of m={m}, dims={d}; asked for {count}")
+        sets = reference_sets(self.pattern, m, d)
+        idx = [(s + c) % k for c in range(int(count))]
+        return np.array(sets[idx])
+
+
+_SYNTHETIC = [
+    Baseline("white", "uniform random points (white noise)", _white),
+    Baseline("jitter", "jittered grid: one uniform point per cell of a k^n grid (m = k^n)", _jitter),
+    Baseline("sobol", "Owen-scrambled Sobol' (scipy.stats.qmc.Sobol)", _sobol),
+    Baseline("halton", "scrambled Halton (scipy.stats.qmc.Halton)", _halton),
+    Baseline("lhs", "Latin hypercube (scipy.stats.qmc.LatinHypercube)", _lhs),
+    Baseline("poisson-disk", "maximal Poisson disk (scipy.stats.qmc.PoissonDisk), trimmed to m",
+             _poisson_disk),
+    Baseline("rank1", "Korobov rank-1 lattice (P_2-optimal generator), random shift", _rank1),
+    Baseline("fibonacci", "2-D Fibonacci lattice z = (1, F_(k-1)), m = F_k, random shift",
+             _fibonacci),
+]
+_REFERENCE = [
+    ReferenceBaseline("ref-bnot", "bnot", "the authors' BNOT sets (De Goes et al. 2012)"),
+    ReferenceBaseline("ref-jitter", "jitter", "the authors' jittered sets"),
+    ReferenceBaseline("ref-step", "step", "the authors' step blue-noise sets (Heck et al. 2013)"),
+    ReferenceBaseline("ref-staircase", "staircase", "the authors' staircase sets (Kailkhura 2016)"),
+]
+BASELINES: dict[str, Baseline | ReferenceBaseline] = {b.name: b for b in _SYNTHETIC + _REFERENCE}
+
+
+def available() -> list[str]:
+    """Names of all baselines."""
+    return list(BASELINES)
+
+
+def get(name: str) -> Baseline | ReferenceBaseline:
+    """The baseline called ``name``."""
+    try:
+        return BASELINES[name]
+    except KeyError:
+        raise InvalidArgumentError(
+            f"unknown baseline {name!r}; available: {', '.join(BASELINES)}") from None
+
+
+def generate(name: str, n_points: int | None, dims: int | None = 2, count: int = 1,
+             seed: int = 0) -> np.ndarray:
+    """``count`` sets of baseline ``name``: float64 (count, m, n)."""
+    return get(name).generate_batch(count, n_points, dims, seed)
