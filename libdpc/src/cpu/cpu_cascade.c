@@ -111,12 +111,15 @@ static void plan_grid(sub_pass *p, size_t m) {
     if (k > 4 || m < 64) return;
     const double r = p->job.radius;
     const double reach = k <= 2 ? 2.0 : 1.0; /* cells per radius: finer cells visit less area */
-    double G = floor(reach / r);
-    const double cap = floor(pow(2.0 * (double)m, 1.0 / k)); /* at most ~2m cells */
+    /* Cell coordinates are computed as (int)(x * G) in float, off by up to G * 6e-8 cells near
+     * cell edges; the margin of 1e-3 cells (G <= 16384) keeps every neighbour within R cells. */
+    const double margin = 1e-3;
+    double G = floor(reach / (r * (1.0 + margin)));
+    const double cap = floor(pow(2.0 * (double)m, 1.0 / k) + 1e-9); /* at most ~2m cells */
     if (G > cap) G = cap;
+    if (G > 16384) G = 16384;
     if (G < 3) return;
-    /* Offsets needed to reach any point within r, with slack for rounding at cell edges. */
-    const double R = floor(r * G * (1.0 + 1e-5) + 1e-5) + 1.0;
+    const double R = ceil(r * G + margin);
     if (2 * R + 1 > G) return;
     if (pow((2 * R + 1) / G, k) > 0.5) return; /* visits most of the domain: all pairs is faster */
     double rows = 2 * pow(2 * R + 1, k - 1);
@@ -211,16 +214,19 @@ static void sub_pass_range(void *ctx, size_t lo, size_t hi) {
     const size_t m = ws->m, n = ws->n;
     uint32_t ranges[2 * MAX_RANGES];
     float xi[DPC_MAX_DIMS], acc[DPC_MAX_DIMS];
-    const uint32_t all[2] = {0, (uint32_t)m};
+    unsigned n_ranges = 1;
+    ranges[0] = 0;
+    ranges[1] = (uint32_t)m; /* all pairs */
+    uint32_t cell = UINT32_MAX;
     for (size_t s = lo; s < hi; s++) {
         const uint32_t i = ws->perm[s];
         for (unsigned q = 0; q < k; q++) xi[q] = p->job.coord[q][s];
-        if (p->grid) {
-            unsigned nr = grid_ranges(p, ws->cell_of[i], ranges);
-            p->engine->point(&p->job, xi, ranges, nr, acc);
-        } else {
-            p->engine->point(&p->job, xi, all, 1, acc);
+        /* Points are sorted by cell, so one range list serves the whole cell. */
+        if (p->grid && ws->cell_of[i] != cell) {
+            cell = ws->cell_of[i];
+            n_ranges = grid_ranges(p, cell, ranges);
         }
+        p->engine->point(&p->job, xi, ranges, n_ranges, acc);
         float *d = ws->delta + (size_t)i * n;
         for (unsigned q = 0; q < k; q++) d[p->dim[q]] += p->h * acc[q];
     }
@@ -241,8 +247,13 @@ static void apply_range(void *ctx, size_t lo, size_t hi) {
         for (size_t d = 0; d < a->n; d++) {
             if (a->count[d] == 0.0f) continue;
             float y = a->x[i * a->n + d] + a->delta[i * a->n + d] / a->count[d];
-            y -= floorf(y);
-            a->x[i * a->n + d] = y < 1.0f ? y : 0.0f; /* -tiny wraps to 1 in float: map to 0 */
+            /* y - floor(y), with the usual cases first (the same operations, so the same bits). */
+            if (y >= 1.0f && y < 2.0f) y -= 1.0f;
+            else if (y < 0.0f && y >= -1.0f) y += 1.0f;
+            else if (!(y >= 0.0f && y < 1.0f)) y -= floorf(y);
+            /* -tiny + 1 rounds to 1: map to 0. Overflow (inf/NaN, only from absurd kernels) also
+             * maps to 0, so every output and every cell index stays in range. */
+            a->x[i * a->n + d] = (y >= 0.0f && y < 1.0f) ? y : 0.0f;
         }
 }
 

@@ -3,6 +3,13 @@
 
 #include "cpu/cpu_kernels.h"
 
+/* Round half to even without libm: adding and subtracting 1.5 * 2^23 leaves the nearest integer
+ * for |t| < 2^22 under the default rounding mode. Same result as _mm256_round_ps(NEAREST). */
+static inline float round_even(float t) {
+    const float big = 12582912.0f; /* (t + big) - big is not folded without -ffast-math */
+    return (t + big) - big;
+}
+
 void dpc_point_scalar(const dpc_sub_job *job, const float *xi, const uint32_t *ranges,
                       unsigned n_ranges, float *acc) {
     const unsigned k = job->k;
@@ -13,7 +20,7 @@ void dpc_point_scalar(const dpc_sub_job *job, const float *xi, const uint32_t *r
             float d2 = 0.0f;
             for (unsigned q = 0; q < k; q++) {
                 float t = job->coord[q][j] - xi[q];
-                t -= floorf(t + 0.5f); /* minimum-image toroidal difference */
+                t -= round_even(t); /* minimum-image toroidal difference */
                 delta[q] = t;
                 d2 += t * t;
             }

@@ -591,7 +591,7 @@ static dpc_status parse_model(pb_span file, dpc_cascade *c, graph_view *gv, pb_s
         if (nv.n_in != 2 || nv.n_out != 1)
             return FAIL("node %u must have 2 inputs and 1 output (has %u and %u)", k, nv.n_in, nv.n_out);
         if (!pb_spans_equal(nv.in[0], prev)) return FAIL("node %u does not read the previous node's output: the graph is not a chain", k);
-        pb_span tensor;
+        pb_span tensor = {NULL, 0};
         if ((st = find_initializer(gv, nv.in[1], &tensor)) != DPC_OK) return st;
         if ((st = build_layer(&nv, k, tensor, c, grid_mask, &kernel_total)) != DPC_OK) return st;
         prev = nv.out;

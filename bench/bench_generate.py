@@ -1,0 +1,126 @@
+"""Generation benchmark for libdpc (single thread), written to docs/performance.md.
+
+    python bench/bench_generate.py [--quick]
+
+Builds libdpc and bench/bench_generate.c in build/bench (Release), then measures:
+1. dpc_generate_n with models/repulsion-2d.onnx (2-D, 40 layers, rho = 3.2 spacings, about 32
+   neighbours per point) at m = 1,024 / 16,384 / 262,144 / 1,048,576, scalar and AVX2;
+2. the scaling exponent: least-squares slope of log(time) against log(m);
+3. all-pairs throughput: a 2-D model whose radius covers the torus (every pair interacts),
+   m = 4,096, 4 layers: m^2 * layers / time pair interactions per second.
+Medians over repeated runs; ratios are taken within this one run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+BUILD = ROOT / "build" / "bench"
+
+
+def build() -> Path:
+    subprocess.run(["cmake", "-S", str(ROOT), "-B", str(BUILD), "-G", "Ninja", "-DCMAKE_BUILD_TYPE=Release",
+                    "-DDPC_BUILD_BENCH=ON"], check=True, stdout=subprocess.DEVNULL)
+    subprocess.run(["cmake", "--build", str(BUILD), "--target", "dpc_bench_generate"], check=True,
+                   stdout=subprocess.DEVNULL)
+    return BUILD / "bench" / "dpc_bench_generate"
+
+
+def all_pairs_model() -> Path:
+    from dpc.model_file import Layer, ModelSpec, write_model
+
+    path = BUILD / "all-pairs-2d.onnx"
+    kernel = -0.01 * np.linspace(1.0, 0.0, 32)[None, :]
+    layers = [Layer([0b11], [1e6], kernel) for _ in range(4)]  # radius clamps to 0.5: all pairs
+    write_model(ModelSpec(dims=2, n_points=4096, layers=layers, name="all-pairs-2d"), path)
+    return path
+
+
+def run(exe: Path, model: Path, isa: str, counts: list[int]) -> list[dict]:
+    out = subprocess.run([str(exe), str(model), isa, *map(str, counts)], check=True,
+                         capture_output=True, text=True).stdout
+    return [json.loads(line) for line in out.splitlines() if line.strip()]
+
+
+def cpu_name() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown CPU"
+
+
+def has_avx2() -> bool:
+    try:
+        flags = Path("/proc/cpuinfo").read_text()
+        return " avx2" in flags and " fma" in flags
+    except OSError:
+        return False
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--quick", action="store_true", help="skip the 1,048,576-point runs")
+    ap.add_argument("--out", default=str(ROOT / "docs" / "performance.md"))
+    args = ap.parse_args()
+    exe = build()
+    counts = [1024, 16384, 262144] + ([] if args.quick else [1048576])
+    isas = ["scalar"] + (["avx2"] if has_avx2() else [])
+    model = ROOT / "models" / "repulsion-2d.onnx"
+    rows = {isa: run(exe, model, isa, counts) for isa in isas}
+    ap_model = all_pairs_model()
+    pairs = {isa: run(exe, ap_model, isa, [4096])[0] for isa in isas}
+
+    lines = [
+        "# Performance", "",
+        "Measured by `python bench/bench_generate.py` (single thread, Release build, medians of "
+        "repeated runs; one run of the script gives every number and ratio below).", "",
+        f"Machine: {cpu_name()}, {os.cpu_count()} logical CPUs, {platform.system()} {platform.machine()}.", "",
+        "## Generation: 2-D, 40 layers, about 32 neighbours per point (`models/repulsion-2d.onnx`)", "",
+        "| points m | " + " | ".join(f"{isa} median" for isa in isas) + (" | AVX2 speed-up |" if len(isas) > 1 else " |"),
+        "|---:|" + "---:|" * len(isas) + ("---:|" if len(isas) > 1 else ""),
+    ]
+    for k, m in enumerate(counts):
+        cells = [f"{rows[isa][k]['median_s'] * 1e3:.2f} ms" for isa in isas]
+        ratio = f" {rows['scalar'][k]['median_s'] / rows['avx2'][k]['median_s']:.2f}x |" if len(isas) > 1 else ""
+        lines.append(f"| {m:,} | " + " | ".join(cells) + " |" + ratio)
+    lines += ["", "Scaling exponent (slope of log time against log m over the counts above):", ""]
+    exps = {}
+    for isa in isas:
+        t = np.array([r["median_s"] for r in rows[isa]])
+        exps[isa] = float(np.polyfit(np.log(counts), np.log(t), 1)[0])
+        lines.append(f"- {isa}: {exps[isa]:.3f}")
+    lines += ["", "## All-pairs throughput (radius covers the torus; m = 4,096, 4 layers)", "",
+              "| ISA | median | pair interactions/s |", "|---|---:|---:|"]
+    rates = {}
+    for isa in isas:
+        r = pairs[isa]
+        rates[isa] = 4096**2 * r["layers"] / r["median_s"]
+        lines.append(f"| {isa} | {r['median_s'] * 1e3:.2f} ms | {rates[isa] / 1e9:.3f} G |")
+    lines += ["", "Targets (issue 2): 1,024 points <= 2 ms; 1,048,576 points <= 3 s; exponent <= 1.1; "
+              "all-pairs >= 0.5 G pair interactions/s per core with AVX2.", ""]
+    text = "\n".join(lines)
+    print(text)
+    out = Path(args.out)
+    if out.exists():  # keep other sections (e.g. training speed) written by other benchmarks
+        old = out.read_text()
+        marker = "\n## Training"
+        if marker in old:
+            text += old[old.index(marker):]
+    out.write_text(text)
+    print(f"\nwrote {out}")
+
+
+if __name__ == "__main__":
+    main()
