@@ -175,3 +175,20 @@ def test_c_impl_raises_clearly():
 def test_bad_layers_rejected(bad):
     with pytest.raises(FilterConfigError):
         filter_layer(torch.rand(10, 2), torch.zeros(len(bad["subspaces"]), 4), **bad)
+
+
+@pytest.mark.skipif(not torch.cuda.is_available(), reason="no CUDA device")
+@pytest.mark.parametrize("impl", ["torch", "analytic"])
+def test_cuda_matches_cpu(impl):
+    x, k, subs, rad, fixed = _inputs("3d_subspaces", dtype=torch.float64)
+    x = torch.cat([x, torch.rand(300, 3, dtype=torch.float64)])  # large enough for the grid path
+    w = torch.randn(x.shape, dtype=torch.float64)
+    out = {}
+    for dev in ("cpu", "cuda"):
+        xx = x.to(dev).requires_grad_()
+        kk = k.to(dev).requires_grad_()
+        y = filter_layer(xx, kk, subs, rad, 1e-4, fixed, impl=impl)
+        (y * w.to(dev)).sum().backward()
+        out[dev] = [t.detach().cpu() for t in (y, xx.grad, kk.grad)]
+    for a, b in zip(out["cpu"], out["cuda"]):
+        assert (a - b).abs().max() < 1e-9
