@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "common/error.h"
 #include "common/rng.h"
@@ -85,6 +86,11 @@ dpc_status dpc_model_load_file(const char *path, const dpc_load_options *options
     if (!path) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "path is NULL");
     FILE *f = fopen(path, "rb");
     if (!f) return dpc_fail(DPC_ERROR_IO, "cannot open model file '%.300s'", path);
+    struct stat info;
+    if (fstat(fileno(f), &info) != 0 || !S_ISREG(info.st_mode)) {
+        fclose(f);
+        return dpc_fail(DPC_ERROR_IO, "'%.300s' is not a regular file", path);
+    }
     long size = -1;
     if (fseek(f, 0, SEEK_END) == 0) size = ftell(f);
     if (size < 0 || fseek(f, 0, SEEK_SET) != 0) {

@@ -1,0 +1,69 @@
+#!/usr/bin/env bash
+# Runs every dpc test suite on a fresh Debian 12 machine, installing what it needs first.
+#   bash tests/run_all.sh            # everything (about 10 minutes on 2 cores)
+#   DPC_FUZZ_SECONDS=10 bash tests/run_all.sh   # shorter fuzzing
+# Suites: C tests (GoogleTest via ctest) under ASan+UBSan, the thread tests under TSan, a
+# Release build's ctest (every ISA path the CPU has), the reader fuzzer (libFuzzer), and pytest
+# against the pip-installed package. Any failure, or a suite that runs no test, fails the script.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+ROOT=$(pwd)
+JOBS=$(nproc)
+FUZZ_SECONDS=${DPC_FUZZ_SECONDS:-60}
+
+step() { printf '\n==== %s\n' "$*"; }
+
+step "system packages"
+APT_PKGS="libgtest-dev clang libclang-rt-14-dev cmake ninja-build"
+missing=$(for p in $APT_PKGS; do dpkg -s "$p" >/dev/null 2>&1 || echo "$p"; done)
+if [ -n "$missing" ]; then
+  SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq $missing >/dev/null
+fi
+
+step "python packages"
+# torch first and pinned: the CPU build of 2.13.0 is on this image's disk; anything else pulls CUDA.
+python3 -m pip install -q --disable-pip-version-check torch==2.13.0
+python3 -m pip install -q --disable-pip-version-check scikit-build-core pybind11 ninja cmake
+python3 -m pip install -q --disable-pip-version-check --no-build-isolation "$ROOT[test,train]"
+
+run_ctest() { # build dir, extra ctest args...
+  local dir=$1; shift
+  local log; log=$(mktemp)
+  (cd "$dir" && ctest --output-on-failure -j "$JOBS" "$@") 2>&1 | tee "$log"
+  grep -Eq '^100% tests passed, 0 tests failed out of [1-9]' "$log" || { echo "ctest in $dir ran no test or failed"; exit 1; }
+}
+
+step "C tests, ASan + UBSan"
+cmake -S . -B build/test-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DDPC_BUILD_TESTS=ON -DDPC_SANITIZE=address >/dev/null
+cmake --build build/test-asan -j "$JOBS"
+ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 run_ctest build/test-asan
+
+step "C thread tests, TSan"
+cmake -S . -B build/test-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DDPC_BUILD_TESTS=ON -DDPC_SANITIZE=thread >/dev/null
+cmake --build build/test-tsan -j "$JOBS"
+# setarch -R: TSan's shadow memory needs a fixed layout on kernels with large mmap randomisation.
+TSAN_OPTIONS=halt_on_error=1 setarch "$(uname -m)" -R bash -c "cd build/test-tsan && ctest --output-on-failure -R '[Tt]hread' 2>&1" | tee build/tsan.log
+grep -Eq '^100% tests passed, 0 tests failed out of [1-9]' build/tsan.log || { echo "TSan thread tests failed or ran none"; exit 1; }
+
+step "C tests, Release (every ISA the CPU supports)"
+cmake -S . -B build/test-release -G Ninja -DCMAKE_BUILD_TYPE=Release -DDPC_BUILD_TESTS=ON >/dev/null
+cmake --build build/test-release -j "$JOBS"
+run_ctest build/test-release
+
+step "reader fuzzer, ${FUZZ_SECONDS} s"
+cmake -S . -B build/fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DDPC_BUILD_FUZZERS=ON \
+      -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ >/dev/null
+cmake --build build/fuzz -j "$JOBS"
+bash tests/fuzz/run_fuzzer.sh build/fuzz "$FUZZ_SECONDS"
+
+step "Python tests (installed package)"
+set +e
+(cd /tmp && python3 -m pytest "$ROOT/tests/python" -q -p no:cacheprovider -m "not slow")
+rc=$?
+set -e
+if [ "$rc" -eq 5 ]; then echo "pytest collected no tests: failing"; exit 1; fi
+[ "$rc" -eq 0 ] || exit "$rc"
+
+step "all suites passed"
