@@ -151,7 +151,8 @@ def _read_text(p: Path) -> np.ndarray:
         try:
             arr = np.loadtxt(io.StringIO(block.replace(",", " ")), ndmin=2, dtype=np.float64)
         except ValueError as e:
-            raise PointFileError(f"{p}: set {len(sets)}: {e}") from None
+            why = str(e).split("; use `usecols`")[0]  # numpy's advice does not apply here
+            raise PointFileError(f"{p}: set {len(sets)}: {why}") from None
         sets.append(arr)
     return _stack(sets, str(p))
 

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import math
+import os
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
 
 import numpy as np
 from tqdm import tqdm
@@ -87,3 +90,40 @@ def progress(iterable, *, enabled: bool, desc: str, total: int | None = None):
     """A tqdm bar on stderr that only appears when the loop runs longer than a second."""
     return tqdm(iterable, desc=desc, total=total, disable=not enabled, delay=1.0,
                 leave=False, dynamic_ncols=True)
+
+
+def cpu_count() -> int:
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+@contextmanager
+def _single_threaded_blas():
+    """BLAS limited to one thread, if threadpoolctl is installed (yields whether it is)."""
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:
+        yield False
+        return
+    with threadpool_limits(limits=1, user_api="blas"):
+        yield True
+
+
+def map_sets(fn, count: int, *, progress_bar: bool, desc: str):
+    """Yield fn(0), ..., fn(count - 1) in order.
+
+    The per-set work is numpy/BLAS code that releases the GIL, so the sets run on one thread
+    per CPU with single-threaded BLAS. Multi-threaded BLAS on small products spends its time
+    synchronising, and collapses when another process holds a core; one set per thread keeps
+    every core busy either way. Without threadpoolctl: sequential, BLAS threads as configured."""
+    with _single_threaded_blas() as limited:
+        workers = min(cpu_count(), count) if limited else 1
+        if workers <= 1:
+            yield from progress(map(fn, range(count)), enabled=progress_bar, desc=desc,
+                                total=count)
+            return
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            yield from progress(pool.map(fn, range(count)), enabled=progress_bar, desc=desc,
+                                total=count)

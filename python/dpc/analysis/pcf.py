@@ -13,7 +13,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..errors import InvalidArgumentError
-from ._common import as_sets, max_packing_distance, progress
+from ._common import as_sets, map_sets, max_packing_distance
 
 
 def _ball_volume(n: int) -> float:
@@ -50,6 +50,13 @@ def pcf(points, *, r_max: float = 2.5, bins: int = 100, progress_bar: bool = Fal
     g(r) = (ordered pairs i != j with toroidal distance in the bin) / (sets m (m - 1) V_bin),
     V_bin the volume of the spherical shell: its expectation is exactly 1 for uniform random
     points while r < 1/2. ``r_max`` is in units of d_max; the shells must stay below 1/2."""
+    return pair_statistics(points, r_max=r_max, bins=bins, progress_bar=progress_bar)[0]
+
+
+def pair_statistics(points, *, r_max: float = 2.5, bins: int = 100,
+                    progress_bar: bool = False) -> tuple[PCF, "MinDistance"]:
+    """:func:`pcf` and :func:`min_distance` from one neighbour search per set (the nearest pair
+    is almost always closer than r_max d_max; where not, a k-NN query finds it)."""
     sets = as_sets(points, min_points=2)
     s_count, m, n = sets.shape
     if int(bins) < 1:
@@ -60,14 +67,29 @@ def pcf(points, *, r_max: float = 2.5, bins: int = 100, progress_bar: bool = Fal
         raise InvalidArgumentError(
             f"r_max = {r_max} d_max = {top:.4g} must lie in (0, 0.5] on the unit torus")
     edges = np.linspace(0.0, top, int(bins) + 1)
+
+    def one_set(s: int):
+        dist = _close_pairs(sets[s], top)
+        closest = float(dist.min()) if dist.size else _nearest(sets[s])
+        return np.histogram(dist, bins=edges)[0], closest
+
     pairs = np.zeros(int(bins))
-    for s in progress(range(s_count), enabled=progress_bar, desc="PCF"):
-        pairs += 2.0 * np.histogram(_close_pairs(sets[s], top), bins=edges)[0]
+    closest = np.empty(s_count)
+    for s, (hist, c) in enumerate(map_sets(one_set, s_count, progress_bar=progress_bar,
+                                           desc="PCF")):
+        pairs += 2.0 * hist
+        closest[s] = c
     shells = _ball_volume(n) * (edges[1:] ** n - edges[:-1] ** n)
     g = pairs / (s_count * m * (m - 1.0) * shells)
     r = 0.5 * (edges[1:] + edges[:-1])
-    return PCF(r=r, r_norm=r / d_max, g=g, edges=edges, pairs=pairs, d_max=d_max, n_points=m,
-               n_sets=s_count, dims=n)
+    return (PCF(r=r, r_norm=r / d_max, g=g, edges=edges, pairs=pairs, d_max=d_max, n_points=m,
+                n_sets=s_count, dims=n),
+            MinDistance(distances=closest, d_max=d_max))
+
+
+def _nearest(x: np.ndarray) -> float:
+    dist, _ = cKDTree(x, boxsize=1.0).query(x, k=2)
+    return float(dist[:, 1].min())
 
 
 @dataclass
@@ -94,10 +116,8 @@ def min_distance(points, *, progress_bar: bool = False) -> MinDistance:
     sets = as_sets(points, min_points=2)
     s_count, m, n = sets.shape
     d_max = max_packing_distance(m, n)
-    out = np.empty(s_count)
-    for s in progress(range(s_count), enabled=progress_bar, desc="min distance"):
-        dist, _ = cKDTree(sets[s], boxsize=1.0).query(sets[s], k=2)
-        out[s] = dist[:, 1].min()
+    out = np.fromiter(map_sets(lambda s: _nearest(sets[s]), s_count, progress_bar=progress_bar,
+                               desc="min distance"), dtype=np.float64, count=s_count)
     return MinDistance(distances=out, d_max=d_max)
 
 

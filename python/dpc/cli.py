@@ -1,0 +1,436 @@
+"""The ``dpc`` command line: list, generate, analyze, compare.
+
+UTK-style short flags: -m model, -n points, -d dims, -s seed, -c sets, -i input, -o output.
+Errors print one line ``dpc: error: ...`` and exit with 2 (bad usage) or 1 (anything else);
+set DPC_DEBUG=1 to get the traceback instead.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import sys
+from pathlib import Path
+
+import click
+import numpy as np
+
+from . import baselines, pointio
+from .errors import DpcError, InvalidArgumentError, ModelNotFoundError
+
+_POINT_EXTS = (".npy", ".txt", ".dat", ".pts", ".csv", ".bin")
+_NO_ARGS_HELP = getattr(click.exceptions, "NoArgsIsHelpError", ())
+_FORMAT_CHOICE = click.Choice(["npy", "txt", "utk", "text", "bin"], case_sensitive=False)
+
+
+# ---------------------------------------------------------------- helpers
+def _progress(iterable, desc: str, total: int | None = None):
+    from tqdm import tqdm
+    return tqdm(iterable, desc=desc, total=total, delay=1.0, leave=False, dynamic_ncols=True,
+                file=sys.stderr)
+
+
+def _load_model(name: str, threads: int = 0):
+    import dpc
+    return dpc.load(name, threads=threads)
+
+
+def _is_model(spec: str) -> bool:
+    import dpc
+    try:
+        path = dpc.model_path(spec)
+    except ModelNotFoundError:
+        return False
+    return Path(path).is_file()
+
+
+def _generate(spec: str, n_points: int | None, dims: int | None, count: int, seed: int,
+              threads: int = 0) -> tuple[np.ndarray, str]:
+    """Sets from a dpc model (bundled name or .onnx path) or a baseline name, with a progress
+    bar over chunks of sets (set c always comes from seed + c)."""
+    if spec in baselines.BASELINES:
+        base = baselines.get(spec)
+        if n_points is None and not isinstance(base, baselines.ReferenceBaseline):
+            raise click.UsageError(f"baseline {spec} needs -n/--points")
+        if isinstance(base, baselines.ReferenceBaseline):
+            return base.generate_batch(count, n_points, dims, seed), spec
+        out = []
+        for c in _progress(range(count), f"{spec}"):
+            out.append(base.generate_batch(1, n_points, 2 if dims is None else dims, seed + c)[0])
+        return np.stack(out), spec
+    if not _is_model(spec):
+        if Path(spec).suffix.lower() in _POINT_EXTS:
+            raise click.ClickException(f"no such file: {spec}")
+        raise click.ClickException(
+            f"{spec!r} is neither a file, a baseline nor a model (see 'dpc list')")
+    model = _load_model(spec, threads)
+    if dims is not None and dims != model.dims:
+        raise InvalidArgumentError(f"model {model.name} makes {model.dims}-D points, not {dims}-D")
+    chunk = max(1, count // 20)
+    parts = []
+    for start in _progress(range(0, count, chunk), f"{model.name}"):
+        parts.append(model.generate_batch(min(chunk, count - start), seed=seed + start,
+                                          n_points=n_points))
+    return np.concatenate(parts).astype(np.float64), model.name
+
+
+def _read_inputs(specs, n_points, dims, count, seed, bin_dtype) -> list[tuple[str, np.ndarray]]:
+    """Each input: a point file, or a model/baseline name to generate from."""
+    out = []
+    for spec in specs:
+        if Path(spec).is_file():
+            out.append((Path(spec).stem, pointio.read_points(spec, dims=dims,
+                                                             bin_dtype=bin_dtype)))
+        else:
+            sets, name = _generate(spec, n_points, dims, count, seed)
+            out.append((name, sets))
+    return out
+
+
+def _parse_list(text: str | None, what: str, cast=str) -> list | None:
+    if text is None:
+        return None
+    if text.strip().lower() in ("", "none"):
+        return []
+    try:
+        return [cast(t.strip()) for t in text.split(",") if t.strip()]
+    except ValueError:
+        raise click.BadParameter(f"expected a comma-separated list of {what}, got {text!r}")
+
+
+def _dump_json(doc, path: Path) -> None:
+    text = json.dumps(doc, indent=2, allow_nan=False)
+    # Keep arrays of numbers on one line: readable metrics, small files.
+    text = re.sub(r"\[\s+([-+0-9.eE,\s]|null)+?\s*\]",
+                  lambda mt: "[" + " ".join(mt.group(0)[1:-1].split()) + "]", text)
+    path.write_text(text + "\n", encoding="utf-8")
+
+
+def _fmt(v) -> str:
+    if v is None:
+        return "-"
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return str(v)
+
+
+def _table(rows: list[dict], cols: list[str]) -> str:
+    cells = [[_fmt(r.get(c)) for c in cols] for r in rows]
+    widths = [max(len(c), *(len(row[i]) for row in cells)) for i, c in enumerate(cols)]
+    line = lambda vals: "| " + " | ".join(v.rjust(w) for v, w in zip(vals, widths)) + " |"
+    out = [line(cols), "|" + "|".join("-" * (w + 2) for w in widths) + "|"]
+    out += [line(row) for row in cells]
+    return "\n".join(out)
+
+
+def _analysis_options(f):
+    opts = [
+        click.option("--nu-max", type=click.FloatRange(min=0.1), default=4.0, show_default=True,
+                     help="Largest normalised frequency analysed."),
+        click.option("--max-size", type=click.IntRange(min=17), default=513, show_default=True,
+                     help="Largest 2-D spectrum grid per axis (beyond it: frequency stride)."),
+        click.option("--subspace", default="0,1", show_default=True,
+                     help="Two axes for the 2-D spectrum of n-D points."),
+        click.option("--discrepancy", "disc", default=",".join(_disc_methods()),
+                     show_default=True, help="Discrepancies to compute ('none' for none)."),
+        click.option("--disc-budget", type=click.FloatRange(min=0), default=2.0 ** 28,
+                     show_default=True,
+                     help="Pair terms allowed for all discrepancies (O(m^2) per set)."),
+        click.option("-n", "--points", "n_points", type=click.IntRange(min=1), default=None,
+                     help="Points per set, for inputs generated from a model or baseline."),
+        click.option("-d", "--dims", type=click.IntRange(min=1), default=None,
+                     help="Dimension of generated inputs; hint for UTK .bin files."),
+        click.option("-c", "--sets", "count", type=click.IntRange(min=1), default=16,
+                     show_default=True, help="Sets for generated inputs."),
+        click.option("-s", "--seed", type=click.IntRange(min=0), default=0, show_default=True,
+                     help="Seed of generated inputs (set c from seed + c)."),
+        click.option("--bin-dtype", type=click.Choice(["float64", "float32"]), default=None,
+                     help="Float type of UTK .bin inputs (default: detect)."),
+    ]
+    for o in reversed(opts):
+        f = o(f)
+    return f
+
+
+def _disc_methods():
+    from .analysis.discrepancy import METHODS
+    return METHODS
+
+
+def _run_analysis(points, label, nu_max, max_size, subspace, disc, disc_budget, seed):
+    from .analysis import analyze
+    sub = _parse_list(subspace, "axes", int)
+    methods = _parse_list(disc, "discrepancy names")
+    return analyze(points, label=label, nu_max=nu_max, max_size=max_size,
+                   dims=tuple(sub) if sub else (0, 1), discrepancies=methods,
+                   discrepancy_budget=disc_budget, seed=seed, progress_bar=True)
+
+
+def _output_dir(path: str) -> Path:
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise click.BadParameter(f"{path} exists and is not a folder", param_hint="-o")
+    out.mkdir(parents=True, exist_ok=True)
+    return out
+
+
+# ---------------------------------------------------------------- commands
+@click.group(context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
+@click.version_option(package_name="dpc", prog_name="dpc")
+def cli():
+    """dpc: point patterns from Deep Point Correlation Design (Leimkuehler et al. 2019)."""
+
+
+@cli.command("list")
+def list_cmd():
+    """List the bundled models and the baselines."""
+    import dpc
+    click.echo("models:")
+    names = dpc.available_models()
+    if not names:
+        click.echo("  (none bundled; set DPC_MODEL_PATH or pass a .onnx file)")
+    for name in names:
+        try:
+            m = dpc.load(name)
+            desc = m.metadata.get("dpc.description", "").split(". ")[0]
+            click.echo(f"  {name:22s} {m.dims}-D, trained m={m.n_points}, {m.layers} layers"
+                       + (f"  {desc}" if desc else ""))
+        except DpcError as e:
+            click.echo(f"  {name:22s} (cannot load: {e})")
+    click.echo("baselines:")
+    for name, b in baselines.BASELINES.items():
+        extra = ""
+        if isinstance(b, baselines.ReferenceBaseline):
+            extra = "  [" + ", ".join(f"m={m} d={d}: {k} sets" for m, d, k in b.available()) + "]"
+        click.echo(f"  {name:22s} {b.description}{extra}")
+
+
+@cli.command("generate")
+@click.option("-m", "--model", required=True,
+              help="Bundled model name, .onnx file, or baseline name (see 'dpc list').")
+@click.option("-n", "--points", "n_points", type=click.IntRange(min=1), default=None,
+              help="Points per set (default: the model's trained count).")
+@click.option("-d", "--dims", type=click.IntRange(min=1), default=None,
+              help="Dimension (baselines; default 2; must match a model).")
+@click.option("-s", "--seed", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Seed; set c comes from seed + c.")
+@click.option("-c", "--sets", "count", type=click.IntRange(min=1), default=1, show_default=True,
+              help="Number of sets.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False, writable=True), default=None,
+              help="Output file (.npy, .txt/.dat, .bin); default: text on stdout.")
+@click.option("-f", "--format", "fmt", type=_FORMAT_CHOICE, default=None,
+              help="File format (default: from the extension).")
+@click.option("--bin-dtype", type=click.Choice(["float64", "float32"]), default="float64",
+              show_default=True, help="Float type of UTK .bin output.")
+@click.option("-t", "--threads", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Worker threads for models (0 = one per CPU).")
+def generate_cmd(model, n_points, dims, seed, count, output, fmt, bin_dtype, threads):
+    """Generate point sets from a model or a baseline."""
+    if output is not None:
+        pointio.resolve_format(output, fmt)  # fail on a bad name before the work
+    sets, _ = _generate(model, n_points, dims, count, seed, threads)
+    if output is None:
+        if fmt not in (None, "txt", "utk", "text"):
+            raise click.UsageError("stdout output is text; give -o FILE for other formats")
+        for s in range(sets.shape[0]):
+            if s:
+                click.echo("#")
+            click.echo("\n".join(" ".join(f"{v:.17g}" for v in row) for row in sets[s]))
+        return
+    pointio.write_points(output, sets, fmt, bin_dtype=bin_dtype)
+    click.echo(f"wrote {sets.shape[0]} set(s) of {sets.shape[1]} {sets.shape[2]}-D points "
+               f"to {output}", err=True)
+
+
+@cli.command("analyze")
+@click.option("-i", "--input", "inputs", multiple=True,
+              help="Point file(s) (.npy, text, UTK .bin), or a model/baseline name; more may "
+                   "follow as arguments. All inputs form one batch of sets.")
+@click.argument("more", nargs=-1)
+@click.option("-o", "--output", required=True, type=click.Path(file_okay=False),
+              help="Folder for metrics.json and the PNG plots.")
+@click.option("--label", default=None, help="Name used in titles (default: first input).")
+@click.option("--no-plots", is_flag=True, help="Only write metrics.json.")
+@_analysis_options
+def analyze_cmd(inputs, more, output, label, no_plots, nu_max, max_size, subspace, disc,
+                disc_budget, n_points, dims, count, seed, bin_dtype):
+    """Measure point sets: spectra, anisotropy, PCF, minimum distance, discrepancy."""
+    specs = list(inputs) + list(more)
+    if not specs:
+        raise click.UsageError("give at least one input with -i")
+    out = _output_dir(output)
+    loaded = _read_inputs(specs, n_points, dims, count, seed, bin_dtype)
+    shapes = {a.shape[1:] for _, a in loaded}
+    if len(shapes) > 1:
+        raise click.ClickException(
+            "inputs differ in points or dimension: "
+            + ", ".join(f"{n}: {a.shape[1]}x{a.shape[2]}" for n, a in loaded)
+            + " (use 'dpc compare' for different inputs)")
+    sets = np.concatenate([a for _, a in loaded])
+    name = label or loaded[0][0]
+    res = _run_analysis(sets, name, nu_max, max_size, subspace, disc, disc_budget, seed)
+    doc = res.to_json()
+    doc["input"]["sources"] = specs
+    _dump_json(doc, out / "metrics.json")
+    written = ["metrics.json"]
+    if not no_plots:
+        written += _analysis_plots(res, sets, out, nu_max)
+    s = res.summary()
+    click.echo(f"{name}: {res.n_sets} sets of {res.n_points} {res.dims}-D points")
+    for key in ("E_low<0.5", "E_low<0.75", "peak", "peak_nu", "delta_min",
+                *res.discrepancy.keys()):
+        if key in s and s[key] is not None:
+            click.echo(f"  {key:12s} {_fmt(s[key])}")
+    for note in res.notes:
+        click.echo(f"  note: {note}")
+    click.echo(f"wrote {', '.join(written)} to {out}")
+
+
+def _analysis_plots(res, sets, out: Path, nu_max: float) -> list[str]:
+    from .analysis import plots
+    title = f"{res.label}: m={res.n_points}, {res.n_sets} sets"
+    sub = tuple(res.spectrum.dims) if res.spectrum is not None else (0,)
+    plots.save_points(out / "points.png", sets[0], dims=sub,
+                      title=f"{res.label}: set 0 of {res.n_sets}, m={res.n_points}")
+    names = ["points.png"]
+    if res.spectrum is not None:
+        plots.save_spectrum2d(out / "spectrum.png", res.spectrum, title=title)
+        names.append("spectrum.png")
+    curves = [(f"{res.label} (axes {sub[0]},{sub[1]})" if res.dims > 2 else res.label, res.radial)]
+    plots.save_radial(out / "radial.png", curves, title=f"radial mean and anisotropy, {title}",
+                      nu_max=nu_max)
+    names.append("radial.png")
+    if res.radial_nd is not None:
+        plots.save_radial(out / "radial_nd.png", [(f"{res.label} ({res.dims}-D, MC)",
+                                                  res.radial_nd)],
+                          title=f"{res.dims}-D radial mean (Monte Carlo), {title}", nu_max=nu_max)
+        names.append("radial_nd.png")
+    if res.pcf is not None:
+        plots.save_pcf(out / "pcf.png", [(res.label, res.pcf)], title=f"PCF, {title}")
+        names.append("pcf.png")
+    if res.projections:
+        plots.save_projections(out / "projections.png",
+                               [(f"axis {p.dim}", p) for p in res.projections],
+                               title=f"1-D projections, {title}", nu_max=nu_max)
+        names.append("projections.png")
+    return names
+
+
+@cli.command("compare")
+@click.option("-i", "--input", "inputs", multiple=True,
+              help="A point file, or a model/baseline name generated with -n/-c/-s; repeat, "
+                   "or list more as arguments.")
+@click.argument("more", nargs=-1)
+@click.option("-o", "--output", required=True, type=click.Path(file_okay=False),
+              help="Folder for compare.json, compare.md and the plots.")
+@click.option("--integration/--no-integration", default=True, show_default=True,
+              help="Relative variance of MC integration over each input's sets.")
+@_analysis_options
+def compare_cmd(inputs, more, output, integration, nu_max, max_size, subspace, disc,
+                disc_budget, n_points, dims, count, seed, bin_dtype):
+    """Compare several inputs (files, models, baselines) in one table and plots."""
+    specs = list(inputs) + list(more)
+    if len(specs) < 1:
+        raise click.UsageError("give inputs with -i")
+    out = _output_dir(output)
+    loaded = _read_inputs(specs, n_points, dims, count, seed, bin_dtype)
+    labels, seen = [], {}
+    for name, _ in loaded:  # unique labels
+        seen[name] = seen.get(name, 0) + 1
+        labels.append(name if seen[name] == 1 else f"{name}#{seen[name]}")
+    results, rows = [], []
+    for (name, sets), label in zip(loaded, labels):
+        res = _run_analysis(sets, label, nu_max, max_size, subspace, disc, disc_budget, seed)
+        row = res.summary()
+        if integration:
+            row.update(_integration_row(sets, res, seed))
+        results.append((res, sets))
+        rows.append(row)
+    cols = list(dict.fromkeys(k for r in rows for k in r))
+    table = _table(rows, cols)
+    click.echo(table)
+    (out / "compare.md").write_text(table + "\n", encoding="utf-8")
+    doc = {"dpc_compare": 1, "inputs": specs, "rows": rows,
+           "analyses": [r.to_json() for r, _ in results]}
+    _dump_json(doc, out / "compare.json")
+    _compare_plots(results, out, nu_max)
+    click.echo(f"wrote compare.md, compare.json, radial.png, pcf.png, points.png to {out}")
+
+
+def _integration_row(sets: np.ndarray, res, seed: int) -> dict:
+    from .analysis.integration import FAMILIES, integrands, relative_variance
+    if sets.shape[0] < 2 or sets.shape[2] < 2:
+        return {}
+    d = tuple(res.spectrum.dims) if res.spectrum is not None else (0, 1)
+    row = {}
+    for i, fam in enumerate(FAMILIES):
+        f = integrands(fam, 10, dims=2, seed=seed + i)
+        row[f"relvar_{fam}"] = float(relative_variance(sets[:, :, d], f).mean())
+    return row
+
+
+def _compare_plots(results, out: Path, nu_max: float) -> None:
+    from matplotlib.figure import Figure
+    from .analysis import plots
+    radial = [(r.label, r.radial) for r, _ in results if r.radial is not None]
+    plots.save_radial(out / "radial.png", radial, title="radial mean power", anisotropy=False,
+                      nu_max=nu_max)
+    pcfs = [(r.label, r.pcf) for r, _ in results if r.pcf is not None]
+    if pcfs:
+        plots.save_pcf(out / "pcf.png", pcfs, title="pair correlation")
+    k = len(results)
+    fig = Figure(figsize=(3.2 * k, 3.4))
+    axes = np.atleast_1d(fig.subplots(1, k))
+    for ax, (r, sets) in zip(axes, results):
+        pts = sets[0]
+        if pts.shape[1] >= 2:
+            d = r.spectrum.dims
+            ax.scatter(pts[:, d[0]], pts[:, d[1]], s=float(np.clip(2000 / len(pts), 0.2, 6)),
+                       c="k", linewidths=0)
+            ax.set_aspect("equal")
+            ax.set_ylim(0, 1)
+        else:
+            ax.eventplot(pts[:, 0], colors="k", linewidths=0.5)
+        ax.set_xlim(0, 1)
+        ax.set_xticks([])
+        ax.set_yticks([])
+        ax.set_title(f"{r.label} (m={r.n_points})", fontsize=9)
+    fig.savefig(out / "points.png", dpi=110, bbox_inches="tight")
+
+
+# ---------------------------------------------------------------- entry point
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+def main(argv=None) -> int:
+    """Console entry point: runs the CLI and turns every error into one line + exit code."""
+    debug = os.environ.get("DPC_DEBUG", "") not in ("", "0")
+    try:
+        rv = cli.main(args=argv, prog_name="dpc", standalone_mode=False)
+    except _NO_ARGS_HELP as e:  # bare 'dpc' (click >= 8.2): show the help
+        click.echo(e.ctx.get_help())
+        return 0
+    except click.UsageError as e:
+        hint = f" (see '{e.ctx.command_path} --help')" if e.ctx is not None else ""
+        click.echo(f"dpc: error: {_one_line(e.format_message())}{hint}", err=True)
+        return 2
+    except click.ClickException as e:
+        click.echo(f"dpc: error: {_one_line(e.format_message())}", err=True)
+        return 1 if e.exit_code in (0, None) else e.exit_code
+    except (click.exceptions.Abort, KeyboardInterrupt):
+        click.echo("dpc: interrupted", err=True)
+        return 130
+    except (DpcError, OSError, ValueError, MemoryError) as e:
+        if debug:
+            raise
+        click.echo(f"dpc: error: {_one_line(e) or type(e).__name__}", err=True)
+        return 1
+    return rv if isinstance(rv, int) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
