@@ -20,7 +20,8 @@
 typedef struct workspace {
     size_t m, n;
     float *delta;         /* m * n: summed subspace displacements */
-    float *soa;           /* n * m: coordinates of the current subspace, sorted */
+    float *soa;           /* n columns of `stride` floats: coordinates of the current subspace, sorted */
+    size_t stride;        /* column stride: m rounded up to 8, plus 8 floats that SIMD loads may read */
     uint32_t *perm;       /* m: sorted position -> point index */
     uint32_t *cell_of;    /* m: cell id of each point */
     uint32_t *cell_start; /* cells + 1 */
@@ -40,8 +41,9 @@ static dpc_status workspace_init(workspace *w, size_t m, size_t n) {
     w->m = m;
     w->n = n;
     w->cell_cap = 2 * m + 64;
+    w->stride = (m + 7) / 8 * 8 + 8;
     w->delta = (float *)malloc(m * n * sizeof(float));
-    w->soa = (float *)malloc(m * n * sizeof(float));
+    w->soa = (float *)calloc(w->stride * n, sizeof(float));
     w->perm = (uint32_t *)malloc(m * sizeof(uint32_t));
     w->cell_of = (uint32_t *)malloc(m * sizeof(uint32_t));
     w->cell_start = (uint32_t *)malloc((w->cell_cap + 1) * sizeof(uint32_t));
@@ -158,7 +160,7 @@ static void build_layout(sub_pass *p, const float *x) {
         start[0] = 0;
     }
     for (unsigned q = 0; q < k; q++) {
-        float *col = ws->soa + q * m;
+        float *col = ws->soa + q * ws->stride;
         for (size_t s = 0; s < m; s++) col[s] = x[(size_t)ws->perm[s] * n + p->dim[q]];
         p->job.coord[q] = col;
     }

@@ -40,7 +40,7 @@ static inline float hsum(__m256 v) {
             __m256 delta[KMAX];                                                                     \
             __m256 d2 = _mm256_setzero_ps();                                                        \
             for (unsigned q = 0; q < k; q++) {                                                      \
-                __m256 t = _mm256_sub_ps(_mm256_maskload_ps(coord[q] + j, load), vx[q]);            \
+                __m256 t = _mm256_sub_ps(_mm256_loadu_ps(coord[q] + j), vx[q]);                     \
                 t = _mm256_sub_ps(t, _mm256_round_ps(t, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC)); \
                 delta[q] = t;                                                                       \
                 d2 = _mm256_fmadd_ps(t, t, d2);                                                     \

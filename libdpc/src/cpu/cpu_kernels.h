@@ -12,7 +12,9 @@
 
 typedef struct dpc_sub_job {
     unsigned k;                        /* dimensions in the subspace */
-    const float *coord[DPC_MAX_DIMS];  /* coord[q][j]: dimension q of candidate j */
+    /* coord[q][j]: dimension q of candidate j. Each column is readable (and finite) for 8 floats
+     * past any range end, so SIMD kernels load whole vectors and mask the extra lanes. */
+    const float *coord[DPC_MAX_DIMS];
     float radius;                      /* r_t (absolute) */
     float cutoff;                      /* e_t (absolute) */
     float scale;                       /* (b - 1) / r_t */
