@@ -27,6 +27,13 @@ std::vector<float> input_points(const dpc_model_info &info, uint64_t seed, size_
     return x;
 }
 
+// A point count other than the trained 1024 (smaller in 10-D, where one subspace is the full
+// space and costs O(m^2)); 0 for gridded models, which have only their grid's count.
+size_t other_count(const dpc_model_info &info) {
+    if (info.grid_dims) return 0;
+    return info.dims >= 8 ? 600 : 1500;
+}
+
 bool is_grid_axis(const dpc_model_info &info, uint32_t k) {
     for (uint32_t g = 0; g < info.grid_dims; g++)
         if (info.grid_axis[g] == k) return true;
@@ -103,12 +110,12 @@ TEST_P(PerModel, ThreadCountDoesNotChangeBits) {
         ASSERT_TRUE(one);
         dpc_model_info info = info_of(one.get());
         std::vector<size_t> counts = {0};
-        if (!info.grid_dims) counts.push_back(1500);
+        if (other_count(info)) counts.push_back(other_count(info));
         for (uint32_t threads : {2u, 8u, 0u}) {
             ModelPtr many = load(path(), isa, threads);
             ASSERT_TRUE(many);
             for (size_t n : counts)
-                for (uint64_t seed : {5ull, 6ull})
+                for (uint64_t seed : {5ull})
                     EXPECT_EQ(generate(one.get(), seed, n), generate(many.get(), seed, n))
                         << isa_name(isa) << ", 1 vs " << threads << " threads, n " << n << ", seed " << seed;
         }
@@ -119,7 +126,7 @@ TEST_P(PerModel, EightThreadsSharingOneModelGiveTheSerialResults) {
     for (uint32_t handle_threads : {1u, 2u}) {
         ModelPtr m = load(path(), DPC_ISA_AUTO, handle_threads);
         ASSERT_TRUE(m);
-        const int T = 8, per_thread = 3;
+        const int T = 8, per_thread = 2;
         std::vector<std::vector<float>> serial(T * per_thread);
         for (int s = 0; s < T * per_thread; s++) serial[s] = generate(m.get(), 1000 + s);
         std::vector<std::vector<float>> parallel(T * per_thread);
@@ -147,7 +154,7 @@ TEST_P(PerModel, BatchEqualsPerSeedGenerate) {
     ASSERT_TRUE(m);
     dpc_model_info info = info_of(m.get());
     std::vector<size_t> counts = {0};
-    if (!info.grid_dims) counts.push_back(600);
+    if (other_count(info)) counts.push_back(600);
     for (size_t n : counts) {
         size_t m_pts = n ? n : info.n_points;
         for (uint64_t seed : {10ull, ~0ull - 1}) {  // the second wraps: seeds 2^64-2, 2^64-1, 0, 1
@@ -171,6 +178,7 @@ TEST_P(PerModel, OtherPointCounts) {
     EXPECT_EQ(generate(m.get(), 4, 0), generate(m.get(), 4, info.n_points)) << "0 means the trained count";
     if (info.grid_dims) GTEST_SKIP() << "gridded models generate only their grid's count (tested in test_api)";
     for (size_t n : {777u, 1500u, 3000u}) {
+        if (info.dims >= 8 && n > 1000) continue;  // O(m^2) full-space subspace: keep it fast
         std::vector<float> y = generate(m.get(), 4, n);
         ASSERT_EQ(y.size(), n * info.dims);
         expect_unit_cube(y);
@@ -197,14 +205,14 @@ TEST_P(PerModel, EveryIsaAgreesWithScalar) {
     EXPECT_EQ(info_of(scalar.get()).isa, DPC_ISA_SCALAR);
     dpc_model_info info = info_of(scalar.get());
     std::vector<size_t> counts = {0};
-    if (!info.grid_dims) counts.push_back(1500);
+    if (other_count(info)) counts.push_back(other_count(info));
     for (dpc_isa isa : isas) {
         ModelPtr vec = load(path(), isa);
         ASSERT_TRUE(vec);
         EXPECT_EQ(info_of(vec.get()).isa, isa);
         double worst = 0;
         for (size_t n : counts)
-            for (uint64_t seed : {0ull, 1ull, 2ull, 77ull}) {
+            for (uint64_t seed : {0ull, 1ull, 77ull}) {
                 double d = max_torus_diff(generate(scalar.get(), seed, n), generate(vec.get(), seed, n));
                 EXPECT_LE(d, 1e-5) << isa_name(isa) << " vs scalar, seed " << seed << ", n " << n;
                 worst = std::max(worst, d);

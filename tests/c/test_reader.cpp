@@ -165,7 +165,7 @@ TEST(Mutation, RandomBitFlipsNeverCrash) {
     for (const std::string &f : files) {
         const std::vector<uint8_t> good = read_file(f);
         ASSERT_FALSE(good.empty()) << f;
-        for (int iter = 0; iter < 400; iter++) {
+        for (int iter = 0; iter < 250; iter++) {
             std::vector<uint8_t> b = good;
             int kind = (int)(rng() % 4);
             if (kind <= 1) {  // flip 1..4 bits
