@@ -1,0 +1,103 @@
+"""Cascade: depth interpolation of unique kernels, inits, gridded inputs, layer chaining."""
+
+import math
+
+import pytest
+import torch
+
+from dpc_train.cascade import Cascade, CascadeSpec, parse_subspace, repulsion_kernel
+from dpc_train.filter import FilterConfigError, filter_layer
+from dpc_train.lossprog import build_loss
+
+
+def test_depth_interpolation_is_piecewise_linear():
+    sp = CascadeSpec(dims=2, n_points=64, layers=7, unique_kernels=3, bins=4)
+    c = Cascade(sp)
+    with torch.no_grad():
+        c.theta.copy_(torch.arange(3 * 4, dtype=torch.float32).reshape(3, 1, 4))
+    tab = c.tables()
+    assert tab.shape == (7, 1, 4)
+    th = c.theta.detach()
+    # layer i sits at depth i·(l_u − 1)/(l − 1) = i/3 in unique-kernel units
+    for i in range(7):
+        p = i / 3
+        lo = min(int(math.floor(p)), 1)
+        f = p - lo
+        assert torch.allclose(tab[i], (1 - f) * th[lo] + f * th[lo + 1], atol=1e-6)
+    assert torch.equal(tab[0], th[0]) and torch.allclose(tab[-1], th[-1])
+    # gradients reach every unique kernel
+    tab.sum().backward()
+    assert (c.theta.grad > 0).all()
+
+
+def test_inits():
+    sp = CascadeSpec(dims=2, n_points=64, layers=3, unique_kernels=2, bins=9, radius=[4.0])
+    assert torch.count_nonzero(Cascade(sp).theta) == 0
+    x = torch.rand(2, 64, 2)
+    assert torch.equal(Cascade(sp)(x), x)  # zero kernels: identity cascade
+    sp.init = "repulsion"
+    c = Cascade(sp)
+    k = repulsion_kernel(9, 4.0, sp.init_sigma, sp.init_amplitude)
+    assert k[0] == -sp.init_amplitude and (k < 0).all()
+    assert abs(k[2] + sp.init_amplitude * math.exp(-0.5 * (1.0 / sp.init_sigma) ** 2)) < 1e-12
+    assert torch.allclose(c.theta[1, 0].double(), k, atol=1e-7)
+    # repulsion spreads points: the minimum distance grows
+    x = torch.rand(1, 64, 2, generator=torch.Generator().manual_seed(0), dtype=torch.float64)
+
+    def dmin(p):
+        d = p[0][None] - p[0][:, None]
+        d = d - torch.floor(d + 0.5)
+        return (d.norm(dim=-1) + 10 * torch.eye(64)).min()
+    assert dmin(c(x)) > 2 * dmin(x)
+
+
+def test_cascade_chains_filter_layers_and_grid_inputs():
+    sp = CascadeSpec(dims=3, n_points=12, layers=3, unique_kernels=2, bins=5,
+                     subspaces=["xyz", "z"], radius=[2.0, 3.0], grid_axes=[0, 1],
+                     grid_shape=[4, 3])
+    c = Cascade(sp)
+    with torch.no_grad():
+        c.theta.normal_(0, 0.1, generator=torch.Generator().manual_seed(1))
+    x = c.input_points(2, torch.Generator().manual_seed(2), dtype=torch.float64)
+    # format §5: first grid axis varies fastest, cell centres
+    assert torch.allclose(x[0, :, 0], torch.tensor([0.125, 0.375, 0.625, 0.875] * 3,
+                                                    dtype=torch.float64))
+    assert torch.allclose(x[0, :, 1], torch.tensor([1 / 6] * 4 + [0.5] * 4 + [5 / 6] * 4,
+                                                    dtype=torch.float64))
+    y = x
+    for t in c.tables().double():
+        y = filter_layer(y, t, sp.masks, sp.radius, sp.eps, fixed=0b011)
+    assert torch.equal(c(x), y)
+    assert torch.equal(c(x)[..., :2], x[..., :2])
+    with pytest.raises(FilterConfigError, match="trained point count"):
+        c.input_points(1, torch.Generator(), m=20)
+
+
+@pytest.mark.parametrize("kw, msg", [
+    (dict(unique_kernels=5, layers=4), "unique_kernels"),
+    (dict(bins=1), "bins"),
+    (dict(grid_axes=[0], grid_shape=[5]), "n_points"),
+    (dict(init="ones"), "init"),
+    (dict(subspaces=["xy", "yx"], radius=[1.0, 1.0]), "distinct"),
+])
+def test_bad_specs(kw, msg):
+    base = dict(dims=2, n_points=64)
+    base.update(kw)
+    with pytest.raises(FilterConfigError, match=msg):
+        CascadeSpec(**base)
+
+
+def test_parse_subspace():
+    assert parse_subspace("xz", 3) == 0b101 and parse_subspace([1], 2) == 2
+    assert parse_subspace(3, 2) == 3
+    with pytest.raises(FilterConfigError):
+        parse_subspace("z", 2)
+
+
+def test_loss_file_route(tmp_path):
+    (tmp_path / "my_loss.py").write_text(
+        "S = step_radial(M, 2, nu_max=2.0, nu0=0.5)\n"
+        "def loss(X):\n    return l2(radspec(X, nu_max=2.0), S)\n")
+    fn, src = build_loss({"file": "my_loss.py"}, 64, 2, base_dir=tmp_path)
+    assert "step_radial" in src
+    assert torch.isfinite(fn(torch.rand(2, 64, 2))) and fn(torch.rand(2, 64, 2)) > 0
