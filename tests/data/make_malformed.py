@@ -26,7 +26,7 @@ from onnx import AttributeProto, TensorProto, helper
 import pbwire as pb
 
 HERE = Path(__file__).resolve().parent
-OUT = HERE / "malformed"
+MODELS = HERE            # where the valid models are read from (--models)
 
 FORMAT = "DPC_ERROR_FORMAT"
 UNSUPPORTED = "DPC_ERROR_UNSUPPORTED"
@@ -36,7 +36,7 @@ CASES: list[tuple[str, str, str, bytes]] = []   # (name, expected, why, bytes)
 
 
 def base(name: str) -> onnx.ModelProto:
-    return onnx.load(str(HERE / f"{name}.onnx"))
+    return onnx.load(str(MODELS / f"{name}.onnx"))
 
 
 def case(name: str, expected: str, why: str, data) -> None:
@@ -476,7 +476,7 @@ def with_field(fields, number, new_bytes_fn):
 
 
 def raw_cases():
-    good = (HERE / "model_2d.onnx").read_bytes()
+    good = (MODELS / "model_2d.onnx").read_bytes()
     top = split_fields(good)
     assert join_fields(top) == good
     graph_payload = next(p for n, _, _, p in top if n == 7)
@@ -571,12 +571,21 @@ def raw_cases():
 
 
 def main() -> None:
+    global MODELS
+    import argparse
+
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--models", type=Path, default=HERE, help="folder of the valid test models")
+    ap.add_argument("--out", type=Path, default=HERE / "malformed", help="output folder")
+    args = ap.parse_args()
+    MODELS = args.models
+    OUT = args.out
     tensor_cases()
     attribute_cases()
     metadata_cases()
     graph_cases()
     raw_cases()
-    OUT.mkdir(exist_ok=True)
+    OUT.mkdir(parents=True, exist_ok=True)
     for old in OUT.glob("*.onnx"):
         old.unlink()
     lines = ["# file\texpected status (alternatives separated by |)\twhat is wrong"]

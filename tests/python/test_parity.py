@@ -188,3 +188,43 @@ def test_eps_cut_off_on_a_two_point_model(tmp_path):
         hand[1, 0] -= h * g
         assert torus_max(expect, hand) < 1e-12
         assert torus_max(got, expect) <= TOL
+
+
+# ---- the committed test files are what their scripts make ---------------------------------------
+
+
+def _same_model(a: rc.RefModel, b: rc.RefModel) -> bool:
+    if (a.dims, a.n_points, a.grid_axes, a.grid_shape, a.metadata) != \
+            (b.dims, b.n_points, b.grid_axes, b.grid_shape, b.metadata):
+        return False
+    if len(a.layers) != len(b.layers):
+        return False
+    for x, y in zip(a.layers, b.layers):
+        if (x.subspaces, x.radius, x.eps, x.fixed) != (y.subspaces, y.radius, y.eps, y.fixed):
+            return False
+        # kernels come from numpy exp/sin: allow an ulp of platform difference
+        if x.kernels.shape != y.kernels.shape or not np.allclose(x.kernels, y.kernels, rtol=1e-6,
+                                                                 atol=1e-9):
+            return False
+    return True
+
+
+def test_committed_files_are_what_the_scripts_make(tmp_path):
+    import subprocess
+    import sys
+
+    env_root = Path(__file__).resolve().parents[2]
+    subprocess.run([sys.executable, str(DATA / "make_models.py"), "--out", str(tmp_path)],
+                   check=True, cwd=env_root, capture_output=True)
+    subprocess.run([sys.executable, str(DATA / "make_malformed.py"), "--models", str(tmp_path),
+                    "--out", str(tmp_path / "malformed")], check=True, cwd=env_root,
+                   capture_output=True)
+    for name in MODELS:
+        assert _same_model(rc.load_reference(tmp_path / f"{name}.onnx"), ref_model(name)), name
+    for sub in ("variants", "malformed"):
+        made = (tmp_path / sub / "manifest.tsv").read_text()
+        assert made == (DATA / sub / "manifest.tsv").read_text(), f"{sub}/manifest.tsv is stale"
+        names = sorted(p.name for p in (tmp_path / sub).glob("*.onnx"))
+        assert names == sorted(p.name for p in (DATA / sub).glob("*.onnx")), sub
+        for n in names:   # same sizes: same structure (kernel bytes may differ by an ulp)
+            assert (tmp_path / sub / n).stat().st_size == (DATA / sub / n).stat().st_size, n
