@@ -264,6 +264,8 @@ class ReferenceBaseline:
         s = _check_seed(seed)
         fits = [(m, d, k) for m, d, k in self.available()
                 if (n_points is None or m == int(n_points)) and (dims is None or d == int(dims))]
+        if len(fits) > 1 and dims is None:      # unspecified dims: 2-D, like the other baselines
+            fits = [f for f in fits if f[1] == 2] or fits
         if len(fits) != 1:
             have = ", ".join(f"m={m} dims={d} ({k} sets)" for m, d, k in self.available())
             want = "ambiguous" if fits else "not available"

@@ -15,7 +15,7 @@ from .discrepancy import (METHODS as DISCREPANCY_METHODS, discrepancy, discrepan
                           generalized_l2, unanchored_l2)
 from .integration import (FAMILIES, IntegrandFamily, IntegrationStudy, estimates, integrands,
                           integration_study, relative_variance)
-from .pcf import PCF, MinDistance, min_distance, min_distance_ratio, pcf
+from .pcf import PCF, MinDistance, min_distance, min_distance_ratio, pair_statistics, pcf
 from .report import Analysis, analyze
 from .spectrum import (RadialSpectrum, Spectrum1D, Spectrum2D, power_spectrum_1d,
                        power_spectrum_2d, power_spectrum_direct, radial_profile,
@@ -26,7 +26,7 @@ __all__ = [
     "as_sets", "max_packing_distance",
     "power_spectrum_2d", "power_spectrum_1d", "power_spectrum_direct", "radial_profile",
     "radial_spectrum", "radial_spectrum_mc", "Spectrum2D", "Spectrum1D", "RadialSpectrum",
-    "pcf", "PCF", "min_distance", "min_distance_ratio", "MinDistance",
+    "pcf", "PCF", "pair_statistics", "min_distance", "min_distance_ratio", "MinDistance",
     "discrepancy", "discrepancy_per_set", "generalized_l2", "unanchored_l2",
     "DISCREPANCY_METHODS",
     "integrands", "IntegrandFamily", "estimates", "relative_variance", "integration_study",

@@ -275,9 +275,11 @@ def power_spectrum_1d(points, *, dim: int = 0, nu_max: float = 4.0, max_freqs: i
                       dim=dim)
 
 
-def power_spectrum_direct(points, q) -> np.ndarray:
+def power_spectrum_direct(points, q, *, dtype=np.float64) -> np.ndarray:
     """Reference O(m |q|) evaluation: mean over sets of |sum_k exp(2 pi i <q, x_k>)|^2 / m at the
-    integer frequencies ``q`` (shape (count, n), or (count,) for n = 1). No DC removal."""
+    integer frequencies ``q`` (shape (count, n), or (count,) for n = 1). No DC removal.
+    ``dtype=float32`` does the trigonometry in single precision (phases still reduced in
+    float64): ~10x faster, ~1e-6 relative error per term."""
     sets = as_sets(points)
     s_count, m, n = sets.shape
     qa = np.asarray(q)
@@ -286,8 +288,9 @@ def power_spectrum_direct(points, q) -> np.ndarray:
     if qa.ndim != 2 or qa.shape[1] != n:
         raise InvalidArgumentError(f"q must have shape (count, {n}), got {np.shape(q)}")
     if qa.dtype.kind not in "iu":
-        if not np.all(qa == np.rint(qa)):
+        if qa.dtype.kind != "f" or not np.all(qa == np.rint(qa)):
             raise InvalidArgumentError("frequencies q must be integers")
+    dt = _auto_dtype(dtype, 0.0)
     qf = qa.astype(np.float64)
     out = np.zeros(qf.shape[0])
     chunk = max(1, _CHUNK_ELEMS // m)
@@ -295,9 +298,10 @@ def power_spectrum_direct(points, q) -> np.ndarray:
         for start in range(0, qf.shape[0], chunk):
             ph = sets[s] @ qf[start:start + chunk].T      # (m, chunk) phases in cycles
             ph -= np.floor(ph)
+            ph = ph.astype(dt, copy=False)
             ph *= _TWO_PI
-            re = np.cos(ph).sum(axis=0)
-            im = np.sin(ph).sum(axis=0)
+            re = np.cos(ph).sum(axis=0, dtype=np.float64)
+            im = np.sin(ph).sum(axis=0, dtype=np.float64)
             out[start:start + chunk] += re * re + im * im
     return out / (m * s_count)
 
@@ -328,8 +332,9 @@ def radial_spectrum_mc(points, *, dims=None, nu_max: float = 4.0, directions: in
     nonzero = np.any(q != 0, axis=-1)
     flat = q.reshape(-1, nd)
     p = np.zeros(flat.shape[0])
-    for ps in map_sets(lambda s: power_spectrum_direct(sub[s], flat), s_count,
-                       progress_bar=progress_bar, desc="radial spectrum (MC)"):
+    # Single precision trigonometry: the estimate is Monte Carlo anyway (see the docstring).
+    for ps in map_sets(lambda s: power_spectrum_direct(sub[s], flat, dtype=np.float32),
+                       s_count, progress_bar=progress_bar, desc="radial spectrum (MC)"):
         p += ps
     p = (p / s_count).reshape(ring.size, int(directions))
     cnt = nonzero.sum(axis=1)

@@ -1,0 +1,168 @@
+"""The dpc command line: every subcommand, every file format, one-line errors."""
+
+import json
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import dpc
+from dpc import analysis, baselines
+from dpc.cli import main
+from dpc.pointio import read_points
+
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+def run(capsys, *args):
+    rc = main(list(map(str, args)))
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+def _one_line_error(err):
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1 and lines[0].startswith("dpc: error: "), err
+    assert "Traceback" not in err
+
+
+def test_list_shows_models_and_baselines(capsys):
+    rc, out, _ = run(capsys, "list")
+    assert rc == 0
+    for name in dpc.available_models() + baselines.available():
+        assert name in out
+    assert "models:" in out and "baselines:" in out
+
+
+@pytest.mark.parametrize("ext", [".npy", ".txt", ".bin"])
+def test_generate_baseline_in_every_format(tmp_path, capsys, ext):
+    f = tmp_path / f"sobol{ext}"
+    rc, _, err = run(capsys, "generate", "-m", "sobol", "-n", 128, "-d", 3, "-s", 4, "-c", 3,
+                     "-o", f)
+    assert rc == 0 and "wrote 3 set(s)" in err
+    np.testing.assert_array_equal(read_points(f),
+                                  baselines.generate("sobol", 128, dims=3, count=3, seed=4))
+
+
+def test_generate_utk_text_format_option_and_float32_bin(tmp_path, capsys):
+    f = tmp_path / "w.dat"
+    assert run(capsys, "generate", "-m", "white", "-n", 16, "-c", 2, "-f", "utk", "-o", f)[0] == 0
+    assert f.read_text().count("#\n") == 1
+    g = tmp_path / "w.bin"
+    rc = run(capsys, "generate", "-m", "white", "-n", 64, "-o", g, "--bin-dtype", "float32")[0]
+    assert rc == 0 and g.stat().st_size == 4 + 64 * 2 * 4
+
+
+def test_generate_from_a_model(tmp_path, capsys):
+    names = dpc.available_models()
+    assert names, "no bundled model: the package must ship at least one"
+    model = dpc.load(names[0])
+    f = tmp_path / "m.npy"
+    n = model.n_points
+    rc, _, err = run(capsys, "generate", "-m", names[0], "-s", 3, "-c", 2, "-o", f)
+    assert rc == 0, err
+    got = read_points(f)
+    np.testing.assert_array_equal(got, model.generate_batch(2, seed=3).astype(np.float64))
+    assert got.shape == (2, n, model.dims)
+
+
+def test_generate_to_stdout_reads_back(tmp_path, capsys):
+    rc, out, _ = run(capsys, "generate", "-m", "jitter", "-n", 16, "-c", 2, "-s", 1)
+    assert rc == 0
+    f = tmp_path / "o.txt"
+    f.write_text(out)
+    np.testing.assert_array_equal(read_points(f), baselines.generate("jitter", 16, count=2,
+                                                                     seed=1))
+
+
+def test_analyze_writes_metrics_and_plots(tmp_path, capsys):
+    sets = baselines.generate("jitter", 256, count=6, seed=2)
+    a, b = tmp_path / "a.npy", tmp_path / "b.txt"
+    np.save(a, sets[:4])
+    (tmp_path / "b.txt").write_text("\n#\n".join(
+        "\n".join(f"{x!r} {y!r}" for x, y in s.tolist()) for s in sets[4:]))
+    out = tmp_path / "out"
+    rc, stdout, err = run(capsys, "analyze", "-i", a, b, "-o", out)   # two inputs, one batch
+    assert rc == 0, err
+    doc = json.loads((out / "metrics.json").read_text())
+    assert doc["input"]["sets"] == 6 and doc["input"]["points"] == 256
+    want = analysis.power_spectrum_2d(sets).low_frequency_energy(0.5)
+    assert doc["summary"]["E_low<0.5"] == pytest.approx(want, rel=1e-9)
+    assert doc["min_distance"]["mean_ratio"] == pytest.approx(
+        analysis.min_distance_ratio(sets), rel=1e-12)
+    assert doc["discrepancy"]["CD"] == pytest.approx(analysis.discrepancy(sets, "CD"))
+    assert len(doc["radial"]["nu"]) == len(doc["radial"]["mean"]) > 50
+    assert doc["radial"]["nu"][-1] == pytest.approx(4.0)
+    for png in ("points.png", "spectrum.png", "radial.png", "pcf.png", "projections.png"):
+        assert (out / png).read_bytes()[:8] == PNG
+    assert "E_low<0.5" in stdout
+
+
+def test_analyze_3d_baseline_and_bin_input(tmp_path, capsys):
+    f = tmp_path / "h.bin"
+    assert run(capsys, "generate", "-m", "halton", "-n", 200, "-d", 3, "-c", 3, "-o", f)[0] == 0
+    out = tmp_path / "o3"
+    rc, _, err = run(capsys, "analyze", "-i", f, "-o", out, "--subspace", "2,0",
+                     "--discrepancy", "GL2")
+    assert rc == 0, err
+    doc = json.loads((out / "metrics.json").read_text())
+    assert doc["spectrum_2d"]["dims"] == [2, 0] and doc["radial_nd"]["method"] == "monte-carlo"
+    assert set(doc["discrepancy"]) == {"sets", "GL2"}
+    assert (out / "radial_nd.png").read_bytes()[:8] == PNG
+
+
+def test_compare_table_and_plots(tmp_path, capsys):
+    f = tmp_path / "w.npy"
+    np.save(f, baselines.generate("white", 256, count=4, seed=9))
+    out = tmp_path / "cmp"
+    rc, stdout, err = run(capsys, "compare", "-i", f, "-i", "jitter", "ref-bnot", "-n", 256,
+                          "-c", 4, "-o", out, "--discrepancy", "CD,L2-star")
+    assert rc == 0, err
+    table = (out / "compare.md").read_text()
+    assert table.strip() == stdout.strip().split("\nwrote")[0].strip()
+    rows = [ln for ln in table.splitlines() if ln.startswith("| ") and "label" not in ln]
+    assert [r.split("|")[1].strip() for r in rows] == ["w", "jitter", "ref-bnot"]
+    doc = json.loads((out / "compare.json").read_text())
+    low = {r["label"]: r["E_low<0.5"] for r in doc["rows"]}
+    assert low["ref-bnot"] < low["jitter"] < low["w"]
+    assert all("relvar_disk" in r for r in doc["rows"])
+    for png in ("radial.png", "pcf.png", "points.png"):
+        assert (out / png).read_bytes()[:8] == PNG
+
+
+@pytest.mark.parametrize("args, code", [
+    (["generate", "-x"], 2),
+    (["generate", "-m", "white"], 2),                       # a baseline needs -n
+    (["generate", "-m", "white", "-n", "abc"], 2),
+    (["analyze", "-o", "OUT"], 2),                           # no input
+    (["generate", "-m", "no-such-model", "-n", "5"], 1),
+    (["generate", "-m", "jitter", "-n", "1000"], 1),
+    (["generate", "-m", "white", "-n", "5", "-o", "x.unknown"], 1),
+    (["analyze", "-i", "missing.npy", "-o", "OUT"], 1),
+    (["analyze", "-i", "BAD", "-o", "OUT"], 1),
+    (["analyze", "-i", "OK", "-o", "OUT", "--subspace", "0,7"], 1),
+    (["compare", "-i", "ref-bnot", "-o", "OUT"], 1),         # ambiguous without -n
+])
+def test_errors_are_one_line(tmp_path, capsys, args, code):
+    bad = tmp_path / "bad.txt"
+    bad.write_text("0.1 0.2\n0.3\n")
+    ok = tmp_path / "ok.npy"
+    np.save(ok, np.random.default_rng(0).random((2, 20, 2)))
+    names = {"BAD": str(bad), "OK": str(ok), "OUT": str(tmp_path / "o")}
+    args = [names.get(a, a) for a in args]
+    rc, _, err = run(capsys, *args)
+    assert rc == code
+    _one_line_error(err)
+
+
+def test_module_and_console_script_entry_points(tmp_path):
+    r = subprocess.run([sys.executable, "-m", "dpc.cli", "generate", "-m", "nope", "-n", "3"],
+                       capture_output=True, text=True)
+    assert r.returncode == 1 and r.stderr.startswith("dpc: error:")
+    exe = shutil.which("dpc")
+    if exe is None:
+        pytest.skip("the dpc console script is not on PATH (package not pip-installed)")
+    r = subprocess.run([exe, "--help"], capture_output=True, text=True)
+    assert r.returncode == 0 and "generate" in r.stdout and "analyze" in r.stdout
