@@ -1,5 +1,5 @@
 /* Times dpc_generate_n on one thread and prints one JSON line per point count:
- *   dpc_bench_generate MODEL ISA(scalar|avx2) M [M ...]
+ *   dpc_bench_generate MODEL ISA(scalar|avx2|avx512) M [M ...]
  * Each count runs once to warm up, then repeats until 1.5 s or 25 runs (at least 3). */
 #define _POSIX_C_SOURCE 200809L
 #include <stdio.h>
@@ -29,13 +29,19 @@ static int cmp(const void *a, const void *b) {
 
 int main(int argc, char **argv) {
     if (argc < 4) {
-        fprintf(stderr, "usage: %s MODEL scalar|avx2 M [M ...]\n", argv[0]);
+        fprintf(stderr, "usage: %s MODEL scalar|avx2|avx512 M [M ...]\n", argv[0]);
         return 2;
     }
     dpc_load_options opt;
     dpc_load_options_init(&opt);
     opt.threads = 1;
-    opt.isa = strcmp(argv[2], "avx2") == 0 ? DPC_ISA_AVX2 : DPC_ISA_SCALAR;
+    if (strcmp(argv[2], "scalar") == 0) opt.isa = DPC_ISA_SCALAR;
+    else if (strcmp(argv[2], "avx2") == 0) opt.isa = DPC_ISA_AVX2;
+    else if (strcmp(argv[2], "avx512") == 0) opt.isa = DPC_ISA_AVX512;
+    else {
+        fprintf(stderr, "unknown ISA '%s': scalar, avx2 or avx512\n", argv[2]);
+        return 2;
+    }
     dpc_model *model;
     if (dpc_model_load_file(argv[1], &opt, &model) != DPC_OK) {
         fprintf(stderr, "load failed: %s\n", dpc_last_error());

@@ -11,7 +11,7 @@ import numpy as np
 from . import _core
 from .errors import InvalidArgumentError, ModelNotFoundError
 
-_ISA = {"auto": 0, "scalar": 1, "avx2": 2}
+_ISA = {"auto": 0, "scalar": 1, "avx2": 2, "avx512": 3}
 _ISA_NAME = {v: k for k, v in _ISA.items()}
 
 
@@ -110,6 +110,6 @@ class Model:
 def load(path_or_name, *, isa: str = "auto", threads: int = 0) -> Model:
     """Load a model file, or a bundled model by name (see :func:`available_models`).
 
-    ``isa``: "auto" (best the CPU supports), "scalar" or "avx2". ``threads``: worker threads per
+    ``isa``: "auto" (best the CPU supports), "scalar", "avx2" or "avx512". ``threads``: worker threads per
     call, 0 = one per CPU; the output bits do not depend on it."""
     return Model(model_path(path_or_name), isa=isa, threads=threads)

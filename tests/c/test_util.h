@@ -107,10 +107,20 @@ inline bool cpu_has_avx2_fma() {
 #endif
 }
 
+inline bool cpu_has_avx512() {
+#if defined(__x86_64__) || defined(__i386__)
+    __builtin_cpu_init();
+    return cpu_has_avx2_fma() && __builtin_cpu_supports("avx512f");
+#else
+    return false;
+#endif
+}
+
 // The ISA paths to compare against scalar: every one this CPU supports.
 inline std::vector<dpc_isa> vector_isas() {
     std::vector<dpc_isa> v;
     if (cpu_has_avx2_fma()) v.push_back(DPC_ISA_AVX2);
+    if (cpu_has_avx512()) v.push_back(DPC_ISA_AVX512);
     return v;
 }
 
@@ -119,6 +129,7 @@ inline std::string isa_name(dpc_isa isa) {
     case DPC_ISA_AUTO: return "auto";
     case DPC_ISA_SCALAR: return "scalar";
     case DPC_ISA_AVX2: return "avx2";
+    case DPC_ISA_AVX512: return "avx512";
     }
     return "unknown";
 }

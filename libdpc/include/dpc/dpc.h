@@ -84,11 +84,13 @@ DPC_API const char *dpc_status_string(dpc_status status);
 typedef struct dpc_model dpc_model;
 
 /* Which CPU code path runs the filters. AUTO picks the best the CPU supports (cpuid), unless the
- * environment variable DPC_ISA is "scalar" or "avx2". */
+ * environment variable DPC_ISA is "scalar", "avx2" or "avx512". Asking for a path the CPU lacks
+ * gives DPC_ERROR_UNSUPPORTED. */
 typedef enum dpc_isa {
     DPC_ISA_AUTO = 0,
     DPC_ISA_SCALAR = 1, /* portable reference path */
-    DPC_ISA_AVX2 = 2    /* x86-64 AVX2 + FMA */
+    DPC_ISA_AVX2 = 2,   /* x86-64 AVX2 + FMA */
+    DPC_ISA_AVX512 = 3  /* x86-64 AVX-512F */
 } dpc_isa;
 
 /* Options fixed at load time. Initialise with dpc_load_options_init(). */

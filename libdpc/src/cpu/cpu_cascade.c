@@ -21,7 +21,7 @@ typedef struct workspace {
     size_t m, n;
     float *delta;         /* m * n: summed subspace displacements */
     float *soa;           /* n columns of `stride` floats: coordinates of the current subspace, sorted */
-    size_t stride;        /* column stride: m rounded up to 8, plus 8 floats that SIMD loads may read */
+    size_t stride;        /* column stride: m rounded up to 16, plus 16 floats that SIMD loads may read */
     uint32_t *perm;       /* m: sorted position -> point index */
     uint32_t *cell_of;    /* m: cell id of each point */
     uint32_t *cell_start; /* cells + 1 */
@@ -41,7 +41,7 @@ static dpc_status workspace_init(workspace *w, size_t m, size_t n) {
     w->m = m;
     w->n = n;
     w->cell_cap = 2 * m + 64;
-    w->stride = (m + 7) / 8 * 8 + 8;
+    w->stride = (m + 15) / 16 * 16 + 16;
     w->delta = (float *)malloc(m * n * sizeof(float));
     w->soa = (float *)calloc(w->stride * n, sizeof(float));
     w->perm = (uint32_t *)malloc(m * sizeof(uint32_t));
@@ -215,22 +215,30 @@ static void sub_pass_range(void *ctx, size_t lo, size_t hi) {
     const unsigned k = p->job.k;
     const size_t m = ws->m, n = ws->n;
     uint32_t ranges[2 * MAX_RANGES];
-    float xi[DPC_MAX_DIMS], acc[DPC_MAX_DIMS];
+    float xs[DPC_BLOCK_MAX * 4], acc[DPC_BLOCK_MAX * 4]; /* blocks hold DPC_BLOCK_MAX * 4 floats */
+    const unsigned block_cap = k <= 4 ? DPC_BLOCK_MAX : (DPC_BLOCK_MAX * 4) / k;
     unsigned n_ranges = 1;
     ranges[0] = 0;
     ranges[1] = (uint32_t)m; /* all pairs */
-    uint32_t cell = UINT32_MAX;
-    for (size_t s = lo; s < hi; s++) {
-        const uint32_t i = ws->perm[s];
-        for (unsigned q = 0; q < k; q++) xi[q] = p->job.coord[q][s];
-        /* Points are sorted by cell, so one range list serves the whole cell. */
-        if (p->grid && ws->cell_of[i] != cell) {
-            cell = ws->cell_of[i];
+    for (size_t s = lo; s < hi;) {
+        /* A block: consecutive sorted points of one cell (they share candidate ranges). */
+        size_t e = s + 1;
+        if (p->grid) {
+            const uint32_t cell = ws->cell_of[ws->perm[s]];
+            while (e < hi && e - s < block_cap && ws->cell_of[ws->perm[e]] == cell) e++;
             n_ranges = grid_ranges(p, cell, ranges);
+        } else {
+            e = s + block_cap < hi ? s + block_cap : hi;
         }
-        p->engine->point(&p->job, xi, ranges, n_ranges, acc);
-        float *d = ws->delta + (size_t)i * n;
-        for (unsigned q = 0; q < k; q++) d[p->dim[q]] += p->h * acc[q];
+        const unsigned count = (unsigned)(e - s);
+        for (unsigned b = 0; b < count; b++)
+            for (unsigned q = 0; q < k; q++) xs[b * k + q] = p->job.coord[q][s + b];
+        p->engine->block(&p->job, xs, count, ranges, n_ranges, acc);
+        for (unsigned b = 0; b < count; b++) {
+            float *d = ws->delta + (size_t)ws->perm[s + b] * n;
+            for (unsigned q = 0; q < k; q++) d[p->dim[q]] += p->h * acc[b * k + q];
+        }
+        s = e;
     }
 }
 
@@ -248,7 +256,8 @@ static void apply_range(void *ctx, size_t lo, size_t hi) {
     for (size_t i = lo; i < hi; i++)
         for (size_t d = 0; d < a->n; d++) {
             if (a->count[d] == 0.0f) continue;
-            float y = a->x[i * a->n + d] + a->delta[i * a->n + d] / a->count[d];
+            const float step = a->delta[i * a->n + d];
+            float y = a->x[i * a->n + d] + (a->count[d] == 1.0f ? step : step / a->count[d]);
             /* y - floor(y), with the usual cases first (the same operations, so the same bits). */
             if (y >= 1.0f && y < 2.0f) y -= 1.0f;
             else if (y < 0.0f && y >= -1.0f) y += 1.0f;

@@ -7,7 +7,7 @@
 
 typedef struct dpc_cpu_engine {
     dpc_isa isa;        /* resolved: never DPC_ISA_AUTO */
-    dpc_point_fn point; /* that ISA's kernel */
+    dpc_block_fn block; /* that ISA's kernel */
     unsigned threads;   /* >= 1 */
 } dpc_cpu_engine;
 

@@ -7,6 +7,15 @@
 #include "common/error.h"
 #include "cpu/cpu_cascade.h"
 
+static int cpu_has_avx512(void) {
+#if defined(DPC_HAVE_AVX2) && (defined(__x86_64__) || defined(__i386__)) && defined(__GNUC__)
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+#else
+    return 0;
+#endif
+}
+
 static int cpu_has_avx2_fma(void) {
 #if defined(DPC_HAVE_AVX2) && (defined(__x86_64__) || defined(__i386__)) && defined(__GNUC__)
     __builtin_cpu_init();
@@ -22,24 +31,34 @@ dpc_status dpc_cpu_engine_init(dpc_cpu_engine *e, dpc_isa isa, unsigned threads)
         if (env && *env && strcmp(env, "auto") != 0) {
             if (strcmp(env, "scalar") == 0) isa = DPC_ISA_SCALAR;
             else if (strcmp(env, "avx2") == 0) isa = DPC_ISA_AVX2;
+            else if (strcmp(env, "avx512") == 0) isa = DPC_ISA_AVX512;
             else return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
-                                 "environment variable DPC_ISA='%.32s': use auto, scalar or avx2", env);
+                                 "environment variable DPC_ISA='%.32s': use auto, scalar, avx2 or avx512", env);
         } else {
-            isa = cpu_has_avx2_fma() ? DPC_ISA_AVX2 : DPC_ISA_SCALAR;
+            isa = cpu_has_avx512() ? DPC_ISA_AVX512 : cpu_has_avx2_fma() ? DPC_ISA_AVX2 : DPC_ISA_SCALAR;
         }
     }
     switch (isa) {
     case DPC_ISA_SCALAR:
-        e->point = dpc_point_scalar;
+        e->block = dpc_block_scalar;
         break;
     case DPC_ISA_AVX2:
 #if defined(DPC_HAVE_AVX2)
         if (!cpu_has_avx2_fma())
             return dpc_fail(DPC_ERROR_UNSUPPORTED, "the AVX2 path needs a CPU with AVX2 and FMA");
-        e->point = dpc_point_avx2;
+        e->block = dpc_block_avx2;
         break;
 #else
         return dpc_fail(DPC_ERROR_UNSUPPORTED, "this libdpc was built without the AVX2 path");
+#endif
+    case DPC_ISA_AVX512:
+#if defined(DPC_HAVE_AVX2)
+        if (!cpu_has_avx512())
+            return dpc_fail(DPC_ERROR_UNSUPPORTED, "the AVX-512 path needs a CPU with AVX-512F");
+        e->block = dpc_block_avx512;
+        break;
+#else
+        return dpc_fail(DPC_ERROR_UNSUPPORTED, "this libdpc was built without the AVX-512 path");
 #endif
     default:
         return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "unknown ISA %d", (int)isa);

@@ -18,13 +18,8 @@ static inline float hsum(__m256 v) {
  * compile-time size, K == 0 the run-time job->k. */
 #define POINT_BODY(KMAX, K)                                                                         \
     const unsigned k = (K) ? (K) : job->k;                                                          \
-    __m256 vacc[KMAX], vx[KMAX];                                                                    \
     const float *coord[KMAX];                                                                       \
-    for (unsigned q = 0; q < k; q++) {                                                              \
-        vacc[q] = _mm256_setzero_ps();                                                              \
-        vx[q] = _mm256_set1_ps(xi[q]);                                                              \
-        coord[q] = job->coord[q];                                                                   \
-    }                                                                                               \
+    for (unsigned q = 0; q < k; q++) coord[q] = job->coord[q];                                      \
     const float *w_tab = job->w, *dw_tab = job->dw;                                                 \
     const __m256 cutoff = _mm256_set1_ps(job->cutoff), three_halves = _mm256_set1_ps(1.5f);         \
     const __m256 neg_half = _mm256_set1_ps(-0.5f);                                                  \
@@ -32,6 +27,14 @@ static inline float hsum(__m256 v) {
     const __m256 umax = _mm256_set1_ps(job->umax);                                                  \
     const __m256i qmax = _mm256_set1_epi32(job->qmax);                                              \
     const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);                                 \
+    for (unsigned p = 0; p < count; p++) {                                                        \
+    const float *xi = xs + p * k;                                                                   \
+    float *acc = accs + p * k;                                                                      \
+    __m256 vacc[KMAX], vx[KMAX];                                                                     \
+    for (unsigned q = 0; q < k; q++) {                                                              \
+        vacc[q] = _mm256_setzero_ps();                                                              \
+        vx[q] = _mm256_set1_ps(xi[q]);                                                              \
+    }                                                                                               \
     for (unsigned r = 0; r < n_ranges; r++) {                                                       \
         const uint32_t end = ranges[2 * r + 1];                                                     \
         for (uint32_t j = ranges[2 * r]; j < end; j += 8) {                                         \
@@ -64,26 +67,28 @@ static inline float hsum(__m256 v) {
             for (unsigned q = 0; q < k; q++) vacc[q] = _mm256_fmadd_ps(coef, delta[q], vacc[q]);    \
         }                                                                                           \
     }                                                                                               \
-    for (unsigned q = 0; q < k; q++) acc[q] = hsum(vacc[q]);
+    for (unsigned q = 0; q < k; q++) acc[q] = hsum(vacc[q]);                                      \
+    }
 
-static inline __attribute__((always_inline)) void point_small(const dpc_sub_job *job, const float *xi,
-                                                              const uint32_t *ranges, unsigned n_ranges,
-                                                              float *acc, const unsigned K) {
+static inline __attribute__((always_inline)) void point_small(const dpc_sub_job *job, const float *xs,
+                                                              unsigned count, const uint32_t *ranges,
+                                                              unsigned n_ranges, float *accs,
+                                                              const unsigned K) {
     POINT_BODY(4, K)
 }
 
-static void point_generic(const dpc_sub_job *job, const float *xi, const uint32_t *ranges,
-                          unsigned n_ranges, float *acc) {
+static void point_generic(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
+                          unsigned n_ranges, float *accs) {
     POINT_BODY(DPC_MAX_DIMS, 0)
 }
 
-void dpc_point_avx2(const dpc_sub_job *job, const float *xi, const uint32_t *ranges,
-                    unsigned n_ranges, float *acc) {
+void dpc_block_avx2(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
+                    unsigned n_ranges, float *accs) {
     switch (job->k) {
-    case 1: point_small(job, xi, ranges, n_ranges, acc, 1); break;
-    case 2: point_small(job, xi, ranges, n_ranges, acc, 2); break;
-    case 3: point_small(job, xi, ranges, n_ranges, acc, 3); break;
-    case 4: point_small(job, xi, ranges, n_ranges, acc, 4); break;
-    default: point_generic(job, xi, ranges, n_ranges, acc); break;
+    case 1: point_small(job, xs, count, ranges, n_ranges, accs, 1); break;
+    case 2: point_small(job, xs, count, ranges, n_ranges, accs, 2); break;
+    case 3: point_small(job, xs, count, ranges, n_ranges, accs, 3); break;
+    case 4: point_small(job, xs, count, ranges, n_ranges, accs, 4); break;
+    default: point_generic(job, xs, count, ranges, n_ranges, accs); break;
     }
 }

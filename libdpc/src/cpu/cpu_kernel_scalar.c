@@ -10,8 +10,8 @@ static inline float round_even(float t) {
     return (t + big) - big;
 }
 
-void dpc_point_scalar(const dpc_sub_job *job, const float *xi, const uint32_t *ranges,
-                      unsigned n_ranges, float *acc) {
+static void point(const dpc_sub_job *job, const float *xi, const uint32_t *ranges, unsigned n_ranges,
+                  float *acc) {
     const unsigned k = job->k;
     float delta[DPC_MAX_DIMS];
     for (unsigned q = 0; q < k; q++) acc[q] = 0.0f;
@@ -35,4 +35,9 @@ void dpc_point_scalar(const dpc_sub_job *job, const float *xi, const uint32_t *r
             for (unsigned q = 0; q < k; q++) acc[q] += coef * delta[q];
         }
     }
+}
+
+void dpc_block_scalar(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
+                      unsigned n_ranges, float *acc) {
+    for (unsigned p = 0; p < count; p++) point(job, xs + p * job->k, ranges, n_ranges, acc + p * job->k);
 }

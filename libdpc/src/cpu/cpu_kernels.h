@@ -12,7 +12,7 @@
 
 typedef struct dpc_sub_job {
     unsigned k;                        /* dimensions in the subspace */
-    /* coord[q][j]: dimension q of candidate j. Each column is readable (and finite) for 8 floats
+    /* coord[q][j]: dimension q of candidate j. Each column is readable (and finite) for 16 floats
      * past any range end, so SIMD kernels load whole vectors and mask the extra lanes. */
     const float *coord[DPC_MAX_DIMS];
     float radius;                      /* r_t (absolute) */
@@ -24,15 +24,20 @@ typedef struct dpc_sub_job {
     const float *dw;                   /* w[q+1] - w[q] */
 } dpc_sub_job;
 
-/* ranges[2r], ranges[2r+1]: half-open candidate index range r; acc[0..k) receives the sums. */
-typedef void (*dpc_point_fn)(const dpc_sub_job *job, const float *xi, const uint32_t *ranges,
-                             unsigned n_ranges, float *acc);
+/* Sums for `count` query points that share the candidate ranges (the points of one cell, or a
+ * block of points for all pairs): xs[p * k + q] is dimension q of query p, the sums go to
+ * acc[p * k + q]. ranges[2r], ranges[2r+1]: half-open candidate index range r. */
+#define DPC_BLOCK_MAX 64u
+typedef void (*dpc_block_fn)(const dpc_sub_job *job, const float *xs, unsigned count,
+                             const uint32_t *ranges, unsigned n_ranges, float *acc);
 
-void dpc_point_scalar(const dpc_sub_job *job, const float *xi, const uint32_t *ranges,
+void dpc_block_scalar(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
                       unsigned n_ranges, float *acc);
 #if defined(DPC_HAVE_AVX2)
-void dpc_point_avx2(const dpc_sub_job *job, const float *xi, const uint32_t *ranges,
+void dpc_block_avx2(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
                     unsigned n_ranges, float *acc);
+void dpc_block_avx512(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
+                      unsigned n_ranges, float *acc);
 #endif
 
 #endif
