@@ -33,7 +33,7 @@ HAVE_AVX2 = {"avx2", "fma"} <= _cpu_flags()
 
 def _is_c_float32(a: np.ndarray, shape) -> bool:
     return (isinstance(a, np.ndarray) and a.dtype == np.float32 and a.shape == tuple(shape)
-            and a.flags["C_CONTIGUOUS"] and a.flags["OWNDATA"] | (a.base is not None))
+            and a.flags["C_CONTIGUOUS"] and a.flags["WRITEABLE"])
 
 
 # ---- arrays ---------------------------------------------------------------------------------
