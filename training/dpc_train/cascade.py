@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import torch
 
-from .filter import FilterConfigError, check_layer, filter_layer, mask_dims
+from .filter import FilterConfigError, NeighbourCache, check_layer, filter_layer, mask_dims
 
 AXES = "xyzwabcdefghijklmnopqrstuv"
 
@@ -124,12 +124,17 @@ class Cascade(torch.nn.Module):
         f = frac.to(self.theta)[:, None, None]
         return (1 - f) * self.theta[lo] + f * self.theta[hi]
 
-    def forward(self, x: torch.Tensor, impl: str = "torch", return_all: bool = False):
+    def forward(self, x: torch.Tensor, impl: str = "torch", return_all: bool = False,
+                skin: float | None = 1.0):
+        """Run all layers. skin (in spacings): reuse neighbour lists across layers while points
+        move less than skin/2 (NeighbourCache; same result); None searches afresh per layer."""
         sp = self.spec
         tabs = self.tables().to(x.dtype)
+        cache = NeighbourCache(sp.masks, sp.radius, skin) if skin is not None else None
         outs = []
         for i in range(sp.layers):
-            x = filter_layer(x, tabs[i], sp.masks, sp.radius, sp.eps, sp.fixed, impl=impl)
+            x = filter_layer(x, tabs[i], sp.masks, sp.radius, sp.eps, sp.fixed, impl=impl,
+                             cache=cache)
             if return_all:
                 outs.append(x)
         return outs if return_all else x

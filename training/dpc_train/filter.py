@@ -177,14 +177,65 @@ class _Sub:
     jj: torch.Tensor
 
 
-def _prepare(x: torch.Tensor, subspaces, radius, eps: float):
+@torch.no_grad()
+def _restrict(x: torch.Tensor, dims: list[int], ii, jj, r: float, e: float):
+    """The pairs among candidates (ii, jj) with e < d < r at the current positions."""
+    flat = x.reshape(-1, x.shape[-1])
+    d2 = None
+    for a in dims:
+        col = flat[:, a]
+        dc = _wrap_diff(col.index_select(0, jj) - col.index_select(0, ii))
+        d2 = dc * dc if d2 is None else d2 + dc * dc
+    ok = ((d2 < r * r) & (d2 > e * e)).nonzero().squeeze(1)
+    return ii.index_select(0, ok), jj.index_select(0, ok)
+
+
+def _prepare(x: torch.Tensor, subspaces, radius, eps: float, candidates=None):
     _, m, n = x.shape
     subs = []
-    for mask, rho in zip(subspaces, radius):
+    for t, (mask, rho) in enumerate(zip(subspaces, radius)):
         dims, h, r, e = subspace_geometry(m, int(mask), n, rho, eps)
-        ii, jj = find_pairs(x.detach(), dims, r, e)
+        if candidates is None:
+            ii, jj = find_pairs(x.detach(), dims, r, e)
+        else:
+            ii, jj = _restrict(x.detach(), dims, *candidates[t], r, e)
         subs.append(_Sub(dims, h, r, e, ii, jj))
     return subs
+
+
+class NeighbourCache:
+    """Verlet lists across the layers of a cascade: candidate pairs within r_t + skin·h_t are
+    found once and reused while no point has moved more than skin·h_t / 2 (torus distance in
+    the subspace) since they were built; then every pair with d < r_t is still a candidate
+    (d_then ≤ d_now + 2·max move < r_t + skin·h_t), so results equal a fresh search's."""
+
+    def __init__(self, subspaces, radius, skin: float = 1.0):
+        self.subspaces = tuple(int(s) for s in subspaces)
+        self.radius = tuple(float(r) for r in radius)
+        self.skin = float(skin)
+        self.entries: dict[int, tuple] = {}
+        self.builds = 0
+
+    @torch.no_grad()
+    def candidates(self, x: torch.Tensor):
+        x = x.detach()
+        _, m, n = x.shape
+        out = []
+        for t, (mask, rho) in enumerate(zip(self.subspaces, self.radius)):
+            dims, h, r, _ = subspace_geometry(m, mask, n, rho, 0.0)
+            ent = self.entries.get(t)
+            if ent is not None:
+                ref, ii, jj, half = ent
+                mv = _wrap_diff(x[..., dims] - ref)
+                if ref.shape == mv.shape and float(_sqnorm(mv.reshape(-1, len(dims))).max()) < half * half:
+                    out.append((ii, jj))
+                    continue
+            rc = r + self.skin * h
+            ii, jj = find_pairs(x, dims, rc, 0.0)
+            self.entries[t] = (x[..., dims].clone(), ii, jj, 0.5 * self.skin * h)
+            self.builds += 1
+            out.append((ii, jj))
+        return out
 
 
 def _scale(n: int, subspaces, fixed: int, dtype, device) -> torch.Tensor:
@@ -221,13 +272,14 @@ def _as_batch(points: torch.Tensor):
 # impl="torch": autograd on gathered pairs
 # ----------------------------------------------------------------------------------------
 
-def _filter_torch(x: torch.Tensor, kernels: torch.Tensor, subspaces, radius, eps, fixed):
+def _filter_torch(x: torch.Tensor, kernels: torch.Tensor, subspaces, radius, eps, fixed,
+                  candidates=None):
     bsz, m, n = x.shape
     flat = x.reshape(bsz * m, n)
     b = kernels.shape[1]
     scale = _scale(n, subspaces, fixed, x.dtype, x.device)
     total = torch.zeros_like(flat)
-    for t, sub in enumerate(_prepare(x, subspaces, radius, eps)):
+    for t, sub in enumerate(_prepare(x, subspaces, radius, eps, candidates)):
         if sub.ii.numel() == 0:
             continue
         dims = torch.tensor(sub.dims, device=x.device)
@@ -261,14 +313,14 @@ class _FilterAnalytic(torch.autograd.Function):
     """
 
     @staticmethod
-    def forward(ctx, x, kernels, subspaces, radius, eps, fixed):
+    def forward(ctx, x, kernels, subspaces, radius, eps, fixed, candidates=None):
         bsz, m, n = x.shape
         b = kernels.shape[1]
         flat = x.reshape(bsz * m, n)
         scale = _scale(n, subspaces, fixed, x.dtype, x.device)
         total = torch.zeros_like(flat)
         saved = []
-        for t, sub in enumerate(_prepare(x, subspaces, radius, eps)):
+        for t, sub in enumerate(_prepare(x, subspaces, radius, eps, candidates)):
             dims = torch.tensor(sub.dims, device=x.device, dtype=torch.long)
             xd = flat.index_select(1, dims)
             delta = _wrap_diff(xd.index_select(0, sub.jj) - xd.index_select(0, sub.ii))
@@ -311,7 +363,7 @@ class _FilterAnalytic(torch.autograd.Function):
             base = sub.h * gdot / d
             gk[t].index_add_(0, q, base * (1 - f))
             gk[t].index_add_(0, q + 1, base * f)
-        return gx.reshape(bsz, m, n), gk, None, None, None, None
+        return gx.reshape(bsz, m, n), gk, None, None, None, None, None
 
 
 # ----------------------------------------------------------------------------------------
@@ -322,12 +374,15 @@ IMPLS = ("torch", "analytic", "c")
 
 
 def filter_layer(points: torch.Tensor, kernels: torch.Tensor, subspaces, radius,
-                 eps: float = 1e-4, fixed: int = 0, impl: str = "torch") -> torch.Tensor:
+                 eps: float = 1e-4, fixed: int = 0, impl: str = "torch",
+                 cache: NeighbourCache | None = None) -> torch.Tensor:
     """Apply one PointFilter layer (docs/model-format.md §3).
 
     points: [m, n] or [batch, m, n] in [0, 1); kernels: [s, b] (kernel values in units of the
     subspace's mean spacing); subspaces: s bitmasks; radius: s values ρ_t (in spacings);
-    eps: cutoff in spacings; fixed: bitmask of dims that never move.
+    eps: cutoff in spacings; fixed: bitmask of dims that never move. cache: optional
+    NeighbourCache shared by the layers of a cascade (same subspaces and radii) to reuse the
+    neighbour search; the result is the same pair set either way.
     """
     x, squeeze = _as_batch(points)
     check_layer(x.shape[-1], kernels, subspaces, radius, float(eps), int(fixed))
@@ -335,10 +390,15 @@ def filter_layer(points: torch.Tensor, kernels: torch.Tensor, subspaces, radius,
         raise FilterConfigError(f"kernels dtype {kernels.dtype} != points dtype {x.dtype}")
     subspaces = tuple(int(s) for s in subspaces)
     radius = tuple(float(r) for r in radius)
+    cands = None
+    if cache is not None and impl in ("torch", "analytic"):
+        if cache.subspaces != subspaces or cache.radius != radius:
+            raise FilterConfigError("NeighbourCache was built for other subspaces/radii")
+        cands = cache.candidates(x)
     if impl == "torch":
-        y = _filter_torch(x, kernels, subspaces, radius, float(eps), int(fixed))
+        y = _filter_torch(x, kernels, subspaces, radius, float(eps), int(fixed), cands)
     elif impl == "analytic":
-        y = _FilterAnalytic.apply(x, kernels, subspaces, radius, float(eps), int(fixed))
+        y = _FilterAnalytic.apply(x, kernels, subspaces, radius, float(eps), int(fixed), cands)
     elif impl == "c":
         raise NotImplementedError(
             "filter_layer(impl='c') needs the libdpc training kernels exposed by the dpc "

@@ -101,3 +101,36 @@ def test_loss_file_route(tmp_path):
     fn, src = build_loss({"file": "my_loss.py"}, 64, 2, base_dir=tmp_path)
     assert "step_radial" in src
     assert torch.isfinite(fn(torch.rand(2, 64, 2))) and fn(torch.rand(2, 64, 2)) > 0
+
+
+def test_neighbour_cache_gives_the_fresh_search_result():
+    from dpc_train.filter import NeighbourCache, _restrict, find_pairs
+
+    sp = CascadeSpec(dims=2, n_points=1024, layers=12, unique_kernels=3, bins=16,
+                     radius=[3.0], init="repulsion", init_amplitude=0.2)
+    c = Cascade(sp).double()
+    x = c.input_points(2, torch.Generator().manual_seed(3), dtype=torch.float64)
+    outs = {}
+    for skin in (None, 0.5):
+        th = c.theta.detach().clone().requires_grad_()
+        c.theta = torch.nn.Parameter(th)
+        y = c(x, skin=skin)
+        (y * torch.arange(y.numel(), dtype=y.dtype).reshape(y.shape).cos()).sum().backward()
+        outs[skin] = (y.detach(), c.theta.grad.clone())
+    assert (outs[None][0] - outs[0.5][0]).abs().max() < 1e-12
+    assert (outs[None][1] - outs[0.5][1]).abs().max() < 1e-9
+    # the cache is reused, and after moves below skin/2 it still holds every pair within r
+    cache = NeighbourCache([3], [3.0], skin=1.0)
+    h = 1024 ** -0.5
+    cache.candidates(x)
+    g = torch.Generator().manual_seed(4)
+    move = torch.randn(x.shape, generator=g, dtype=torch.float64)
+    move = move / move.norm(dim=-1, keepdim=True) * (0.49 * h)
+    x2 = (x + move) % 1.0
+    cands = cache.candidates(x2)
+    assert cache.builds == 1
+    got = set(zip(*[t.tolist() for t in _restrict(x2, [0, 1], *cands[0], 3.0 * h, 1e-4 * h)]))
+    ref = set(zip(*[t.tolist() for t in find_pairs(x2, [0, 1], 3.0 * h, 1e-4 * h)]))
+    assert got == ref
+    cache.candidates((x + 2 * move) % 1.0)  # moved 0.98 h > skin/2: rebuilt
+    assert cache.builds == 2
