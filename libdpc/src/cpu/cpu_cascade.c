@@ -15,6 +15,11 @@
 #include "common/error.h"
 
 #define MAX_RANGES 512u          /* index ranges per point (2 per row of cells) */
+#define DPC_MAX_THREADS 64u
+/* A cell's candidates come in up to 2(2R+1)^(k-1) short ranges; copied into one run (when there
+ * are at most GATHER_CAP), the kernel loops once with a predictable trip count. */
+#define GATHER_CAP 4096u
+#define GATHER_STRIDE (GATHER_CAP + 16u)
 #define PARALLEL_MIN_POINTS 8192 /* below this, threads cost more than they save */
 
 typedef struct workspace {
@@ -26,6 +31,12 @@ typedef struct workspace {
     uint32_t *cell_of;    /* m: cell id of each point */
     uint32_t *cell_start; /* cells + 1 */
     size_t cell_cap;
+    /* Points are kept physically sorted by cell between layers (they move little per layer, so
+     * each layer's sort then reads memory almost sequentially): x is the working copy, order[i]
+     * the caller's index of working point i; x_tmp / order_tmp are the reorder targets. */
+    float *x, *x_tmp;
+    uint32_t *order, *order_tmp;
+    float *gather; /* per worker: 4 columns of GATHER_STRIDE floats (cell candidates, see below) */
 } workspace;
 
 static void workspace_free(workspace *w) {
@@ -34,9 +45,14 @@ static void workspace_free(workspace *w) {
     free(w->perm);
     free(w->cell_of);
     free(w->cell_start);
+    free(w->x);
+    free(w->x_tmp);
+    free(w->order);
+    free(w->order_tmp);
+    free(w->gather);
 }
 
-static dpc_status workspace_init(workspace *w, size_t m, size_t n) {
+static dpc_status workspace_init(workspace *w, size_t m, size_t n, unsigned threads) {
     memset(w, 0, sizeof *w);
     w->m = m;
     w->n = n;
@@ -47,7 +63,13 @@ static dpc_status workspace_init(workspace *w, size_t m, size_t n) {
     w->perm = (uint32_t *)malloc(m * sizeof(uint32_t));
     w->cell_of = (uint32_t *)malloc(m * sizeof(uint32_t));
     w->cell_start = (uint32_t *)malloc((w->cell_cap + 1) * sizeof(uint32_t));
-    if (!w->delta || !w->soa || !w->perm || !w->cell_of || !w->cell_start) {
+    w->x = (float *)malloc(m * n * sizeof(float));
+    w->x_tmp = (float *)malloc(m * n * sizeof(float));
+    w->order = (uint32_t *)malloc(m * sizeof(uint32_t));
+    w->order_tmp = (uint32_t *)malloc(m * sizeof(uint32_t));
+    w->gather = (float *)malloc((size_t)threads * 4 * GATHER_STRIDE * sizeof(float));
+    if (!w->gather || !w->delta || !w->soa || !w->perm || !w->cell_of || !w->cell_start || !w->x || !w->x_tmp ||
+        !w->order || !w->order_tmp) {
         workspace_free(w);
         return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory for a %zu x %zu point set", m, n);
     }
@@ -56,24 +78,26 @@ static dpc_status workspace_init(workspace *w, size_t m, size_t n) {
 
 /* ---- a minimal parallel-for over index ranges -------------------------------------------- */
 
-typedef void (*range_fn)(void *ctx, size_t lo, size_t hi);
+/* fn(ctx, slot, lo, hi): slot < threads identifies the worker (for per-thread scratch). */
+typedef void (*range_fn)(void *ctx, unsigned slot, size_t lo, size_t hi);
 
 typedef struct chunk {
     range_fn fn;
     void *ctx;
+    unsigned slot;
     size_t lo, hi;
 } chunk;
 
 static void *chunk_main(void *arg) {
     chunk *c = (chunk *)arg;
-    c->fn(c->ctx, c->lo, c->hi);
+    c->fn(c->ctx, c->slot, c->lo, c->hi);
     return NULL;
 }
 
 static void parallel_for(unsigned threads, size_t n, range_fn fn, void *ctx) {
-    if (threads > 64) threads = 64;
+    if (threads > DPC_MAX_THREADS) threads = DPC_MAX_THREADS;
     if (threads <= 1 || n < PARALLEL_MIN_POINTS) {
-        fn(ctx, 0, n);
+        fn(ctx, 0, 0, n);
         return;
     }
     chunk chunks[64];
@@ -82,12 +106,13 @@ static void parallel_for(unsigned threads, size_t n, range_fn fn, void *ctx) {
     for (unsigned t = 0; t < threads; t++) {
         chunks[t].fn = fn;
         chunks[t].ctx = ctx;
+        chunks[t].slot = t;
         chunks[t].lo = n * t / threads;
         chunks[t].hi = n * (t + 1) / threads;
     }
     for (unsigned t = 1; t < threads; t++)
         started[t] = pthread_create(&ids[t], NULL, chunk_main, &chunks[t]) == 0;
-    fn(ctx, chunks[0].lo, chunks[0].hi);
+    fn(ctx, 0, chunks[0].lo, chunks[0].hi);
     for (unsigned t = 1; t < threads; t++) {
         if (started[t]) pthread_join(ids[t], NULL);
         else chunk_main(&chunks[t]); /* no thread to be had: do the work here */
@@ -209,7 +234,7 @@ static unsigned grid_ranges(const sub_pass *p, uint32_t id, uint32_t *ranges) {
     return n;
 }
 
-static void sub_pass_range(void *ctx, size_t lo, size_t hi) {
+static void sub_pass_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
     const sub_pass *p = (const sub_pass *)ctx;
     workspace *ws = p->ws;
     const unsigned k = p->job.k;
@@ -217,23 +242,50 @@ static void sub_pass_range(void *ctx, size_t lo, size_t hi) {
     uint32_t ranges[2 * MAX_RANGES];
     float xs[DPC_BLOCK_MAX * 4], acc[DPC_BLOCK_MAX * 4]; /* blocks hold DPC_BLOCK_MAX * 4 floats */
     const unsigned block_cap = k <= 4 ? DPC_BLOCK_MAX : (DPC_BLOCK_MAX * 4) / k;
+    float *gathered = ws->gather + (size_t)slot * 4 * GATHER_STRIDE; /* grid subspaces have k <= 4 */
+    dpc_sub_job run = p->job;
+    if (p->grid)
+        for (unsigned q = 0; q < k; q++) run.coord[q] = gathered + q * GATHER_STRIDE;
     unsigned n_ranges = 1;
     ranges[0] = 0;
     ranges[1] = (uint32_t)m; /* all pairs */
     for (size_t s = lo; s < hi;) {
         /* A block: consecutive sorted points of one cell (they share candidate ranges). */
         size_t e = s + 1;
+        const dpc_sub_job *job = &p->job;
+        const uint32_t *use = ranges;
+        unsigned n_use = n_ranges;
+        uint32_t span[2];
         if (p->grid) {
             const uint32_t cell = ws->cell_of[ws->perm[s]];
             while (e < hi && e - s < block_cap && ws->cell_of[ws->perm[e]] == cell) e++;
             n_ranges = grid_ranges(p, cell, ranges);
+            n_use = n_ranges;
+            uint32_t total = 0;
+            for (unsigned r = 0; r < n_ranges; r++) total += ranges[2 * r + 1] - ranges[2 * r];
+            if (total <= GATHER_CAP) {
+                for (unsigned q = 0; q < k; q++) {
+                    float *dst = gathered + q * GATHER_STRIDE;
+                    for (unsigned r = 0; r < n_ranges; r++) {
+                        const uint32_t len = ranges[2 * r + 1] - ranges[2 * r];
+                        memcpy(dst, p->job.coord[q] + ranges[2 * r], len * sizeof(float));
+                        dst += len;
+                    }
+                    memset(dst, 0, 16 * sizeof(float)); /* lanes past the end read zeros */
+                }
+                span[0] = 0;
+                span[1] = total;
+                job = &run;
+                use = span;
+                n_use = 1;
+            }
         } else {
             e = s + block_cap < hi ? s + block_cap : hi;
         }
         const unsigned count = (unsigned)(e - s);
         for (unsigned b = 0; b < count; b++)
             for (unsigned q = 0; q < k; q++) xs[b * k + q] = p->job.coord[q][s + b];
-        p->engine->block(&p->job, xs, count, ranges, n_ranges, acc);
+        p->engine->block(job, xs, count, use, n_use, acc);
         for (unsigned b = 0; b < count; b++) {
             float *d = ws->delta + (size_t)ws->perm[s + b] * n;
             for (unsigned q = 0; q < k; q++) d[p->dim[q]] += p->h * acc[b * k + q];
@@ -251,7 +303,8 @@ typedef struct apply_pass {
     float count[DPC_MAX_DIMS]; /* c_k, 0 for dimensions that do not move */
 } apply_pass;
 
-static void apply_range(void *ctx, size_t lo, size_t hi) {
+static void apply_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
+    (void)slot;
     const apply_pass *a = (const apply_pass *)ctx;
     for (size_t i = lo; i < hi; i++)
         for (size_t d = 0; d < a->n; d++) {
@@ -268,8 +321,25 @@ static void apply_range(void *ctx, size_t lo, size_t hi) {
         }
 }
 
-static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws, float *x) {
+/* Physically reorder the working points by the cell order build_layout just computed. */
+static void reorder_points(workspace *ws) {
     const size_t m = ws->m, n = ws->n;
+    for (size_t s = 0; s < m; s++) {
+        const uint32_t i = ws->perm[s];
+        memcpy(ws->x_tmp + s * n, ws->x + (size_t)i * n, n * sizeof(float));
+        ws->order_tmp[s] = ws->order[i];
+    }
+    float *xt = ws->x;
+    ws->x = ws->x_tmp;
+    ws->x_tmp = xt;
+    uint32_t *ot = ws->order;
+    ws->order = ws->order_tmp;
+    ws->order_tmp = ot;
+}
+
+static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws) {
+    const size_t m = ws->m, n = ws->n;
+    int reordered = 0;
     memset(ws->delta, 0, m * n * sizeof(float));
     apply_pass a;
     memset(&a, 0, sizeof a);
@@ -296,10 +366,15 @@ static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws
         p.job.w = L->kernels + (size_t)t * L->bins;
         p.job.dw = L->slopes + (size_t)t * L->bins;
         plan_grid(&p, m);
-        build_layout(&p, x);
+        build_layout(&p, ws->x);
+        if (p.grid && !reordered) { /* before any displacement of this layer is accumulated */
+            reorder_points(ws);
+            build_layout(&p, ws->x);
+            reordered = 1;
+        }
         parallel_for(e->threads, m, sub_pass_range, &p);
     }
-    a.x = x;
+    a.x = ws->x;
     a.delta = ws->delta;
     a.n = n;
     parallel_for(e->threads, m, apply_range, &a);
@@ -307,9 +382,13 @@ static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws
 
 dpc_status dpc_cpu_filter(const dpc_cascade *c, const dpc_cpu_engine *e, size_t m, float *x) {
     workspace ws;
-    dpc_status st = workspace_init(&ws, m, c->dims);
+    dpc_status st = workspace_init(&ws, m, c->dims, e->threads);
     if (st != DPC_OK) return st;
-    for (uint32_t l = 0; l < c->n_layers; l++) run_layer(&c->layers[l], e, &ws, x);
+    const size_t n = c->dims;
+    memcpy(ws.x, x, m * n * sizeof(float));
+    for (size_t i = 0; i < m; i++) ws.order[i] = (uint32_t)i;
+    for (uint32_t l = 0; l < c->n_layers; l++) run_layer(&c->layers[l], e, &ws);
+    for (size_t i = 0; i < m; i++) memcpy(x + (size_t)ws.order[i] * n, ws.x + i * n, n * sizeof(float));
     workspace_free(&ws);
     return DPC_OK;
 }

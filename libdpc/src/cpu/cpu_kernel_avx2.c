@@ -13,82 +13,126 @@ static inline float hsum(__m256 v) {
     return _mm_cvtss_f32(s);
 }
 
-/* One body for every subspace size: KMAX is the array size (4 for the specialised small sizes,
- * so the compiler keeps accumulators in registers; DPC_MAX_DIMS for the generic path), K > 0 a
- * compile-time size, K == 0 the run-time job->k. */
-#define POINT_BODY(KMAX, K)                                                                         \
-    const unsigned k = (K) ? (K) : job->k;                                                          \
-    const float *coord[KMAX];                                                                       \
-    for (unsigned q = 0; q < k; q++) coord[q] = job->coord[q];                                      \
-    const float *w_tab = job->w, *dw_tab = job->dw;                                                 \
-    const __m256 cutoff = _mm256_set1_ps(job->cutoff), three_halves = _mm256_set1_ps(1.5f);         \
-    const __m256 neg_half = _mm256_set1_ps(-0.5f);                                                  \
-    const __m256 radius = _mm256_set1_ps(job->radius), scale = _mm256_set1_ps(job->scale);          \
-    const __m256 umax = _mm256_set1_ps(job->umax);                                                  \
-    const __m256i qmax = _mm256_set1_epi32(job->qmax);                                              \
-    const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);                                 \
-    for (unsigned p = 0; p < count; p++) {                                                        \
-    const float *xi = xs + p * k;                                                                   \
-    float *acc = accs + p * k;                                                                      \
-    __m256 vacc[KMAX], vx[KMAX];                                                                     \
-    for (unsigned q = 0; q < k; q++) {                                                              \
-        vacc[q] = _mm256_setzero_ps();                                                              \
-        vx[q] = _mm256_set1_ps(xi[q]);                                                              \
-    }                                                                                               \
+typedef __m256 lane_mask;
+#define LANES 8
+#define ANY(m) (!_mm256_testz_ps(m, m))
+#define LOAD_MASK(left) _mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_set1_epi32((left) < 8 ? (int)(left) : 8), lane))
+#define WINDOW(d, load) _mm256_and_ps(load, _mm256_and_ps(_mm256_cmp_ps(d, cutoff, _CMP_GT_OQ), _mm256_cmp_ps(d, radius, _CMP_LT_OQ)))
+#define MASKED_COEF(in, g, inv) _mm256_and_ps(in, _mm256_mul_ps(g, inv))
+#define ROUND(t) _mm256_round_ps(t, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC)
+#define RSQRT(x) _mm256_rsqrt_ps(x)
+#define REDUCE(v) hsum(v)
+
+/* The loop over candidates, written once. FOR_DIMS(X) expands X(q) for each subspace dimension
+ * q: with a fixed list (DIMS_1 .. DIMS_4) every per-dimension value is its own variable, so the
+ * accumulators stay in registers; DIMS_N loops over arrays for larger subspaces.
+ * Per candidate: toroidal difference, distance via rsqrt + one Newton step (relative error
+ * ~1e-7; d2 = 0 lanes fail the window test), window eps < d < r, linear kernel lookup. */
+#define CANDIDATE_LOOP(FOR_DIMS, SMALL_TABLE)                                                         \
     for (unsigned r = 0; r < n_ranges; r++) {                                                       \
         const uint32_t end = ranges[2 * r + 1];                                                     \
-        for (uint32_t j = ranges[2 * r]; j < end; j += 8) {                                         \
+        for (uint32_t j = ranges[2 * r]; j < end; j += LANES) {                                     \
             const uint32_t left = end - j;                                                          \
-            __m256i load = _mm256_cmpgt_epi32(_mm256_set1_epi32(left < 8 ? (int)left : 8), lane);   \
-            __m256 delta[KMAX];                                                                     \
-            __m256 d2 = _mm256_setzero_ps();                                                        \
-            for (unsigned q = 0; q < k; q++) {                                                      \
-                __m256 t = _mm256_sub_ps(_mm256_loadu_ps(coord[q] + j), vx[q]);                     \
-                t = _mm256_sub_ps(t, _mm256_round_ps(t, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC)); \
-                delta[q] = t;                                                                       \
-                d2 = _mm256_fmadd_ps(t, t, d2);                                                     \
-            }                                                                                       \
-            /* 1/d from rsqrt plus one Newton step (relative error ~1e-7), not sqrt + div.          \
-             * d2 = 0 gives inf/NaN here; those lanes fail the window test below. */               \
-            __m256 inv = _mm256_rsqrt_ps(d2);                                                       \
-            inv = _mm256_mul_ps(inv, _mm256_fmadd_ps(_mm256_mul_ps(neg_half, d2),                   \
-                                                     _mm256_mul_ps(inv, inv), three_halves));       \
-            const __m256 d = _mm256_mul_ps(d2, inv);                                                \
-            __m256 in = _mm256_and_ps(_mm256_cmp_ps(d, cutoff, _CMP_GT_OQ),                         \
-                                      _mm256_cmp_ps(d, radius, _CMP_LT_OQ));                        \
-            in = _mm256_and_ps(in, _mm256_castsi256_ps(load));                                      \
-            if (_mm256_testz_ps(in, in)) continue;                                                  \
-            const __m256 u = _mm256_min_ps(_mm256_mul_ps(d, scale), umax);                          \
-            const __m256i b = _mm256_min_epi32(_mm256_cvttps_epi32(u), qmax);                       \
-            const __m256 f = _mm256_sub_ps(u, _mm256_cvtepi32_ps(b));                               \
-            const __m256 w = _mm256_i32gather_ps(w_tab, b, 4);                                      \
-            const __m256 dw = _mm256_i32gather_ps(dw_tab, b, 4);                                    \
-            const __m256 coef = _mm256_and_ps(in, _mm256_mul_ps(_mm256_fmadd_ps(f, dw, w), inv));   \
-            for (unsigned q = 0; q < k; q++) vacc[q] = _mm256_fmadd_ps(coef, delta[q], vacc[q]);    \
+            const lane_mask load = LOAD_MASK(left);                                                 \
+            __m256 d2 = _mm256_setzero_ps();                                                              \
+            FOR_DIMS(DIFF)                                                                          \
+            __m256 inv = RSQRT(d2);                                                                    \
+            inv = _mm256_mul_ps(inv, _mm256_fmadd_ps(_mm256_mul_ps(neg_half, d2), _mm256_mul_ps(inv, inv), three_halves)); \
+            const __m256 d = _mm256_mul_ps(d2, inv);                                                      \
+            const lane_mask in = WINDOW(d, load);                                                   \
+            if (!ANY(in)) continue;                                                                 \
+            const __m256 u = _mm256_min_ps(_mm256_mul_ps(d, scale), umax);                                   \
+            const __m256i b = _mm256_min_epi32(_mm256_cvttps_epi32(u), qmax);                                              \
+            const __m256 f = _mm256_sub_ps(u, _mm256_cvtepi32_ps(b));                                        \
+            const __m256 w = _mm256_i32gather_ps(job->w, b, 4);                                     \
+            const __m256 dw = _mm256_i32gather_ps(job->dw, b, 4);                                   \
+            const __m256 coef = MASKED_COEF(in, _mm256_fmadd_ps(f, dw, w), inv);                          \
+            FOR_DIMS(ACCUMULATE)                                                                    \
         }                                                                                           \
-    }                                                                                               \
-    for (unsigned q = 0; q < k; q++) acc[q] = hsum(vacc[q]);                                      \
     }
 
-static inline __attribute__((always_inline)) void point_small(const dpc_sub_job *job, const float *xs,
-                                                              unsigned count, const uint32_t *ranges,
-                                                              unsigned n_ranges, float *accs,
-                                                              const unsigned K) {
-    POINT_BODY(4, K)
-}
+#define DIFF(q)                                                                                     \
+    __m256 t##q = _mm256_sub_ps(_mm256_loadu_ps(c##q + j), x##q);                                            \
+    t##q = _mm256_sub_ps(t##q, ROUND(t##q));                                                           \
+    d2 = _mm256_fmadd_ps(t##q, t##q, d2);
+#define ACCUMULATE(q) a##q = _mm256_fmadd_ps(coef, t##q, a##q);
+#define DECLARE(q)                                                                                  \
+    const float *c##q = job->coord[q];                                                              \
+    __m256 x##q, a##q;
+#define START(q)                                                                                    \
+    x##q = _mm256_set1_ps(xi[q]);                                                                      \
+    a##q = _mm256_setzero_ps();
+#define FINISH(q) acc[q] = REDUCE(a##q);
+#define DIMS_1(X) X(0)
+#define DIMS_2(X) X(0) X(1)
+#define DIMS_3(X) X(0) X(1) X(2)
+#define DIMS_4(X) X(0) X(1) X(2) X(3)
 
-static void point_generic(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
-                          unsigned n_ranges, float *accs) {
-    POINT_BODY(DPC_MAX_DIMS, 0)
+#define SETUP                                                                                       \
+    const int bins = job->qmax + 2;                                                                 \
+    const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);                                 \
+    const __m256 cutoff = _mm256_set1_ps(job->cutoff), radius = _mm256_set1_ps(job->radius);        \
+    const __m256 scale = _mm256_set1_ps(job->scale), umax = _mm256_set1_ps(job->umax);              \
+    const __m256 three_halves = _mm256_set1_ps(1.5f), neg_half = _mm256_set1_ps(-0.5f);             \
+    const __m256i qmax = _mm256_set1_epi32(job->qmax);                                                          \
+    (void)bins;
+
+#define SMALL_KERNEL(NAME, DIMS, K)                                                                 \
+    static void NAME(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges, \
+                     unsigned n_ranges, float *accs) {                                              \
+        SETUP                                                                                       \
+        DIMS(DECLARE)                                                                               \
+        for (unsigned p = 0; p < count; p++) {                                                      \
+            const float *xi = xs + p * (K);                                                         \
+            float *acc = accs + p * (K);                                                            \
+            DIMS(START)                                                                             \
+            CANDIDATE_LOOP_TABLE(DIMS)                                                              \
+            DIMS(FINISH)                                                                            \
+        }                                                                                           \
+    }
+#define CANDIDATE_LOOP_TABLE(DIMS) CANDIDATE_LOOP(DIMS, 0)
+
+SMALL_KERNEL(kernel_1, DIMS_1, 1)
+SMALL_KERNEL(kernel_2, DIMS_2, 2)
+SMALL_KERNEL(kernel_3, DIMS_3, 3)
+SMALL_KERNEL(kernel_4, DIMS_4, 4)
+
+/* Any subspace size: per-dimension values in arrays (the per-candidate work is large enough here
+ * that keeping accumulators in memory costs little). */
+#undef DIFF
+#undef ACCUMULATE
+#define DIMS_N(X) for (unsigned q = 0; q < k; q++) { X(q) }
+#define DIFF(q)                                                                                     \
+    __m256 tq = _mm256_sub_ps(_mm256_loadu_ps(job->coord[q] + j), x[q]);                                     \
+    tq = _mm256_sub_ps(tq, ROUND(tq));                                                                 \
+    t[q] = tq;                                                                                      \
+    d2 = _mm256_fmadd_ps(tq, tq, d2);
+#define ACCUMULATE(q) a[q] = _mm256_fmadd_ps(coef, t[q], a[q]);
+
+static void kernel_n(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
+                     unsigned n_ranges, float *accs) {
+    SETUP
+    const unsigned k = job->k;
+    __m256 x[DPC_MAX_DIMS], a[DPC_MAX_DIMS], t[DPC_MAX_DIMS];
+    for (unsigned p = 0; p < count; p++) {
+        const float *xi = xs + p * k;
+        float *acc = accs + p * k;
+        for (unsigned q = 0; q < k; q++) {
+            x[q] = _mm256_set1_ps(xi[q]);
+            a[q] = _mm256_setzero_ps();
+        }
+        CANDIDATE_LOOP_TABLE(DIMS_N)
+        for (unsigned q = 0; q < k; q++) acc[q] = REDUCE(a[q]);
+    }
 }
 
 void dpc_block_avx2(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
                     unsigned n_ranges, float *accs) {
     switch (job->k) {
-    case 1: point_small(job, xs, count, ranges, n_ranges, accs, 1); break;
-    case 2: point_small(job, xs, count, ranges, n_ranges, accs, 2); break;
-    case 3: point_small(job, xs, count, ranges, n_ranges, accs, 3); break;
-    case 4: point_small(job, xs, count, ranges, n_ranges, accs, 4); break;
-    default: point_generic(job, xs, count, ranges, n_ranges, accs); break;
+    case 1: kernel_1(job, xs, count, ranges, n_ranges, accs); break;
+    case 2: kernel_2(job, xs, count, ranges, n_ranges, accs); break;
+    case 3: kernel_3(job, xs, count, ranges, n_ranges, accs); break;
+    case 4: kernel_4(job, xs, count, ranges, n_ranges, accs); break;
+    default: kernel_n(job, xs, count, ranges, n_ranges, accs); break;
     }
 }
