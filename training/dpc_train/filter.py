@@ -226,8 +226,9 @@ class NeighbourCache:
             ent = self.entries.get(t)
             if ent is not None:
                 ref, ii, jj, half = ent
-                mv = _wrap_diff(x[..., dims] - ref)
-                if ref.shape == mv.shape and float(_sqnorm(mv.reshape(-1, len(dims))).max()) < half * half:
+                same = ref.shape == x[..., dims].shape
+                mv = _wrap_diff(x[..., dims] - ref) if same else None
+                if same and float(_sqnorm(mv.reshape(-1, len(dims))).max()) < half * half:
                     out.append((ii, jj))
                     continue
             rc = r + self.skin * h
