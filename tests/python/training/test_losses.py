@@ -220,3 +220,19 @@ def test_loss_programs():
         build_loss({"source": "x = 1"}, 256, 2)
     with pytest.raises(LossConfigError, match="exactly one"):
         build_loss({}, 256, 2)
+
+
+@pytest.mark.parametrize("name", ["bnot", "jitter"])
+def test_2d_spectrum_files_radially_average_to_the_radial_files(name):
+    """The authors' 2-D spectra, cropped by spectrum2d_target and floor-binned like radspec,
+    give their radial files: pins the centring, the DC handling and the binning convention."""
+    K = 128
+    S = T.spectrum2d_target(name, 1024, K)
+    assert S[K, K] == 0
+    q = torch.arange(-K, K + 1, dtype=torch.float64)
+    idx = torch.floor(torch.sqrt(q[:, None] ** 2 + q[None, :] ** 2) + 1e-9).long().reshape(-1)
+    ok = idx <= K
+    rad = torch.zeros(K + 1, dtype=torch.float64).index_add(0, idx[ok], S.reshape(-1)[ok])
+    rad /= torch.bincount(idx[ok], minlength=K + 1)
+    tgt = T.radial_target(name, 1024, 2, nu_max=4.0)[: K + 1]
+    assert (rad - tgt)[1:].abs().max() < 1e-6
