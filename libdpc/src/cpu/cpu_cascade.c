@@ -339,7 +339,7 @@ static void reorder_points(workspace *ws) {
 
 static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws) {
     const size_t m = ws->m, n = ws->n;
-    int reordered = 0;
+    int accumulated = 0; /* the reorder must come before any displacement is summed */
     memset(ws->delta, 0, m * n * sizeof(float));
     apply_pass a;
     memset(&a, 0, sizeof a);
@@ -367,12 +367,12 @@ static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws
         p.job.dw = L->slopes + (size_t)t * L->bins;
         plan_grid(&p, m);
         build_layout(&p, ws->x);
-        if (p.grid && !reordered) { /* before any displacement of this layer is accumulated */
+        if (p.grid && !accumulated) {
             reorder_points(ws);
             build_layout(&p, ws->x);
-            reordered = 1;
         }
         parallel_for(e->threads, m, sub_pass_range, &p);
+        accumulated = 1;
     }
     a.x = ws->x;
     a.delta = ws->delta;
