@@ -178,7 +178,15 @@ class Trainer:
             import matplotlib.pyplot as plt
 
             fig, ax = plt.subplots(figsize=(6, 3.5))
-            ax.plot([h[0] for h in self.history], [h[1] for h in self.history], lw=0.8)
+            steps = [h[0] for h in self.history]
+            vals = [h[1] for h in self.history]
+            ax.plot(steps, vals, lw=0.6, alpha=0.5, label="loss (one batch)")
+            win = max(1, min(25, len(vals) // 5))
+            if win > 1:  # batch losses are noisy: show a running mean too
+                run = [sum(vals[max(0, i - win + 1):i + 1]) / (i - max(0, i - win + 1) + 1)
+                       for i in range(len(vals))]
+                ax.plot(steps, run, lw=1.2, label=f"running mean ({win})")
+                ax.legend(fontsize=8)
             ax.set_yscale("log")
             ax.set_xlabel("step")
             ax.set_ylabel("loss")
