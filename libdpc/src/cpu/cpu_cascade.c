@@ -35,7 +35,7 @@ typedef struct workspace {
      * each layer's sort then reads memory almost sequentially): x is the working copy, order[i]
      * the caller's index of working point i; x_tmp / order_tmp are the reorder targets. */
     float *x, *x_tmp;
-    uint32_t *order, *order_tmp;
+    uint32_t *order, *order_tmp, *cell_tmp;
     float *gather; /* per worker: 4 columns of GATHER_STRIDE floats (cell candidates, see below) */
 } workspace;
 
@@ -49,6 +49,7 @@ static void workspace_free(workspace *w) {
     free(w->x_tmp);
     free(w->order);
     free(w->order_tmp);
+    free(w->cell_tmp);
     free(w->gather);
 }
 
@@ -67,8 +68,9 @@ static dpc_status workspace_init(workspace *w, size_t m, size_t n, unsigned thre
     w->x_tmp = (float *)malloc(m * n * sizeof(float));
     w->order = (uint32_t *)malloc(m * sizeof(uint32_t));
     w->order_tmp = (uint32_t *)malloc(m * sizeof(uint32_t));
+    w->cell_tmp = (uint32_t *)malloc(m * sizeof(uint32_t));
     w->gather = (float *)malloc((size_t)threads * 4 * GATHER_STRIDE * sizeof(float));
-    if (!w->gather || !w->delta || !w->soa || !w->perm || !w->cell_of || !w->cell_start || !w->x || !w->x_tmp ||
+    if (!w->gather || !w->cell_tmp || !w->delta || !w->soa || !w->perm || !w->cell_of || !w->cell_start || !w->x || !w->x_tmp ||
         !w->order || !w->order_tmp) {
         workspace_free(w);
         return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory for a %zu x %zu point set", m, n);
@@ -156,8 +158,8 @@ static void plan_grid(sub_pass *p, size_t m) {
     p->R = (uint32_t)R;
 }
 
-/* Sort points by cell (stable counting sort) and lay out coordinates structure-of-arrays. */
-static void build_layout(sub_pass *p, const float *x) {
+/* Sort points by cell (stable counting sort): cell_of, cell_start and perm. */
+static void sort_cells(sub_pass *p, const float *x) {
     workspace *ws = p->ws;
     const size_t m = ws->m, n = ws->n;
     const unsigned k = p->job.k;
@@ -184,7 +186,13 @@ static void build_layout(sub_pass *p, const float *x) {
         for (size_t c = cells; c > 0; c--) start[c] = start[c - 1];
         start[0] = 0;
     }
-    for (unsigned q = 0; q < k; q++) {
+}
+
+/* Copy the subspace's coordinates, in sorted order, structure-of-arrays. */
+static void fill_soa(sub_pass *p, const float *x) {
+    workspace *ws = p->ws;
+    const size_t m = ws->m, n = ws->n;
+    for (unsigned q = 0; q < p->job.k; q++) {
         float *col = ws->soa + q * ws->stride;
         for (size_t s = 0; s < m; s++) col[s] = x[(size_t)ws->perm[s] * n + p->dim[q]];
         p->job.coord[q] = col;
@@ -321,20 +329,26 @@ static void apply_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
         }
 }
 
-/* Physically reorder the working points by the cell order build_layout just computed. */
+/* Physically reorder the working points by the cell order sort_cells just computed; afterwards
+ * the sorted order is the identity and the cell starts are unchanged. */
 static void reorder_points(workspace *ws) {
     const size_t m = ws->m, n = ws->n;
     for (size_t s = 0; s < m; s++) {
         const uint32_t i = ws->perm[s];
         memcpy(ws->x_tmp + s * n, ws->x + (size_t)i * n, n * sizeof(float));
         ws->order_tmp[s] = ws->order[i];
+        ws->cell_tmp[s] = ws->cell_of[i];
     }
+    for (size_t s = 0; s < m; s++) ws->perm[s] = (uint32_t)s;
     float *xt = ws->x;
     ws->x = ws->x_tmp;
     ws->x_tmp = xt;
-    uint32_t *ot = ws->order;
+    uint32_t *t = ws->order;
     ws->order = ws->order_tmp;
-    ws->order_tmp = ot;
+    ws->order_tmp = t;
+    t = ws->cell_of;
+    ws->cell_of = ws->cell_tmp;
+    ws->cell_tmp = t;
 }
 
 static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws) {
@@ -366,11 +380,9 @@ static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws
         p.job.w = L->kernels + (size_t)t * L->bins;
         p.job.dw = L->slopes + (size_t)t * L->bins;
         plan_grid(&p, m);
-        build_layout(&p, ws->x);
-        if (p.grid && !accumulated) {
-            reorder_points(ws);
-            build_layout(&p, ws->x);
-        }
+        sort_cells(&p, ws->x);
+        if (p.grid && !accumulated) reorder_points(ws);
+        fill_soa(&p, ws->x);
         parallel_for(e->threads, m, sub_pass_range, &p);
         accumulated = 1;
     }
