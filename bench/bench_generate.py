@@ -4,7 +4,8 @@
 
 Builds libdpc and bench/bench_generate.c in build/bench (Release), then measures:
 1. dpc_generate_n with models/repulsion-2d.onnx (2-D, 40 layers, rho = 3.2 spacings, about 32
-   neighbours per point) at m = 1,024 / 16,384 / 262,144 / 1,048,576, scalar and AVX2;
+   neighbours per point) at m = 1,024 / 16,384 / 262,144 / 1,048,576, on every ISA path the CPU
+   has (scalar, AVX2, AVX-512);
 2. the scaling exponent: least-squares slope of log(time) against log(m);
 3. all-pairs throughput: a 2-D model whose radius covers the torus (every pair interacts),
    m = 4,096, 4 layers: m^2 * layers / time pair interactions per second.
@@ -61,12 +62,14 @@ def cpu_name() -> str:
     return platform.processor() or "unknown CPU"
 
 
-def has_avx2() -> bool:
+def cpu_flags() -> set[str]:
     try:
-        flags = Path("/proc/cpuinfo").read_text()
-        return " avx2" in flags and " fma" in flags
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("flags"):
+                return set(line.split(":", 1)[1].split())
     except OSError:
-        return False
+        pass
+    return set()
 
 
 def main() -> None:
@@ -76,7 +79,9 @@ def main() -> None:
     args = ap.parse_args()
     exe = build()
     counts = [1024, 16384, 262144] + ([] if args.quick else [1048576])
-    isas = ["scalar"] + (["avx2"] if has_avx2() else [])
+    flags = cpu_flags()
+    isas = ["scalar"] + (["avx2"] if {"avx2", "fma"} <= flags else [])
+    isas += ["avx512"] if {"avx2", "fma", "avx512f"} <= flags else []
     model = ROOT / "models" / "repulsion-2d.onnx"
     rows = {isa: run(exe, model, isa, counts) for isa in isas}
     ap_model = all_pairs_model()
@@ -88,13 +93,14 @@ def main() -> None:
         "repeated runs; one run of the script gives every number and ratio below).", "",
         f"Machine: {cpu_name()}, {os.cpu_count()} logical CPUs, {platform.system()} {platform.machine()}.", "",
         "## Generation: 2-D, 40 layers, about 32 neighbours per point (`models/repulsion-2d.onnx`)", "",
-        "| points m | " + " | ".join(f"{isa} median" for isa in isas) + (" | AVX2 speed-up |" if len(isas) > 1 else " |"),
-        "|---:|" + "---:|" * len(isas) + ("---:|" if len(isas) > 1 else ""),
+        "| points m | " + " | ".join(f"{isa} median (CPU)" for isa in isas)
+        + "".join(f" | {isa} speed-up" for isa in isas[1:]) + " |",
+        "|---:|" + "---:|" * (2 * len(isas) - 1),
     ]
     for k, m in enumerate(counts):
-        cells = [f"{rows[isa][k]['median_s'] * 1e3:.2f} ms" for isa in isas]
-        ratio = f" {rows['scalar'][k]['median_s'] / rows['avx2'][k]['median_s']:.2f}x |" if len(isas) > 1 else ""
-        lines.append(f"| {m:,} | " + " | ".join(cells) + " |" + ratio)
+        cells = [f"{rows[isa][k]['median_s'] * 1e3:.2f} ms ({rows[isa][k]['cpu_median_s'] * 1e3:.2f})" for isa in isas]
+        ratios = [f"{rows['scalar'][k]['median_s'] / rows[isa][k]['median_s']:.2f}x" for isa in isas[1:]]
+        lines.append(f"| {m:,} | " + " | ".join(cells + ratios) + " |")
     lines += ["", "Scaling exponent (slope of log time against log m over the counts above):", ""]
     exps = {}
     for isa in isas:
@@ -108,7 +114,10 @@ def main() -> None:
         r = pairs[isa]
         rates[isa] = 4096**2 * r["layers"] / r["median_s"]
         lines.append(f"| {isa} | {r['median_s'] * 1e3:.2f} ms | {rates[isa] / 1e9:.3f} G |")
-    lines += ["", "Targets (issue 2): 1,024 points <= 2 ms; 1,048,576 points <= 3 s; exponent <= 1.1; "
+    lines += ["", f"Load average while measuring: {os.getloadavg()[0]:.2f} (1 min) on {os.cpu_count()} CPUs."]
+    lines += ["", "Wall-clock medians; thread CPU time in parentheses (it differs from wall time only "
+              "when the machine is busy). `auto` picks the last column's ISA on this CPU.", "",
+              "Targets (issue 2): 1,024 points <= 2 ms; 1,048,576 points <= 3 s; exponent <= 1.1; "
               "all-pairs >= 0.5 G pair interactions/s per core with AVX2.", ""]
     text = "\n".join(lines)
     print(text)

@@ -12,29 +12,37 @@ static inline float round_even(float t) {
 
 static void point(const dpc_sub_job *job, const float *xi, const uint32_t *ranges, unsigned n_ranges,
                   float *acc) {
+    /* Job fields and sums in locals: the compiler cannot prove `acc` does not alias them. */
     const unsigned k = job->k;
-    float delta[DPC_MAX_DIMS];
-    for (unsigned q = 0; q < k; q++) acc[q] = 0.0f;
+    const float cutoff = job->cutoff, radius = job->radius, scale = job->scale, umax = job->umax;
+    const int32_t qmax = job->qmax;
+    const float *w = job->w, *dw = job->dw;
+    float delta[DPC_MAX_DIMS], sum[DPC_MAX_DIMS], x[DPC_MAX_DIMS];
+    for (unsigned q = 0; q < k; q++) {
+        sum[q] = 0.0f;
+        x[q] = xi[q];
+    }
     for (unsigned r = 0; r < n_ranges; r++) {
         for (uint32_t j = ranges[2 * r]; j < ranges[2 * r + 1]; j++) {
             float d2 = 0.0f;
             for (unsigned q = 0; q < k; q++) {
-                float t = job->coord[q][j] - xi[q];
+                float t = job->coord[q][j] - x[q];
                 t -= round_even(t); /* minimum-image toroidal difference */
                 delta[q] = t;
                 d2 += t * t;
             }
             const float d = sqrtf(d2);
-            if (!(d > job->cutoff && d < job->radius)) continue;
-            float u = d * job->scale;
-            u = u < job->umax ? u : job->umax;
+            if (!(d > cutoff && d < radius)) continue;
+            float u = d * scale;
+            u = u < umax ? u : umax;
             int32_t b = (int32_t)u;
-            b = b < job->qmax ? b : job->qmax;
+            b = b < qmax ? b : qmax;
             const float f = u - (float)b;
-            const float coef = (job->w[b] + f * job->dw[b]) / d;
-            for (unsigned q = 0; q < k; q++) acc[q] += coef * delta[q];
+            const float coef = (w[b] + f * dw[b]) / d;
+            for (unsigned q = 0; q < k; q++) sum[q] += coef * delta[q];
         }
     }
+    for (unsigned q = 0; q < k; q++) acc[q] = sum[q];
 }
 
 void dpc_block_scalar(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
