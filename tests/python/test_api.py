@@ -29,6 +29,8 @@ def _cpu_flags() -> set[str]:
 
 
 HAVE_AVX2 = {"avx2", "fma"} <= _cpu_flags()
+HAVE_AVX512 = HAVE_AVX2 and "avx512f" in _cpu_flags()
+VECTOR_ISAS = (["avx2"] if HAVE_AVX2 else []) + (["avx512"] if HAVE_AVX512 else [])
 
 
 def _is_c_float32(a: np.ndarray, shape) -> bool:
@@ -181,26 +183,29 @@ def test_metadata_dict():
     assert g.metadata["dpc.grid_axes"] == "0,1" and g.metadata["dpc.grid_shape"] == "32,32"
 
 
-def test_scalar_and_avx2_agree():
-    if not HAVE_AVX2:
+def test_scalar_and_vector_isas_agree():
+    if not VECTOR_ISAS:
         pytest.skip("CPU lacks avx2/fma (per /proc/cpuinfo): only the scalar path exists here")
     for path, n in ((M2D, None), (M2D, 3000), (GRID, None), (DATA / "model_3d_mixed.onnx", None)):
         s = dpc.load(path, isa="scalar")
-        v = dpc.load(path, isa="avx2")
-        assert (s.isa, v.isa) == ("scalar", "avx2")
-        for seed in (0, 1):
-            a, b = s.generate(seed, n), v.generate(seed, n)
-            d = np.abs(a.astype(np.float64) - b)
-            d = np.minimum(d, 1 - d).max()
-            assert d <= 1e-5, f"{path.name}: scalar vs avx2 differ by {d:.3g}"
+        assert s.isa == "scalar"
+        for isa in VECTOR_ISAS:
+            v = dpc.load(path, isa=isa)
+            assert v.isa == isa
+            for seed in (0, 1):
+                a, b = s.generate(seed, n), v.generate(seed, n)
+                d = np.abs(a.astype(np.float64) - b)
+                d = np.minimum(d, 1 - d).max()
+                assert d <= 1e-5, f"{path.name}: scalar vs {isa} differ by {d:.3g}"
 
 
-def test_avx2_request_without_avx2_is_unsupported():
-    if HAVE_AVX2:
-        assert dpc.load(M2D, isa="avx2").isa == "avx2"
+@pytest.mark.parametrize("isa,have", [("avx2", HAVE_AVX2), ("avx512", HAVE_AVX512)])
+def test_vector_isa_request_matches_the_cpu(isa, have):
+    if have:
+        assert dpc.load(M2D, isa=isa).isa == isa
     else:
         with pytest.raises(dpc.UnsupportedError):
-            dpc.load(M2D, isa="avx2")
+            dpc.load(M2D, isa=isa)
 
 
 @pytest.mark.parametrize("path,n", [(M2D, None), (M2D, 5000), (DATA / "model_3d_proj.onnx", None),

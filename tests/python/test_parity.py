@@ -37,7 +37,8 @@ def _cpu_flags() -> set[str]:
 
 
 HAVE_AVX2 = {"avx2", "fma"} <= _cpu_flags()
-ISAS = ["scalar"] + (["avx2"] if HAVE_AVX2 else [])
+HAVE_AVX512 = HAVE_AVX2 and "avx512f" in _cpu_flags()
+ISAS = ["scalar"] + (["avx2"] if HAVE_AVX2 else []) + (["avx512"] if HAVE_AVX512 else [])
 
 _ref_cache: dict[str, rc.RefModel] = {}
 _max_diff: dict[str, float] = {}
@@ -111,6 +112,10 @@ def test_generate_matches_float64_reference(name, n):
         expect = rc.run_cascade(ref, x0)
         moved = rc.torus_diff(x0, expect).mean()
         assert moved > 1e-3, "the reference cascade barely moves the points: a vacuous comparison"
+        golden = DATA / "golden" / f"{name}__seed{seed}__n{m_pts}.f32"
+        if golden.exists():  # the C tests' copy of this reference output (make_golden.py)
+            stored = np.fromfile(golden, dtype="<f4").reshape(m_pts, ref.dims)
+            assert torus_max(stored, expect) <= 1e-7, f"{golden.name} is stale"
         for isa, model in handles.items():
             got = model.generate(seed, n)
             assert got.shape == (m_pts, ref.dims) and got.dtype == np.float32
@@ -216,6 +221,10 @@ def test_committed_files_are_what_the_scripts_make(tmp_path):
     env_root = Path(__file__).resolve().parents[2]
     subprocess.run([sys.executable, str(DATA / "make_models.py"), "--out", str(tmp_path)],
                    check=True, cwd=env_root, capture_output=True)
+    subprocess.run([sys.executable, str(DATA / "make_golden.py"), "--models", str(tmp_path),
+                    "--out", str(tmp_path / "golden")], check=True, cwd=env_root, capture_output=True)
+    assert sorted(p.name for p in (tmp_path / "golden").glob("*.f32")) == \
+        sorted(p.name for p in (DATA / "golden").glob("*.f32")), "golden/ has other files"
     subprocess.run([sys.executable, str(DATA / "make_malformed.py"), "--models", str(tmp_path),
                     "--out", str(tmp_path / "malformed")], check=True, cwd=env_root,
                    capture_output=True)
