@@ -1,0 +1,103 @@
+"""Measure every bundled 2-D model the way docs/models.md reports it, next to the classics.
+
+    python models/model_cards.py            # writes docs/models.md and docs/figures/models/*.png
+
+For each model: 100 realisations at its trained point count (seeds 0..99), and the same metrics
+for the authors' BNOT sets (all that ship), jitter and white noise (100 sets each): mean m*P
+below nu = 0.5 and 0.75 (white noise = 1), the radial-spectrum peak and where it is, mean
+anisotropy over 0.5 <= nu <= 4 (dB), and the minimum-distance ratio (mean and worst set).
+Conventions: docs/analysis.md (DESIGN.md §8).
+"""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+import dpc  # noqa: E402
+from dpc import analysis, baselines  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+FIGURES = ROOT / "docs" / "figures" / "models"
+SETS = 100
+
+
+def metrics(sets: np.ndarray) -> dict:
+    r = analysis.radial_spectrum(sets, nu_max=4.0)
+    peak, peak_nu = r.peak()
+    band = (r.nu >= 0.5) & (r.nu <= 4.0) & (r.samples > 0)
+    md = analysis.min_distance(sets)
+    return {
+        "sets": len(sets), "elow50": r.low_frequency_energy(0.5), "elow75": r.low_frequency_energy(0.75),
+        "peak": peak, "peak_nu": peak_nu, "aniso": float(np.mean(r.anisotropy_db[band])),
+        "dmin_mean": md.mean_ratio, "dmin_min": md.min_ratio, "radial": r,
+    }
+
+
+def row(name: str, m: dict) -> str:
+    return (f"| {name} | {m['sets']} | {m['elow50']:.4f} | {m['elow75']:.4f} | {m['peak']:.2f} "
+            f"(ν = {m['peak_nu']:.2f}) | {m['aniso']:.2f} | {m['dmin_mean']:.3f} / {m['dmin_min']:.3f} |")
+
+
+def main() -> None:
+    FIGURES.mkdir(parents=True, exist_ok=True)
+    classics = {
+        "authors' BNOT sets": metrics(baselines.reference_sets("bnot", 1024, 2)),
+        "jitter": metrics(baselines.generate("jitter", 1024, 2, count=SETS, seed=0)),
+        "white noise": metrics(baselines.generate("white", 1024, 2, count=SETS, seed=0)),
+    }
+    target = analysis.reference_radial_spectrum("bnot", 1024, 2)
+
+    lines = ["# Bundled models", "",
+             "Each card is made by `python models/model_cards.py` (this page and its figures are its "
+             "output). Metrics over realisations by the conventions of [analysis](analysis.md): "
+             "E_low(ν) = mean m·P over 0 < ν' < ν (white noise = 1); anisotropy = mean over "
+             "0.5 ≤ ν ≤ 4, in dB; δ_min = minimum toroidal distance / maximal packing distance "
+             "(mean over sets / worst set).", ""]
+    header = ["| point sets | sets | E_low ν<0.5 | E_low ν<0.75 | peak | anisotropy (dB) | δ_min mean / worst |",
+              "|---|---:|---:|---:|---|---:|---|"]
+    for name in dpc.available_models():
+        model = dpc.load(name)
+        if model.dims != 2 or model.grid_axes:
+            continue
+        path = dpc.model_path(name)
+        sha = hashlib.sha256(path.read_bytes()).hexdigest()
+        sets = model.generate_batch(SETS, seed=0)
+        mm = metrics(sets)
+        lines += [f"## {name}", "", model.metadata.get("dpc.description", ""), "",
+                  f"- file: `models/{path.name}` ({path.stat().st_size:,} bytes), sha256 `{sha}`",
+                  f"- {model.dims}-D, trained point count {model.n_points:,}, {model.layers} layers",
+                  f"- made by: `{model.metadata.get('dpc.source', 'python training/train.py')}`"
+                  + (f"; trained: {model.metadata['dpc.trained']}" if "dpc.trained" in model.metadata else ""),
+                  "", *header, row(f"**{name}** (m = {model.n_points:,})", mm)]
+        lines += [row(label, m) for label, m in classics.items()]
+        fig, ax = plt.subplots(figsize=(7, 3.6))
+        for label, m, style in [(name, mm, "-"), ("authors' BNOT sets", classics["authors' BNOT sets"], "--"),
+                                ("jitter", classics["jitter"], ":")]:
+            r = m["radial"]
+            ok = r.samples > 0
+            ax.plot(r.nu[ok], r.mean[ok], style, lw=1.2, label=f"{label} ({m['sets']} sets)")
+        ax.plot(target.nu, target.power, color="0.6", lw=0.8, label="BNOT radial target (authors' file)")
+        ax.set(xlim=(0, 4), ylim=(0, 3.6), xlabel="ν = |q| / √m", ylabel="radial mean of m·P")
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        fig_path = FIGURES / f"{name}-radial.png"
+        fig.savefig(fig_path, dpi=110)
+        plt.close(fig)
+        lines += ["", f"![radial spectrum of {name}](figures/models/{fig_path.name})", ""]
+        print("\n".join(lines[-(len(classics) + 4):]))
+    lines += ["Reference data: the authors' BNOT point sets and radial target come from "
+              "`sinbag/deepsampling` (BSD 3-Clause, `python/dpc/data/deepsampling/LICENSE`).", ""]
+    out = ROOT / "docs" / "models.md"
+    out.write_text("\n".join(lines))
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()
