@@ -28,7 +28,6 @@ from importlib import resources
 from typing import Callable
 
 import numpy as np
-from scipy.stats import qmc
 
 from .errors import InvalidArgumentError
 
@@ -44,7 +43,10 @@ def _check_seed(seed) -> int:
     return s
 
 
-def _qmc_engine(cls, dims: int, rng: np.random.Generator, **kw):
+def _qmc_engine(name: str, dims: int, rng: np.random.Generator, **kw):
+    # Imported here: scipy.stats takes a second to import, and most commands never need it.
+    from scipy.stats import qmc
+    cls = getattr(qmc, name)
     # scipy >= 1.15 takes rng=, older releases seed= (same meaning for a Generator).
     try:
         return cls(dims, rng=rng, **kw)
@@ -68,7 +70,7 @@ def _jitter(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
 
 
 def _sobol(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
-    eng = _qmc_engine(qmc.Sobol, n, rng, scramble=True)
+    eng = _qmc_engine("Sobol", n, rng, scramble=True)
     with warnings.catch_warnings():
         # scipy warns when m is not a power of two (the balance properties then hold only for
         # the leading power-of-two prefix); the first m points are still a valid baseline.
@@ -77,11 +79,11 @@ def _sobol(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
 
 
 def _halton(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
-    return _qmc_engine(qmc.Halton, n, rng, scramble=True).random(m)
+    return _qmc_engine("Halton", n, rng, scramble=True).random(m)
 
 
 def _lhs(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
-    return _qmc_engine(qmc.LatinHypercube, n, rng).random(m)
+    return _qmc_engine("LatinHypercube", n, rng).random(m)
 
 
 def _poisson_disk(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
@@ -91,7 +93,7 @@ def _poisson_disk(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
     from .analysis._common import max_packing_distance
     radius = 0.71 * max_packing_distance(m, n)  # ~5% surplus in 2-D, more in 3-D
     for _ in range(60):
-        pts = _qmc_engine(qmc.PoissonDisk, n, rng, radius=radius).fill_space()
+        pts = _qmc_engine("PoissonDisk", n, rng, radius=radius).fill_space()
         if len(pts) >= m:
             keep = np.sort(rng.choice(len(pts), size=m, replace=False))
             return pts[keep]

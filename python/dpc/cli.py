@@ -20,6 +20,8 @@ from . import baselines, pointio
 from .errors import DpcError, InvalidArgumentError, ModelNotFoundError
 
 _POINT_EXTS = (".npy", ".txt", ".dat", ".pts", ".csv", ".bin")
+# = dpc.analysis.DISCREPANCY_METHODS (not imported here: scipy makes start-up slow)
+_DISC_DEFAULT = "CD,WD,MD,L2-star,GL2,UL2"
 _NO_ARGS_HELP = getattr(click.exceptions, "NoArgsIsHelpError", ())
 _FORMAT_CHOICE = click.Choice(["npy", "txt", "utk", "text", "bin"], case_sensitive=False)
 
@@ -134,9 +136,9 @@ def _analysis_options(f):
                      help="Largest 2-D spectrum grid per axis (beyond it: frequency stride)."),
         click.option("--subspace", default="0,1", show_default=True,
                      help="Two axes for the 2-D spectrum of n-D points."),
-        click.option("--discrepancy", "disc", default=",".join(_disc_methods()),
+        click.option("--discrepancy", "disc", default=_DISC_DEFAULT,
                      show_default=True, help="Discrepancies to compute ('none' for none)."),
-        click.option("--disc-budget", type=click.FloatRange(min=0), default=2.0 ** 28,
+        click.option("--disc-budget", type=click.FloatRange(min=0), default=2.0 ** 26,
                      show_default=True,
                      help="Pair terms allowed for all discrepancies (O(m^2) per set)."),
         click.option("-n", "--points", "n_points", type=click.IntRange(min=1), default=None,
@@ -153,11 +155,6 @@ def _analysis_options(f):
     for o in reversed(opts):
         f = o(f)
     return f
-
-
-def _disc_methods():
-    from .analysis.discrepancy import METHODS
-    return METHODS
 
 
 def _run_analysis(points, label, nu_max, max_size, subspace, disc, disc_budget, seed):

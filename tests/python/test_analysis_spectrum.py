@@ -63,6 +63,16 @@ def test_1d_projection_blocked_product_matches_direct_sum(stride):
     np.testing.assert_allclose(s32.power, direct, atol=1e-4 * direct.max())
 
 
+def test_1d_two_band_sampling_beyond_max_freqs():
+    x = np.random.default_rng(14).random((2, 257, 1))
+    s1 = analysis.power_spectrum_1d(x, nu_max=4.0, max_freqs=200, dtype=np.float64)
+    assert np.array_equal(s1.freqs[:100], np.arange(1, 101))          # every integer first
+    assert np.all(np.diff(s1.freqs[100:]) == s1.stride) and s1.stride == 10
+    assert s1.freqs[-1] >= 4 * 257 and s1.freqs.size <= 200
+    np.testing.assert_allclose(s1.power, analysis.power_spectrum_direct(x, s1.freqs),
+                               rtol=1e-9, atol=1e-9)
+
+
 def test_spectrum_symmetry_and_dc():
     x = np.random.default_rng(5).random((4, 64, 2))
     s = analysis.power_spectrum_2d(x, dtype=np.float64)

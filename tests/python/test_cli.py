@@ -157,6 +157,11 @@ def test_errors_are_one_line(tmp_path, capsys, args, code):
     _one_line_error(err)
 
 
+def test_cli_default_discrepancies_are_all_methods():
+    from dpc import cli
+    assert cli._DISC_DEFAULT.split(",") == list(analysis.DISCREPANCY_METHODS)
+
+
 def test_module_and_console_script_entry_points(tmp_path):
     r = subprocess.run([sys.executable, "-m", "dpc.cli", "generate", "-m", "nope", "-n", "3"],
                        capture_output=True, text=True)

@@ -17,7 +17,6 @@ so their square root is taken. All methods cost O(m^2 n) per set.
 from __future__ import annotations
 
 import numpy as np
-from scipy.stats import qmc
 
 from ..errors import InvalidArgumentError
 from ._common import as_sets, map_sets
@@ -87,6 +86,7 @@ def discrepancy_per_set(points, method: str = "CD", *, progress_bar: bool = Fals
     if method not in METHODS:
         raise InvalidArgumentError(f"unknown discrepancy {method!r}; choose from {', '.join(METHODS)}")
     sets = as_sets(points)
+    from scipy.stats import qmc  # here: scipy.stats takes a second to import
 
     def one_set(s: int) -> float:
         x = sets[s]

@@ -24,12 +24,13 @@ from dataclasses import dataclass, field
 from typing import Callable, Mapping, Sequence
 
 import numpy as np
-from scipy.special import erf
 
 from ..errors import InvalidArgumentError
 from ._common import check_dims, progress
 
 FAMILIES = ("gaussian", "heaviside", "disk")
+# math.erf over the few parameters here; scipy.special costs half a second to import.
+erf = np.vectorize(math.erf, otypes=[np.float64])
 
 
 @dataclass

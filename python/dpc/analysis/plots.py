@@ -18,14 +18,14 @@ _DPI = 110
 
 def _save(fig: Figure, path) -> Path:
     p = Path(path)
-    fig.savefig(p, dpi=_DPI, bbox_inches="tight")
+    fig.savefig(p, dpi=_DPI)  # layout="tight" figures: one draw, not two
     return p
 
 
 def save_points(path, points: np.ndarray, *, dims=(0, 1), title: str = "") -> Path:
     """Scatter plot of one set (m, n) in the subspace ``dims`` (a strip plot for 1-D)."""
     pts = np.asarray(points)
-    fig = Figure(figsize=(4.4, 4.6) if pts.shape[1] >= 2 else (6.0, 1.6))
+    fig = Figure(figsize=(4.4, 4.6) if pts.shape[1] >= 2 else (6.0, 1.6), layout="tight")
     ax = fig.subplots()
     size = float(np.clip(3000.0 / len(pts), 0.2, 8.0))
     if pts.shape[1] >= 2:
@@ -45,7 +45,7 @@ def save_points(path, points: np.ndarray, *, dims=(0, 1), title: str = "") -> Pa
 
 def save_spectrum2d(path, spec: Spectrum2D, *, title: str = "") -> Path:
     """Greyscale image of the mean 2-D power spectrum, axes in normalised frequency."""
-    fig = Figure(figsize=(4.8, 4.4))
+    fig = Figure(figsize=(4.8, 4.4), layout="tight")
     ax = fig.subplots()
     ext = spec.nu_extent
     p = spec.power
@@ -64,7 +64,7 @@ def save_radial(path, curves: Sequence[tuple[str, RadialSpectrum]], *, title: st
                 nu_max: float = 4.0) -> Path:
     """Radial mean power (left axis) and, for a single curve, its anisotropy in dB (right axis,
     grey). ``reference`` = (label, nu, power) is drawn dashed."""
-    fig = Figure(figsize=(6.4, 3.8))
+    fig = Figure(figsize=(6.4, 3.8), layout="tight")
     ax = fig.subplots()
     top = 2.0
     for label, r in curves:
@@ -73,7 +73,7 @@ def save_radial(path, curves: Sequence[tuple[str, RadialSpectrum]], *, title: st
         if np.any(sel):
             top = max(top, float(np.nanmax(r.mean[sel])) * 1.08)
     if reference is not None:
-        ax.plot(reference[1], reference[2], "--", color="tab:orange", lw=1.2, label=reference[0])
+        ax.plot(reference[1], reference[2], "--", color="k", lw=1.0, label=reference[0])
     ax.axhline(1.0, color="0.6", lw=0.6)
     ax.set_xlim(0, nu_max)
     ax.set_ylim(0, min(top, 8.0))
@@ -96,7 +96,7 @@ def save_radial(path, curves: Sequence[tuple[str, RadialSpectrum]], *, title: st
 
 def save_pcf(path, curves: Sequence[tuple[str, PCF]], *, title: str = "") -> Path:
     """Pair correlation functions against r / d_max."""
-    fig = Figure(figsize=(6.4, 3.8))
+    fig = Figure(figsize=(6.4, 3.8), layout="tight")
     ax = fig.subplots()
     top = 2.0
     for label, p in curves:
@@ -116,7 +116,7 @@ def save_pcf(path, curves: Sequence[tuple[str, PCF]], *, title: str = "") -> Pat
 def save_projections(path, curves: Sequence[tuple[str, Spectrum1D]], *, title: str = "",
                      nu_max: float = 4.0) -> Path:
     """1-D power spectra of projections on axes, against nu = q / m."""
-    fig = Figure(figsize=(6.4, 3.6))
+    fig = Figure(figsize=(6.4, 3.6), layout="tight")
     ax = fig.subplots()
     top = 2.0
     for label, sp in curves:
@@ -140,7 +140,7 @@ def save_projections(path, curves: Sequence[tuple[str, Spectrum1D]], *, title: s
 def save_integration(path, study: IntegrationStudy, *, title: str = "") -> Path:
     """Relative variance against point count, log-log, one panel per integrand family."""
     fams = study.families
-    fig = Figure(figsize=(4.0 * len(fams), 3.8))
+    fig = Figure(figsize=(4.0 * len(fams), 3.8), layout="tight")
     axes = np.atleast_1d(fig.subplots(1, len(fams)))
     for ax, fam in zip(axes, fams):
         for name, values in study.rel_var[fam].items():
@@ -159,7 +159,7 @@ def save_series(path, series: dict[str, tuple[Sequence[float], Sequence[float]]]
                 xlabel: str, ylabel: str, title: str = "", logx: bool = False,
                 logy: bool = False) -> Path:
     """Generic line plot of named (x, y) series."""
-    fig = Figure(figsize=(6.0, 3.8))
+    fig = Figure(figsize=(6.0, 3.8), layout="tight")
     ax = fig.subplots()
     for label, (x, y) in series.items():
         ax.plot(x, y, "o-", ms=3, lw=1.1, label=label)

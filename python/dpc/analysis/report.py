@@ -149,7 +149,7 @@ def _clean(d: dict) -> dict:
 
 def analyze(points, *, label: str = "points", nu_max: float = 4.0, max_size: int = 513,
             dims=(0, 1), directions: int = 128, pcf_r_max: float = 2.5, pcf_bins: int = 100,
-            discrepancies=METHODS, discrepancy_budget: float = 2.0 ** 28,
+            discrepancies=METHODS, discrepancy_budget: float = 2.0 ** 26,
             projections: bool = True, seed: int = 0, progress_bar: bool = False) -> Analysis:
     """Measure a batch of point sets by DESIGN.md §8.
 

@@ -118,13 +118,20 @@ def _auto_dtype(dtype, work: float):
 
 
 def _phases(x: np.ndarray, q: np.ndarray, cos_out: np.ndarray, sin_out: np.ndarray) -> None:
-    """cos/sin(2 pi q x) for every (point, frequency) into the given (m, Q) views.
-    The phase q x is formed and reduced to [0, 1) in float64 so that single precision
-    trigonometry stays accurate for large q."""
-    ph = np.multiply.outer(x, q.astype(np.float64))
-    ph -= np.floor(ph)
-    ph = ph.astype(cos_out.dtype, copy=False)
-    ph *= _TWO_PI
+    """cos/sin(2 pi q x) for every (point, frequency) into the given (m, Q) views (q >= 0).
+
+    The phase q x must be reduced modulo 1 before single precision trigonometry. float64 does
+    it with floor; float32 output uses 32-bit fixed point instead: with X = round(x 2^32),
+    X q mod 2^32 is exactly what uint32 multiplication wraps to, in one pass of 4-byte values
+    (x is quantised to 2^-32, far below the float32 resolution of the points)."""
+    if cos_out.dtype == np.float32:
+        fixed = np.mod(np.rint(x * 4294967296.0), 4294967296.0).astype(np.uint32)
+        ph = np.multiply.outer(fixed, q.astype(np.uint32)).astype(np.float32)
+        ph *= np.float32(_TWO_PI / 4294967296.0)
+    else:
+        ph = np.multiply.outer(x, q.astype(np.float64))
+        np.subtract(ph, np.floor(ph), out=ph)
+        ph *= _TWO_PI
     np.cos(ph, out=cos_out)
     np.sin(ph, out=sin_out)
 
@@ -226,53 +233,72 @@ def radial_profile(spec: Spectrum2D, nu_max: float | None = None) -> RadialSpect
                           n_sets=spec.n_sets, dims=2, method="grid")
 
 
-def power_spectrum_1d(points, *, dim: int = 0, nu_max: float = 4.0, max_freqs: int = 16384,
+def _progression_power(xs: np.ndarray, q0: int, step: int, count: int, dtype,
+                       progress_bar: bool) -> np.ndarray:
+    """sum over sets of |sum_k exp(2 pi i q x_k)|^2 at q = q0 + step i, i = 0..count-1.
+
+    Separable again: with i = B t + j, z^q = z^(q0 + step B t) z^(step j), so all the sums are
+    one matrix product of a (m x T) and a (m x B) phase table: O(m sqrt(count)) trigonometry,
+    the O(m count) multiply-adds done by BLAS."""
+    s_count, m = xs.shape
+    b = math.isqrt(count) + 1
+    t = -(-count // b)
+    cdt = np.complex64 if dtype == np.float32 else np.complex128
+    q_in = step * np.arange(b)
+    q_out = q0 + step * b * np.arange(t)
+    chunk = max(1, _CHUNK_ELEMS // (b + t))
+
+    def one_set(s: int) -> np.ndarray:
+        acc = np.zeros((t, b), dtype=cdt)
+        for start in range(0, m, chunk):
+            part = xs[s, start:start + chunk]
+            u = np.empty((part.size, t), cdt)
+            v = np.empty((part.size, b), cdt)
+            _phases(part, q_out, u.real, u.imag)      # exp(2 pi i q x) written in place
+            _phases(part, q_in, v.real, v.imag)
+            acc += u.T @ v
+        return np.abs(acc.ravel()[:count]).astype(np.float64) ** 2
+
+    total = np.zeros(count)
+    for p in map_sets(one_set, s_count, progress_bar=progress_bar, desc="1-D spectrum"):
+        total += p
+    return total
+
+
+def power_spectrum_1d(points, *, dim: int = 0, nu_max: float = 4.0, max_freqs: int = 4096,
                       stride: int | None = None, dtype=None, progress_bar: bool = False
                       ) -> Spectrum1D:
-    """Mean power spectrum of the projection of the points on axis ``dim``, at q = s, 2s, ...
-    up to nu_max m (nu = q / m for a 1-D set of m points).
+    """Mean power spectrum of the projection of the points on axis ``dim``, at integer q up to
+    nu_max m (nu = q / m for a 1-D set of m points).
 
-    Also separable: with q = B t + j, sum_k z_k^q = sum_k z_k^(B t) z_k^j is a matrix product
-    of a (m x T) and a (m x B) phase table, so Q frequencies cost O(m sqrt(Q)) trigonometry."""
+    Where that is more than ``max_freqs`` frequencies, the first max_freqs/2 are every integer
+    (the low band, where stratification shows) and the rest are spread evenly to nu_max with
+    stride ``Spectrum1D.stride``. An explicit ``stride`` samples q = stride, 2 stride, ..."""
     sets = as_sets(points)
     s_count, m, n = sets.shape
     (dim,) = check_dims((dim,), n, 1)
     if not nu_max > 0:
         raise InvalidArgumentError(f"nu_max must be positive, got {nu_max}")
+    if int(max_freqs) < 2:
+        raise InvalidArgumentError(f"max_freqs must be >= 2, got {max_freqs}")
     reach = math.ceil(nu_max * m)
-    if stride is None:
-        stride = max(1, math.ceil(reach / int(max_freqs)))
-    elif int(stride) < 1:
-        raise InvalidArgumentError(f"stride must be >= 1, got {stride}")
-    stride = int(stride)
-    count = math.ceil(reach / stride)              # frequencies stride * (1..count)
-    b = math.isqrt(count) + 1                      # inner block: j = 0..b-1
-    t = (count + b) // b                           # outer blocks: q / stride = b t' + j <= count
-    dt = _auto_dtype(dtype, float(m) * (count + 1))
-    cdt = np.complex64 if dt == np.float32 else np.complex128
-    q_in = stride * np.arange(b)
-    q_out = stride * b * np.arange(t)
-    chunk = max(1, _CHUNK_ELEMS // (b + t))
-
-    def one_set(s: int) -> np.ndarray:
-        x = sets[s][:, dim]
-        acc = np.zeros((t, b), dtype=cdt)
-        for start in range(0, m, chunk):
-            part = x[start:start + chunk]
-            cu, su = np.empty((part.size, t), dt), np.empty((part.size, t), dt)
-            cv, sv = np.empty((part.size, b), dt), np.empty((part.size, b), dt)
-            _phases(part, q_out, cu, su)
-            _phases(part, q_in, cv, sv)
-            acc += (cu + 1j * su).astype(cdt, copy=False).T @ (cv + 1j * sv).astype(cdt, copy=False)
-        return np.abs(acc.ravel()).astype(np.float64) ** 2
-
-    total = np.zeros(t * b)
-    for p in map_sets(one_set, s_count, progress_bar=progress_bar, desc="1-D spectrum"):
-        total += p
-    power = total[1:count + 1] / (m * s_count)
-    freqs = stride * np.arange(1, count + 1)
-    return Spectrum1D(power=power, freqs=freqs, stride=stride, n_points=m, n_sets=s_count,
-                      dim=dim)
+    if stride is not None:
+        if int(stride) < 1:
+            raise InvalidArgumentError(f"stride must be >= 1, got {stride}")
+        parts = [(int(stride), int(stride), -(-reach // int(stride)))]
+    elif reach <= int(max_freqs):
+        parts = [(1, 1, reach)]
+    else:
+        low = int(max_freqs) // 2
+        step = -(-(reach - low) // (int(max_freqs) - low))
+        parts = [(1, 1, low), (low + step, step, -(-(reach - low) // step))]
+    xs = np.ascontiguousarray(sets[:, :, dim])
+    dt = _auto_dtype(dtype, float(m) * sum(c for _, _, c in parts))
+    power = np.concatenate([_progression_power(xs, q0, st, c, dt, progress_bar)
+                            for q0, st, c in parts]) / (m * s_count)
+    freqs = np.concatenate([q0 + st * np.arange(c) for q0, st, c in parts])
+    return Spectrum1D(power=power, freqs=freqs, stride=parts[-1][1], n_points=m,
+                      n_sets=s_count, dim=dim)
 
 
 def power_spectrum_direct(points, q, *, dtype=np.float64) -> np.ndarray:
