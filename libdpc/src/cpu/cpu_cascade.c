@@ -16,10 +16,7 @@
 
 #define MAX_RANGES 512u          /* index ranges per point (2 per row of cells) */
 #define DPC_MAX_THREADS 64u
-/* A cell's candidates come in up to 2(2R+1)^(k-1) short ranges; copied into one run (when there
- * are at most GATHER_CAP), the kernel loops once with a predictable trip count. */
-#define GATHER_CAP 4096u
-#define GATHER_STRIDE (GATHER_CAP + 16u)
+
 #define PARALLEL_MIN_POINTS 8192 /* below this, threads cost more than they save */
 
 typedef struct workspace {
@@ -36,7 +33,7 @@ typedef struct workspace {
      * the caller's index of working point i; x_tmp / order_tmp are the reorder targets. */
     float *x, *x_tmp;
     uint32_t *order, *order_tmp, *cell_tmp;
-    float *gather; /* per worker: 4 columns of GATHER_STRIDE floats (cell candidates, see below) */
+    float *gather; /* per worker: 4 columns of DPC_GATHER_STRIDE floats (kernel scratch) */
 } workspace;
 
 static void workspace_free(workspace *w) {
@@ -69,7 +66,7 @@ static dpc_status workspace_init(workspace *w, size_t m, size_t n, unsigned thre
     w->order = (uint32_t *)malloc(m * sizeof(uint32_t));
     w->order_tmp = (uint32_t *)malloc(m * sizeof(uint32_t));
     w->cell_tmp = (uint32_t *)malloc(m * sizeof(uint32_t));
-    w->gather = (float *)malloc((size_t)threads * 4 * GATHER_STRIDE * sizeof(float));
+    w->gather = (float *)malloc((size_t)threads * 4 * DPC_GATHER_STRIDE * sizeof(float));
     if (!w->gather || !w->cell_tmp || !w->delta || !w->soa || !w->perm || !w->cell_of || !w->cell_start || !w->x || !w->x_tmp ||
         !w->order || !w->order_tmp) {
         workspace_free(w);
@@ -250,50 +247,24 @@ static void sub_pass_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
     uint32_t ranges[2 * MAX_RANGES];
     float xs[DPC_BLOCK_MAX * 4], acc[DPC_BLOCK_MAX * 4]; /* blocks hold DPC_BLOCK_MAX * 4 floats */
     const unsigned block_cap = k <= 4 ? DPC_BLOCK_MAX : (DPC_BLOCK_MAX * 4) / k;
-    float *gathered = ws->gather + (size_t)slot * 4 * GATHER_STRIDE; /* grid subspaces have k <= 4 */
-    dpc_sub_job run = p->job;
-    if (p->grid)
-        for (unsigned q = 0; q < k; q++) run.coord[q] = gathered + q * GATHER_STRIDE;
+    float *scratch = p->grid ? ws->gather + (size_t)slot * 4 * DPC_GATHER_STRIDE : NULL; /* grid: k <= 4 */
     unsigned n_ranges = 1;
     ranges[0] = 0;
     ranges[1] = (uint32_t)m; /* all pairs */
     for (size_t s = lo; s < hi;) {
         /* A block: consecutive sorted points of one cell (they share candidate ranges). */
         size_t e = s + 1;
-        const dpc_sub_job *job = &p->job;
-        const uint32_t *use = ranges;
-        unsigned n_use = n_ranges;
-        uint32_t span[2];
         if (p->grid) {
             const uint32_t cell = ws->cell_of[ws->perm[s]];
             while (e < hi && e - s < block_cap && ws->cell_of[ws->perm[e]] == cell) e++;
             n_ranges = grid_ranges(p, cell, ranges);
-            n_use = n_ranges;
-            uint32_t total = 0;
-            for (unsigned r = 0; r < n_ranges; r++) total += ranges[2 * r + 1] - ranges[2 * r];
-            if (total <= GATHER_CAP) {
-                for (unsigned q = 0; q < k; q++) {
-                    float *dst = gathered + q * GATHER_STRIDE;
-                    for (unsigned r = 0; r < n_ranges; r++) {
-                        const uint32_t len = ranges[2 * r + 1] - ranges[2 * r];
-                        memcpy(dst, p->job.coord[q] + ranges[2 * r], len * sizeof(float));
-                        dst += len;
-                    }
-                    memset(dst, 0, 16 * sizeof(float)); /* lanes past the end read zeros */
-                }
-                span[0] = 0;
-                span[1] = total;
-                job = &run;
-                use = span;
-                n_use = 1;
-            }
         } else {
             e = s + block_cap < hi ? s + block_cap : hi;
         }
         const unsigned count = (unsigned)(e - s);
         for (unsigned b = 0; b < count; b++)
             for (unsigned q = 0; q < k; q++) xs[b * k + q] = p->job.coord[q][s + b];
-        p->engine->block(job, xs, count, use, n_use, acc);
+        p->engine->block(&p->job, xs, count, ranges, n_ranges, acc, scratch);
         for (unsigned b = 0; b < count; b++) {
             float *d = ws->delta + (size_t)ws->perm[s + b] * n;
             for (unsigned q = 0; q < k; q++) d[p->dim[q]] += p->h * acc[b * k + q];
@@ -335,7 +306,7 @@ static void reorder_points(workspace *ws) {
     const size_t m = ws->m, n = ws->n;
     for (size_t s = 0; s < m; s++) {
         const uint32_t i = ws->perm[s];
-        memcpy(ws->x_tmp + s * n, ws->x + (size_t)i * n, n * sizeof(float));
+        for (size_t d = 0; d < n; d++) ws->x_tmp[s * n + d] = ws->x[(size_t)i * n + d]; /* n is small: no memcpy call */
         ws->order_tmp[s] = ws->order[i];
         ws->cell_tmp[s] = ws->cell_of[i];
     }

@@ -15,15 +15,37 @@ typedef __mmask16 lane_mask;
 #define RSQRT(x) _mm512_rsqrt14_ps(x)
 #define REDUCE(v) _mm512_reduce_add_ps(v)
 
+/* Concatenate the candidate ranges of each column into scratch (whole-vector copies: columns are
+ * readable 16 floats past any range end, and scratch has room for the overrun). Returns the
+ * candidate count, or 0 (nothing copied) when they exceed DPC_GATHER_CAP. */
+static inline uint32_t concatenate(const dpc_sub_job *job, unsigned k, const uint32_t *ranges,
+                                   unsigned n_ranges, float *scratch, const float **cols) {
+    uint32_t total = 0;
+    for (unsigned r = 0; r < n_ranges; r++) total += ranges[2 * r + 1] - ranges[2 * r];
+    if (total > DPC_GATHER_CAP) return 0;
+    for (unsigned q = 0; q < k; q++) {
+        float *dst = scratch + q * DPC_GATHER_STRIDE;
+        const float *src = job->coord[q];
+        for (unsigned r = 0; r < n_ranges; r++) {
+            const uint32_t a = ranges[2 * r], len = ranges[2 * r + 1] - a;
+            for (uint32_t o = 0; o < len; o += 16) _mm512_storeu_ps(dst + o, _mm512_loadu_ps(src + a + o));
+            dst += len;
+        }
+        _mm512_storeu_ps(dst, _mm512_setzero_ps()); /* lanes past the end read zeros */
+        cols[q] = scratch + q * DPC_GATHER_STRIDE;
+    }
+    return total;
+}
+
 /* The loop over candidates, written once. FOR_DIMS(X) expands X(q) for each subspace dimension
  * q: with a fixed list (DIMS_1 .. DIMS_4) every per-dimension value is its own variable, so the
  * accumulators stay in registers; DIMS_N loops over arrays for larger subspaces.
  * Per candidate: toroidal difference, distance via rsqrt + one Newton step (relative error
  * ~1e-7; d2 = 0 lanes fail the window test), window eps < d < r, linear kernel lookup. */
 #define CANDIDATE_LOOP(FOR_DIMS, SMALL_TABLE)                                                         \
-    for (unsigned r = 0; r < n_ranges; r++) {                                                       \
-        const uint32_t end = ranges[2 * r + 1];                                                     \
-        for (uint32_t j = ranges[2 * r]; j < end; j += LANES) {                                     \
+    for (unsigned r = 0; r < nrg; r++) {                                                            \
+        const uint32_t end = rg[2 * r + 1];                                                     \
+        for (uint32_t j = rg[2 * r]; j < end; j += LANES) {                                     \
             const uint32_t left = end - j;                                                          \
             const lane_mask load = LOAD_MASK(left);                                                 \
             __m512 d2 = _mm512_setzero_ps();                                                              \
@@ -55,7 +77,7 @@ typedef __mmask16 lane_mask;
     d2 = _mm512_fmadd_ps(t##q, t##q, d2);
 #define ACCUMULATE(q) a##q = _mm512_fmadd_ps(coef, t##q, a##q);
 #define DECLARE(q)                                                                                  \
-    const float *c##q = job->coord[q];                                                              \
+    const float *c##q = cols[q];                                                                    \
     __m512 x##q, a##q;
 #define START(q)                                                                                    \
     x##q = _mm512_set1_ps(xi[q]);                                                                      \
@@ -65,6 +87,21 @@ typedef __mmask16 lane_mask;
 #define DIMS_2(X) X(0) X(1)
 #define DIMS_3(X) X(0) X(1) X(2)
 #define DIMS_4(X) X(0) X(1) X(2) X(3)
+
+/* Pick the candidate source: one concatenated run in scratch, or the ranges in place. */
+#define GATHER(K)                                                                                   \
+    const float *cols[DPC_MAX_DIMS];                                                                \
+    for (unsigned q = 0; q < (K); q++) cols[q] = job->coord[q];                                     \
+    uint32_t one_run[2] = {0, 0};                                                                   \
+    const uint32_t *rg = ranges;                                                                    \
+    unsigned nrg = n_ranges;                                                                        \
+    if (scratch && nrg > 1 && (K) <= 4) {                                                           \
+        one_run[1] = concatenate(job, (K), ranges, n_ranges, scratch, cols);                        \
+        if (one_run[1]) {                                                                           \
+            rg = one_run;                                                                           \
+            nrg = 1;                                                                                \
+        }                                                                                           \
+    }
 
 #define SETUP                                                                                       \
     const int bins = job->qmax + 2;                                                                 \
@@ -86,8 +123,9 @@ typedef __mmask16 lane_mask;
 
 #define SMALL_KERNEL(NAME, DIMS, K)                                                                 \
     static void NAME(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges, \
-                     unsigned n_ranges, float *accs) {                                              \
+                     unsigned n_ranges, float *accs, float *scratch) {                              \
         SETUP                                                                                       \
+        GATHER(K)                                                                                   \
         DIMS(DECLARE)                                                                               \
         for (unsigned p = 0; p < count; p++) {                                                      \
             const float *xi = xs + p * (K);                                                         \
@@ -119,9 +157,12 @@ SMALL_KERNEL(kernel_4, DIMS_4, 4)
 #define ACCUMULATE(q) a[q] = _mm512_fmadd_ps(coef, t[q], a[q]);
 
 static void kernel_n(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
-                     unsigned n_ranges, float *accs) {
+                     unsigned n_ranges, float *accs, float *scratch) {
     SETUP
     const unsigned k = job->k;
+    (void)scratch; /* large subspaces run all pairs: one range, nothing to concatenate */
+    const uint32_t *rg = ranges;
+    const unsigned nrg = n_ranges;
     __m512 x[DPC_MAX_DIMS], a[DPC_MAX_DIMS], t[DPC_MAX_DIMS];
     for (unsigned p = 0; p < count; p++) {
         const float *xi = xs + p * k;
@@ -136,12 +177,12 @@ static void kernel_n(const dpc_sub_job *job, const float *xs, unsigned count, co
 }
 
 void dpc_block_avx512(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
-                    unsigned n_ranges, float *accs) {
+                    unsigned n_ranges, float *accs, float *scratch) {
     switch (job->k) {
-    case 1: kernel_1(job, xs, count, ranges, n_ranges, accs); break;
-    case 2: kernel_2(job, xs, count, ranges, n_ranges, accs); break;
-    case 3: kernel_3(job, xs, count, ranges, n_ranges, accs); break;
-    case 4: kernel_4(job, xs, count, ranges, n_ranges, accs); break;
-    default: kernel_n(job, xs, count, ranges, n_ranges, accs); break;
+    case 1: kernel_1(job, xs, count, ranges, n_ranges, accs, scratch); break;
+    case 2: kernel_2(job, xs, count, ranges, n_ranges, accs, scratch); break;
+    case 3: kernel_3(job, xs, count, ranges, n_ranges, accs, scratch); break;
+    case 4: kernel_4(job, xs, count, ranges, n_ranges, accs, scratch); break;
+    default: kernel_n(job, xs, count, ranges, n_ranges, accs, scratch); break;
     }
 }

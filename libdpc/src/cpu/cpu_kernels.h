@@ -26,18 +26,23 @@ typedef struct dpc_sub_job {
 
 /* Sums for `count` query points that share the candidate ranges (the points of one cell, or a
  * block of points for all pairs): xs[p * k + q] is dimension q of query p, the sums go to
- * acc[p * k + q]. ranges[2r], ranges[2r+1]: half-open candidate index range r. */
+ * acc[p * k + q]. ranges[2r], ranges[2r+1]: half-open candidate index range r.
+ * scratch (k <= 4 columns of DPC_GATHER_STRIDE floats, or NULL): SIMD kernels copy up to
+ * DPC_GATHER_CAP candidates of several ranges into one run there, so vectors are full and the
+ * loop has one predictable trip count; the sums are those of the ranges in order. */
 #define DPC_BLOCK_MAX 64u
+#define DPC_GATHER_CAP 4096u
+#define DPC_GATHER_STRIDE (DPC_GATHER_CAP + 32u)
 typedef void (*dpc_block_fn)(const dpc_sub_job *job, const float *xs, unsigned count,
-                             const uint32_t *ranges, unsigned n_ranges, float *acc);
+                             const uint32_t *ranges, unsigned n_ranges, float *acc, float *scratch);
 
 void dpc_block_scalar(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
-                      unsigned n_ranges, float *acc);
+                      unsigned n_ranges, float *acc, float *scratch);
 #if defined(DPC_HAVE_AVX2)
 void dpc_block_avx2(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
-                    unsigned n_ranges, float *acc);
+                    unsigned n_ranges, float *acc, float *scratch);
 void dpc_block_avx512(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
-                      unsigned n_ranges, float *acc);
+                      unsigned n_ranges, float *acc, float *scratch);
 #endif
 
 #endif
