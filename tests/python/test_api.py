@@ -120,9 +120,11 @@ def test_truncated_file_is_model_format_error(tmp_path):
 
 
 def test_unknown_operator_version_is_unsupported():
+    path = DATA / "malformed" / "opset_dpc_v2.onnx"
     with pytest.raises(dpc.UnsupportedError) as e:
-        dpc.load(DATA / "malformed" / "opset_dpc_v2.onnx")
-    assert "2" in str(e.value) and "1" in str(e.value), "the message names both versions"
+        dpc.load(path)
+    msg = str(e.value).replace(str(path), "")
+    assert "2" in msg and "1" in msg, f"the message names both versions: {msg}"
 
 
 def test_bad_point_counts():
