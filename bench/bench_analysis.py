@@ -1,6 +1,6 @@
 """Benchmark of `dpc analyze` (the whole command: start-up, reading, every metric, the plots).
 
-    python bench/bench_analysis.py                 # prints the figures, writes docs/performance-analysis.md
+    python bench/bench_analysis.py         # prints the figures, writes docs/performance-analysis.md
     python bench/bench_analysis.py --repeats 1 --no-write
 
 Cases (requirement: under 10 s and under 60 s on the project's 2-core machine):
@@ -95,7 +95,7 @@ def report(results: dict, info: dict) -> str:
         "",
         f"- date: {info['date']}",
         f"- machine: {info['cpu']}, {info['cores']} cores available",
-        f"- software: " + ", ".join(f"{k} {v}" for k, v in info["versions"].items()),
+        "- software: " + ", ".join(f"{k} {v}" for k, v in info["versions"].items()),
         f"- repeats per case: {info['repeats']}",
         "",
         "| case | target | median wall [s] | best [s] | load average during runs |",
@@ -106,7 +106,7 @@ def report(results: dict, info: dict) -> str:
         ok = "under" if r["median"] < target else "OVER"
         lines.append(f"| {label} points | < {target:.0f} s | {r['median']:.2f} ({ok}) | "
                      f"{r['best']:.2f} | {r['load']:.2f} |")
-    lines += ["", "Per-stage times of the last run (seconds, from `metrics.json` → `timings_s`):", ""]
+    lines += ["", "Per-stage times of the last run (seconds, `timings_s` in metrics.json):", ""]
     stages = list(dict.fromkeys(k for r in results.values() for k in r["stages"]))
     lines.append("| stage | " + " | ".join(label for label, *_ in CASES) + " |")
     lines.append("|---|" + "---|" * len(CASES))

@@ -1,6 +1,7 @@
 """Make the figures of docs/analysis.md (one per metric) into docs/figures/analysis/.
 
     python docs/figures/make_analysis_figures.py            # about two minutes on 2 cores
+    python docs/figures/make_analysis_figures.py --checks   # only the correctness figures
 
 Everything is seeded; the bundled model (dpc.available_models()[0]) is included where the
 compiled extension is importable. Prints the numbers quoted in docs/analysis.md.
@@ -194,7 +195,56 @@ def fig_integration(ms):
             f"{k} {v[-1]:.2e}" for k, v in study.rel_var[fam].items()) + f"  (m = {counts[-1]})")
 
 
+def checks():
+    """The correctness figures quoted in docs/analysis.md (the tests assert the same things)."""
+    from scipy.stats import qmc
+    w = np.random.default_rng(12345).random((100, 1024, 2))
+    s = analysis.power_spectrum_2d(w)
+    nu = np.hypot(*np.meshgrid(s.freqs, s.freqs, indexing="ij")) / 32.0
+    dev = max(abs(s.power[(nu > lo) & (nu <= lo + 0.5)].mean() - 1) for lo in np.arange(0, 4, 0.5))
+    r = s.radial(4.0)
+    print(f"white noise, 100 x 1024: largest deviation of a nu band (width 0.5) from 1 = "
+          f"{dev:.4f}; "
+          f"median anisotropy {np.median(r.anisotropy_db[r.nu > 0.5]):.2f} dB (expected -20)")
+    j = baselines.generate("jitter", 1024, count=64, seed=7)
+    sj = analysis.power_spectrum_2d(j)
+    a = np.sinc(sj.freqs / 32) ** 2
+    ana = 1 - a[:, None] * a[None, :]
+    ana[sj.freqs.size // 2, sj.freqs.size // 2] = 0
+    from dpc.analysis.spectrum import Spectrum2D
+    ra = Spectrum2D(ana, sj.freqs, 1, 1024, 1, (0, 1)).radial(4.0)
+    ratio = sj.radial(4.0).mean / ra.mean
+    print(f"jitter 32x32, 64 sets: ring mean / analytic: mean {ratio.mean():.4f}, worst ring "
+          f"(b >= 2) {np.abs(ratio[1:] - 1).max():.3f}")
+    tgt = reference_radial_spectrum("jitter", 1024, 2)
+    print(f"analytic jitter vs the authors' jitter target: max |diff| "
+          f"{np.abs(tgt.power[:127] - ra.mean[:127]).max():.4f}")
+    b = baselines.reference_sets("bnot", 1024, 2)
+    rb = analysis.power_spectrum_2d(b).radial(4.0)
+    tb = reference_radial_spectrum("bnot", 1024, 2).power[:rb.mean.size]
+    print(f"authors' 10 BNOT sets vs BNOT target: mean |diff| {np.abs(rb.mean - tb).mean():.4f}, "
+          f"max |diff| below nu 0.5 {np.abs(rb.mean - tb)[rb.nu < 0.5].max():.5f}")
+    b256 = baselines.reference_sets("bnot", 256, 2)
+    s256 = analysis.power_spectrum_2d(b256)
+    pk, pnu = s256.radial(4.0).peak()
+    print(f"authors' 20 BNOT sets, m = 256: E_low(<0.5) {s256.low_frequency_energy(0.5):.5f}, "
+          f"E_low(<0.75) {s256.low_frequency_energy(0.75):.4f}, peak {pk:.2f} at nu {pnu:.3f}, "
+          f"delta_min {analysis.min_distance_ratio(b256):.4f}")
+    p = analysis.pcf(w[:60], bins=50)
+    print(f"white noise PCF (60 x 1024): mean g {np.average(p.g, weights=p.pairs + 1):.4f}, "
+          f"mean |g - 1| {np.abs(p.g - 1).mean():.4f}")
+    x = w[0][:200]
+    worst = max(abs(analysis.discrepancy(x, mth) - (np.sqrt(qmc.discrepancy(x, method=mth))
+                                                   if mth != "L2-star" else
+                                                   qmc.discrepancy(x, method=mth)))
+                for mth in ("CD", "WD", "MD", "L2-star"))
+    print(f"discrepancy vs scipy on the same set: largest difference {worst:.2e}")
+
+
 def main() -> int:
+    if "--checks" in sys.argv:
+        checks()
+        return 0
     OUT.mkdir(parents=True, exist_ok=True)
     data = sets_2d()
     print("2-D spectra, radial mean, anisotropy:")

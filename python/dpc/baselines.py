@@ -162,7 +162,8 @@ def _fibonacci(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
         below = max([f for f in fib if f < m] or [3])
         above = min(f for f in fib if f > m)
         raise InvalidArgumentError(
-            f"the Fibonacci lattice needs a Fibonacci number of points >= 3; nearest: {below} or {above}")
+            f"the Fibonacci lattice needs a Fibonacci number of points >= 3; "
+            f"nearest: {below} or {above}")
     k = fib.index(m)
     return _lattice(m, (1, fib[k - 1]), rng)
 
@@ -275,7 +276,8 @@ class ReferenceBaseline:
                 f"{self.name}: m={n_points}, dims={dims} is {want}; published: {have}")
         m, d, k = fits[0]
         if not 1 <= int(count) <= k:
-            raise InvalidArgumentError(f"{self.name} has {k} sets of m={m}, dims={d}; asked for {count}")
+            raise InvalidArgumentError(
+                f"{self.name} has {k} sets of m={m}, dims={d}; asked for {count}")
         sets = reference_sets(self.pattern, m, d)
         idx = [(s + c) % k for c in range(int(count))]
         return np.array(sets[idx])
@@ -283,7 +285,8 @@ class ReferenceBaseline:
 
 _SYNTHETIC = [
     Baseline("white", "uniform random points (white noise)", _white),
-    Baseline("jitter", "jittered grid: one uniform point per cell of a k^n grid (m = k^n)", _jitter),
+    Baseline("jitter", "jittered grid: one uniform point per cell of a k^n grid (m = k^n)",
+             _jitter),
     Baseline("sobol", "Owen-scrambled Sobol' (scipy.stats.qmc.Sobol)", _sobol),
     Baseline("halton", "scrambled Halton (scipy.stats.qmc.Halton)", _halton),
     Baseline("lhs", "Latin hypercube (scipy.stats.qmc.LatinHypercube)", _lhs),

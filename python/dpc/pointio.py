@@ -196,7 +196,8 @@ def _read_bin(p: Path, dims: int | None, bin_dtype: str | None) -> np.ndarray:
     if len(readings) > 1:
         # Pairs of float32 coordinates read as one float64 are tiny numbers (< 2^-7) and pass
         # the range test, so also ask every axis to reach 1/4 somewhere, as real sets do.
-        plausible = [r for r in readings if np.all(np.max([s.max(axis=0) for s in r[2]], axis=0) >= 0.25)]
+        plausible = [r for r in readings
+                     if np.all(np.max([s.max(axis=0) for s in r[2]], axis=0) >= 0.25)]
         if len(plausible) == 1:
             readings = plausible
     if not readings:

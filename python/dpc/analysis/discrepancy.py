@@ -84,7 +84,8 @@ def unanchored_l2(points: np.ndarray) -> float:
 def discrepancy_per_set(points, method: str = "CD", *, progress_bar: bool = False) -> np.ndarray:
     """Discrepancy ``method`` (one of :data:`METHODS`) of every set: array (sets,)."""
     if method not in METHODS:
-        raise InvalidArgumentError(f"unknown discrepancy {method!r}; choose from {', '.join(METHODS)}")
+        raise InvalidArgumentError(
+            f"unknown discrepancy {method!r}; choose from {', '.join(METHODS)}")
     sets = as_sets(points)
     from scipy.stats import qmc  # here: scipy.stats takes a second to import
 

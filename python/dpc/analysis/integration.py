@@ -5,7 +5,8 @@ integrals over [0, 1]^n, for several samplers and point counts.
 Families (parameters drawn from ``numpy.random.default_rng(seed)``):
 
 * ``gaussian``: f(x) = exp(-|x - mu|^2 / (2 sigma^2)), mu ~ U[0.3, 0.7]^n, sigma ~ U[0.05, 0.25];
-  integral = prod_k sigma sqrt(pi/2) [erf((1 - mu_k) / (sigma sqrt 2)) + erf(mu_k / (sigma sqrt 2))].
+  integral = prod_k sigma sqrt(pi/2) [erf((1 - mu_k) / (sigma sqrt 2))
+  + erf(mu_k / (sigma sqrt 2))].
 * ``heaviside``: f(x) = 1[<w, x - c> > 0], w a uniform random unit vector, c ~ U[0.25, 0.75]^n
   (a half-plane in 2-D); integral = 1 - volume of {x in [0,1]^n : <w, x> <= <w, c>}, exact
   from the alternating vertex sum (1 / (n! prod w_k)) sum_v (-1)^|v| max(0, t - <w, v>)^n.

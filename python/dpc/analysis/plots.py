@@ -60,7 +60,8 @@ def save_spectrum2d(path, spec: Spectrum2D, *, title: str = "") -> Path:
 
 
 def save_radial(path, curves: Sequence[tuple[str, RadialSpectrum]], *, title: str = "",
-                anisotropy: bool = True, reference: tuple[str, np.ndarray, np.ndarray] | None = None,
+                anisotropy: bool = True,
+                reference: tuple[str, np.ndarray, np.ndarray] | None = None,
                 nu_max: float = 4.0) -> Path:
     """Radial mean power (left axis) and, for a single curve, its anisotropy in dB (right axis,
     grey). ``reference`` = (label, nu, power) is drawn dashed."""

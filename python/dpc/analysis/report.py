@@ -156,7 +156,8 @@ def analyze(points, *, label: str = "points", nu_max: float = 4.0, max_size: int
     2-D spectrum of the subspace ``dims`` (n >= 2), its radial mean and anisotropy; for n >= 3
     also the n-D Monte Carlo radial spectrum; 1-D spectra of every axis; PCF and minimum-distance
     ratio (n <= 10, where d_max is tabulated); discrepancies on as many sets as
-    ``discrepancy_budget`` point pairs allow (all methods together; O(m^2) each)."""
+    ``discrepancy_budget`` pair terms allow (all methods together; O(m^2) each), at least one
+    set while one costs under 16 budgets."""
     sets = as_sets(points, min_points=2)
     s_count, m, n = sets.shape
     res = Analysis(label=label, n_sets=s_count, n_points=m, dims=n)
@@ -207,7 +208,10 @@ def analyze(points, *, label: str = "points", nu_max: float = 4.0, max_size: int
         if mth not in METHODS:
             raise InvalidArgumentError(f"unknown discrepancy {mth!r}; choose from {METHODS}")
     if methods:
-        k = int(min(s_count, discrepancy_budget // (float(m) ** 2 * len(methods))))
+        cost = float(m) ** 2 * len(methods)          # pair terms for one set
+        # As many sets as the budget pays for, and at least one while that costs < 16 budgets.
+        k = int(min(s_count, max(discrepancy_budget // cost,
+                                 1 if cost <= 16 * discrepancy_budget else 0)))
         res.discrepancy_sets = k
         if k == 0:
             res.notes.append(f"discrepancies skipped: one set of {m} points costs "

@@ -55,7 +55,7 @@ class Spectrum2D:
         return float(self.power[sel].mean())
 
     def radial(self, nu_max: float | None = None) -> "RadialSpectrum":
-        """Radial mean and anisotropy over rings of width ``stride`` (see :func:`radial_profile`)."""
+        """Radial mean and anisotropy, rings of width ``stride`` (see :func:`radial_profile`)."""
         return radial_profile(self, nu_max=nu_max)
 
 
