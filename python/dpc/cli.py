@@ -82,8 +82,8 @@ def _read_inputs(specs, n_points, dims, count, seed, bin_dtype) -> list[tuple[st
     out = []
     for spec in specs:
         if Path(spec).is_file():
-            out.append((Path(spec).stem, pointio.read_points(spec, dims=dims,
-                                                             bin_dtype=bin_dtype)))
+            out.append((Path(spec).stem, pointio.read_points(spec, dims=dims, bin_dtype=bin_dtype,
+                                                             progress_bar=True)))
         else:
             sets, name = _generate(spec, n_points, dims, count, seed)
             out.append((name, sets))
@@ -237,7 +237,7 @@ def generate_cmd(model, n_points, dims, seed, count, output, fmt, bin_dtype, thr
                 click.echo("#")
             click.echo("\n".join(" ".join(f"{v:.17g}" for v in row) for row in sets[s]))
         return
-    pointio.write_points(output, sets, fmt, bin_dtype=bin_dtype)
+    pointio.write_points(output, sets, fmt, bin_dtype=bin_dtype, progress_bar=True)
     click.echo(f"wrote {sets.shape[0]} set(s) of {sets.shape[1]} {sets.shape[2]}-D points "
                f"to {output}", err=True)
 

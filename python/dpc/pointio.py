@@ -72,7 +72,14 @@ def _as_3d(points) -> np.ndarray:
     return a
 
 
-def write_points(path, points, fmt: str | None = None, *, bin_dtype: str = "float64") -> Path:
+def _bar(iterable, enabled: bool, desc: str, total: int | None = None):
+    """A tqdm bar on stderr, shown only once the loop has run for a second."""
+    from tqdm import tqdm
+    return tqdm(iterable, desc=desc, total=total, disable=not enabled, delay=1.0, leave=False)
+
+
+def write_points(path, points, fmt: str | None = None, *, bin_dtype: str = "float64",
+                 progress_bar: bool = False) -> Path:
     """Write one set (m, n) or several (sets, m, n) to ``path`` in ``fmt`` (default: from the
     extension). Returns the path."""
     p = Path(path)
@@ -84,7 +91,7 @@ def write_points(path, points, fmt: str | None = None, *, bin_dtype: str = "floa
             np.save(fh, np.ascontiguousarray(arr), allow_pickle=False)
     elif kind == "text":
         with open(p, "w", encoding="ascii") as fh:
-            for s in range(a.shape[0]):
+            for s in _bar(range(a.shape[0]), progress_bar, f"writing {p.name}"):
                 if s:
                     fh.write("#\n")
                 # 17 significant digits read back as the same float64 (float32 values too);
@@ -139,13 +146,13 @@ def _read_npy(p: Path) -> np.ndarray:
     return _stack(list(a), str(p))
 
 
-def _read_text(p: Path) -> np.ndarray:
+def _read_text(p: Path, progress_bar: bool) -> np.ndarray:
     try:
         text = p.read_text(encoding="utf-8")
     except UnicodeDecodeError:
         raise PointFileError(f"{p}: not a text file") from None
     sets = []
-    for block in _SEPARATOR.split(text):
+    for block in _bar(_SEPARATOR.split(text), progress_bar, f"reading {p.name}"):
         if not block.strip():
             continue
         try:
@@ -211,7 +218,7 @@ def _read_bin(p: Path, dims: int | None, bin_dtype: str | None) -> np.ndarray:
 
 
 def read_points(path, fmt: str | None = None, *, dims: int | None = None,
-                bin_dtype: str | None = None) -> np.ndarray:
+                bin_dtype: str | None = None, progress_bar: bool = False) -> np.ndarray:
     """Read a point-set file: float64 array (sets, m, n). ``dims``/``bin_dtype`` only help
     reading ``.bin`` files (see the module notes); for other formats ``dims`` is checked."""
     p = Path(path)
@@ -221,7 +228,7 @@ def read_points(path, fmt: str | None = None, *, dims: int | None = None,
     if kind == "npy":
         out = _read_npy(p)
     elif kind == "text":
-        out = _read_text(p)
+        out = _read_text(p, progress_bar)
     else:
         out = _read_bin(p, dims, bin_dtype)
     if dims is not None and out.shape[2] != int(dims):
