@@ -4,7 +4,9 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <string>
+#include <vector>
 
 #include "dpc/dpc.h"
 
@@ -110,6 +112,100 @@ py::array_t<float> uniform(uint64_t seed, size_t m, size_t n) {
     return out;
 }
 
+// ---- training support: one filter layer in float64 (dpc_layer_forward / dpc_layer_backward) --
+
+using Array64 = py::array_t<double, py::array::c_style>;
+
+// A Python int (or numpy integer) as a 64-bit mask; anything else is an InvalidArgumentError.
+uint64_t to_mask(py::handle h, const std::string &what) {
+    py::object v = py::reinterpret_steal<py::object>(PyNumber_Index(h.ptr()));
+    if (!v) {
+        PyErr_Clear();
+        raise_status(DPC_ERROR_INVALID_ARGUMENT, what + " must be an int");
+    }
+    if (v < py::int_(0)) raise_status(DPC_ERROR_INVALID_ARGUMENT, what + " must not be negative");
+    unsigned long long out = PyLong_AsUnsignedLongLong(v.ptr());
+    if (out == static_cast<unsigned long long>(-1) && PyErr_Occurred()) {
+        PyErr_Clear();
+        raise_status(DPC_ERROR_INVALID_ARGUMENT, what + " does not fit in 64 bits");
+    }
+    return out;
+}
+
+// The layer description and the batch shape of x: (m, n) is one set, (B, m, n) is B sets.
+struct LayerCall {
+    std::vector<uint64_t> masks;
+    std::vector<double> radius;
+    dpc_layer_desc desc{};
+    size_t count = 1, m = 0;
+    std::vector<py::ssize_t> shape;
+};
+
+LayerCall layer_call(const Array64 &x, const Array64 &kernels, const py::sequence &subspaces,
+                     const std::vector<double> &radius, double eps, py::handle fixed) {
+    LayerCall c;
+    if (x.ndim() != 2 && x.ndim() != 3)
+        raise_status(DPC_ERROR_INVALID_ARGUMENT, "x must have shape (m, n) or (batch, m, n)");
+    if (kernels.ndim() != 2) raise_status(DPC_ERROR_INVALID_ARGUMENT, "kernels must have shape (s, b)");
+    const size_t s = static_cast<size_t>(kernels.shape(0)), b = static_cast<size_t>(kernels.shape(1));
+    const size_t n = static_cast<size_t>(x.shape(x.ndim() - 1));
+    if (static_cast<size_t>(py::len(subspaces)) != s || radius.size() != s)
+        raise_status(DPC_ERROR_INVALID_ARGUMENT,
+                     "kernels has " + std::to_string(s) + " rows but subspaces has " +
+                         std::to_string(py::len(subspaces)) + " and radius " + std::to_string(radius.size()) +
+                         " entries: all three must agree");
+    // Larger values would wrap in the uint32 fields; the C checks give the precise ranges.
+    if (n > DPC_MAX_DIMS || s > 0xFFFFFFFFu || b > 0xFFFFFFFFu)
+        raise_status(DPC_ERROR_INVALID_ARGUMENT, "x has " + std::to_string(n) + " dims (at most " +
+                                                     std::to_string(DPC_MAX_DIMS) + ") or kernels is too large");
+    for (size_t t = 0; t < s; t++) c.masks.push_back(to_mask(subspaces[t], "subspaces[" + std::to_string(t) + "]"));
+    c.radius = radius;
+    c.desc.dims = static_cast<uint32_t>(n);
+    c.desc.n_subspaces = static_cast<uint32_t>(s);
+    c.desc.bins = static_cast<uint32_t>(b);
+    c.desc.subspaces = c.masks.data();
+    c.desc.radius = c.radius.data();
+    c.desc.eps = eps;
+    c.desc.fixed = to_mask(fixed, "fixed");
+    c.m = static_cast<size_t>(x.shape(x.ndim() - 2));
+    c.count = x.ndim() == 3 ? static_cast<size_t>(x.shape(0)) : 1;
+    c.shape.assign(x.shape(), x.shape() + x.ndim());
+    return c;
+}
+
+Array64 layer_forward(const Array64 &x, const Array64 &kernels, const py::sequence &subspaces,
+                      const std::vector<double> &radius, double eps, py::handle fixed, uint32_t threads) {
+    LayerCall c = layer_call(x, kernels, subspaces, radius, eps, fixed);
+    Array64 y(c.shape);
+    double *yp = y.mutable_data();
+    const double *xp = x.data(), *kp = kernels.data();
+    call([&] { return dpc_layer_forward(&c.desc, kp, c.count, c.m, xp, yp, threads); });
+    return y;
+}
+
+py::tuple layer_backward(const Array64 &x, const Array64 &kernels, const py::sequence &subspaces,
+                         const std::vector<double> &radius, double eps, py::handle fixed, const Array64 &grad_y,
+                         uint32_t threads) {
+    LayerCall c = layer_call(x, kernels, subspaces, radius, eps, fixed);
+    if (grad_y.ndim() != x.ndim() || !std::equal(c.shape.begin(), c.shape.end(), grad_y.shape()))
+        raise_status(DPC_ERROR_INVALID_ARGUMENT, "grad_y must have the shape of x");
+    Array64 gx(c.shape);
+    Array64 gk({kernels.shape(0), kernels.shape(1)});
+    double *gxp = gx.mutable_data(), *gkp = gk.mutable_data();
+    const double *xp = x.data(), *kp = kernels.data(), *gyp = grad_y.data();
+    call([&] { return dpc_layer_backward(&c.desc, kp, c.count, c.m, xp, gyp, gxp, gkp, threads); });
+    return py::make_tuple(gx, gk);
+}
+
+void register_layer_training(py::module_ &mod) {
+    mod.def("layer_forward", &layer_forward, py::arg("x"), py::arg("kernels"), py::arg("subspaces"),
+            py::arg("radius"), py::arg("eps"), py::arg("fixed"), py::arg("threads"),
+            "One PointFilter layer in float64: x (m, n) or (batch, m, n) -> y of the same shape.");
+    mod.def("layer_backward", &layer_backward, py::arg("x"), py::arg("kernels"), py::arg("subspaces"),
+            py::arg("radius"), py::arg("eps"), py::arg("fixed"), py::arg("grad_y"), py::arg("threads"),
+            "Gradients of one PointFilter layer: (grad_x like x, grad_kernels (s, b) summed over sets).");
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_core, mod) {
@@ -124,4 +220,5 @@ PYBIND11_MODULE(_core, mod) {
         .def("generate_batch", &Model::generate_batch, py::arg("seed"), py::arg("count"), py::arg("n_points"))
         .def("filter", &Model::filter, py::arg("points"));
     mod.def("uniform", &uniform, py::arg("seed"), py::arg("m"), py::arg("n"));
+    register_layer_training(mod);
 }

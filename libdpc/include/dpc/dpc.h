@@ -71,8 +71,9 @@ typedef enum dpc_status {
     DPC_ERROR_INTERNAL = 7          /* a bug in libdpc: please report it */
 } dpc_status;
 
-/* Detail of the last failure on the calling thread ("" if none). The string stays valid until the
- * next libdpc call on this thread. */
+/* Detail of the most recent failure on the calling thread. Every fallible call clears it when it
+ * starts, so after a successful call it is "". The string stays valid until the next libdpc call
+ * on this thread. */
 DPC_API const char *dpc_last_error(void);
 /* Static, human-readable name of a status code ("DPC_ERROR_FORMAT", ...). */
 DPC_API const char *dpc_status_string(dpc_status status);
@@ -152,7 +153,8 @@ DPC_API dpc_status dpc_model_metadata_at(const dpc_model *model, size_t index, c
 /* Largest point count one set may have. */
 #define DPC_MAX_POINTS (1u << 26)
 
-/* Floats needed for count sets of n_points points (count * n_points * dims); 0 on overflow. */
+/* Floats needed for count sets of n_points points (count * n_points * dims; n_points = 0 means
+ * the trained count); 0 on overflow or a NULL model. */
 DPC_API size_t dpc_output_size(const dpc_model *model, size_t count, size_t n_points);
 
 /* Generate the model's trained point count (info.n_points) from seed: out holds n_points * dims
@@ -170,7 +172,7 @@ DPC_API dpc_status dpc_generate_batch(const dpc_model *model, uint64_t seed, siz
                                       size_t n_points, float *out);
 
 /* Run the model's cascade on caller-provided points (in place): points holds n_points * dims
- * finite floats; gridded dimensions are left as given. */
+ * floats, each in [0, 1) (else DPC_ERROR_INVALID_ARGUMENT); gridded dimensions are left as given. */
 DPC_API dpc_status dpc_filter(const dpc_model *model, size_t n_points, float *points);
 
 /* ---------------------------------------------------------------------------------------------
@@ -180,6 +182,55 @@ DPC_API dpc_status dpc_filter(const dpc_model *model, size_t n_points, float *po
 /* Fill out[0 .. n_points * dims) with the uniform input points of seed: value c (row-major index)
  * is (splitmix64 output number c of the stream seeded by seed) >> 40, times 2^-24. */
 DPC_API dpc_status dpc_uniform(uint64_t seed, size_t n_points, size_t dims, float *out);
+
+/* ---------------------------------------------------------------------------------------------
+ * Training support: one filter layer in float64
+ *
+ * The forward and backward passes of one PointFilter layer (docs/model-format.md section 3) for a
+ * training framework. Everything is float64 (h_t, distances, sums): results match the float64
+ * reference of the format to rounding, not the float32 cascade of dpc_generate bit for bit.
+ * Work is O(m * neighbours) per set (toroidal cell grid, or all pairs where a grid does not
+ * pay), memory O(m * n + cells); never O(m^2). Outputs are bit-identical for every thread count.
+ *
+ * Backward, per set, with G = dL/dy (m x n). The wrap y - floor(y) is treated as the identity.
+ * For subspace t with dimension set D_t and an ordered pair (i, j) with e_t < d < r_t:
+ *   delta = x_j (-) x_i over D_t (toroidal), d = |delta|, nh = delta / d,
+ *   u = d (b-1) / r_t, q = min(floor(u), b-2), f = u - q, g = w[q] + f (w[q+1] - w[q]),
+ *   g' = (w[q+1] - w[q]) (b-1) / r_t, and v_i[k] = h_t G_i[k] / c_k for moving k in D_t, 0 for
+ *   fixed k. Then
+ *   dL/dx_i   = G_i + sum_t sum_j J(delta_ij) (v_j - v_i),
+ *               J(delta) = g' nh nh^T + (g / d) (I - nh nh^T)    (the Jacobian of g(d) delta/d)
+ *   dL/dw_t[q]   += (1 - f) (nh . v_i),   dL/dw_t[q+1] += f (nh . v_i)
+ * summed over every ordered pair of every set. J is even in delta, so each point only gathers
+ * from its own neighbours. Gradients flow into fixed coordinates too (they shape distances).
+ * Pairs exactly at d = e_t or d = r_t, and distances exactly on a bin edge, are kinks where this
+ * is a one-sided derivative.
+ * ------------------------------------------------------------------------------------------- */
+
+/* One PointFilter layer, as in a model file. */
+typedef struct dpc_layer_desc {
+    uint32_t dims;             /* n: 1 .. DPC_MAX_DIMS */
+    uint32_t n_subspaces;      /* s: 1 .. 64 */
+    uint32_t bins;             /* b: 2 .. 65536 */
+    const uint64_t *subspaces; /* s bitmasks: nonzero, only bits < n, pairwise distinct */
+    const double *radius;      /* s values rho_t in units of h_t: finite, 0 < rho_t <= 1e6 */
+    double eps;                /* cutoff in units of h_t: finite, >= 0 */
+    uint64_t fixed;            /* dimensions the layer never moves: only bits < n */
+} dpc_layer_desc;
+
+/* y = layer(x) for count sets of n_points points each: x and y hold count * n_points * dims
+ * doubles (set c at offset c * n_points * dims), x finite and in [0, 1). kernels: s * b finite
+ * values, row t = subspace t (in units of h_t). y may be x (in place); otherwise the buffers must
+ * not overlap. threads: 0 = one per online CPU. */
+DPC_API dpc_status dpc_layer_forward(const dpc_layer_desc *layer, const double *kernels, size_t count,
+                                     size_t n_points, const double *x, double *y, uint32_t threads);
+
+/* Gradients of a scalar loss L given grad_y = dL/dy (same shape as x, finite): grad_x = dL/dx
+ * (same shape; may be grad_y) and grad_kernels = dL/dkernels (s * b, overwritten, summed over the
+ * count sets in set order). Other outputs must not overlap the inputs. */
+DPC_API dpc_status dpc_layer_backward(const dpc_layer_desc *layer, const double *kernels, size_t count,
+                                      size_t n_points, const double *x, const double *grad_y,
+                                      double *grad_x, double *grad_kernels, uint32_t threads);
 
 #ifdef __cplusplus
 }

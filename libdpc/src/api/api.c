@@ -1,5 +1,6 @@
 /* The only file on the ABI boundary: checks every argument, turns every failure into a status
  * with a message, and hands valid requests to the model and the backend. */
+#include <float.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -10,6 +11,7 @@
 #include "common/error.h"
 #include "common/rng.h"
 #include "cpu/cpu_cascade.h"
+#include "cpu/cpu_layer_train.h"
 #include "model/model.h"
 
 #define MAX_FLOATS_PER_SET (1ull << 28) /* n_points * dims: 1 GiB of floats */
@@ -308,4 +310,89 @@ dpc_status dpc_filter(const dpc_model *model, size_t n_points, float *points) {
             return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "point %zu, dimension %zu is %g: points must lie in [0, 1)",
                             i / model->cascade.dims, i % model->cascade.dims, (double)points[i]);
     return dpc_cpu_filter(&model->cascade, &model->engine, n_points, points);
+}
+
+/* ---- training support: one filter layer in float64 ----------------------------------------- */
+
+/* Every check of the layer description and the shared inputs; fills *out for the kernels. */
+static dpc_status check_layer_call(const dpc_layer_desc *layer, const double *kernels, size_t count,
+                                   size_t n_points, const double *x, dpc_train_layer *out) {
+    if (!layer) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "layer is NULL");
+    if (!kernels || !x) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "kernels or x is NULL");
+    const uint32_t n = layer->dims, s = layer->n_subspaces, b = layer->bins;
+    if (n < 1 || n > DPC_MAX_DIMS)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "layer dims is %u, must be 1 .. %d", n, DPC_MAX_DIMS);
+    if (s < 1 || s > DPC_MAX_SUBSPACES)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "layer has %u subspaces, must be 1 .. %u", s, DPC_MAX_SUBSPACES);
+    if (b < 2 || b > DPC_MAX_BINS)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "layer has %u kernel bins, must be 2 .. %u", b, DPC_MAX_BINS);
+    if (!layer->subspaces || !layer->radius)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "layer subspaces or radius is NULL");
+    const uint64_t all = n == 64 ? ~0ull : (1ull << n) - 1;
+    for (uint32_t t = 0; t < s; t++) {
+        const uint64_t mask = layer->subspaces[t];
+        if (mask == 0 || (mask & ~all))
+            return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
+                            "subspace %u has mask 0x%llx: must be nonzero and use only dimensions < %u", t,
+                            (unsigned long long)mask, n);
+        for (uint32_t u = 0; u < t; u++)
+            if (layer->subspaces[u] == mask)
+                return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "subspaces %u and %u are equal (0x%llx)", u, t,
+                                (unsigned long long)mask);
+        const double rho = layer->radius[t];
+        if (!(rho > 0.0 && rho <= 1e6))
+            return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "radius of subspace %u is %g, must be in (0, 1e6]", t, rho);
+    }
+    if (!(layer->eps >= 0.0 && layer->eps <= DBL_MAX))
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "eps is %g, must be finite and >= 0", layer->eps);
+    if (layer->fixed & ~all)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "fixed mask 0x%llx uses dimensions >= %u",
+                        (unsigned long long)layer->fixed, n);
+    if (count == 0 || n_points == 0)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "count and n_points must be positive");
+    if (n_points > DPC_MAX_POINTS)
+        return dpc_fail(DPC_ERROR_LIMIT, "%zu points per set, at most %u", n_points, DPC_MAX_POINTS);
+    if ((unsigned long long)n_points * n > MAX_FLOATS_PER_SET)
+        return dpc_fail(DPC_ERROR_LIMIT, "%zu points x %u dims exceeds 2^28 values per set", n_points, n);
+    if (count > SIZE_MAX / sizeof(double) / (n_points * n))
+        return dpc_fail(DPC_ERROR_LIMIT, "count * n_points * dims overflows");
+    for (size_t i = 0; i < (size_t)s * b; i++)
+        if (!isfinite(kernels[i]))
+            return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "kernel value %zu (subspace %zu, bin %zu) is not finite", i,
+                            i / b, i % b);
+    const size_t total = count * n_points * n;
+    for (size_t i = 0; i < total; i++)
+        if (!(x[i] >= 0.0 && x[i] < 1.0))
+            return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
+                            "x: set %zu, point %zu, dimension %zu is %g: points must be finite and in [0, 1)",
+                            i / (n_points * n), i / n % n_points, i % n, x[i]);
+    *out = (dpc_train_layer){n, s, b, layer->subspaces, layer->radius, layer->eps, layer->fixed, kernels};
+    return DPC_OK;
+}
+
+dpc_status dpc_layer_forward(const dpc_layer_desc *layer, const double *kernels, size_t count, size_t n_points,
+                             const double *x, double *y, uint32_t threads) {
+    dpc_clear_error();
+    dpc_train_layer L;
+    dpc_status st = check_layer_call(layer, kernels, count, n_points, x, &L);
+    if (st != DPC_OK) return st;
+    if (!y) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "y is NULL");
+    return dpc_train_forward(&L, count, n_points, x, y, threads);
+}
+
+dpc_status dpc_layer_backward(const dpc_layer_desc *layer, const double *kernels, size_t count, size_t n_points,
+                              const double *x, const double *grad_y, double *grad_x, double *grad_kernels,
+                              uint32_t threads) {
+    dpc_clear_error();
+    dpc_train_layer L;
+    dpc_status st = check_layer_call(layer, kernels, count, n_points, x, &L);
+    if (st != DPC_OK) return st;
+    if (!grad_y || !grad_x || !grad_kernels)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "grad_y, grad_x or grad_kernels is NULL");
+    const size_t total = count * n_points * L.n;
+    for (size_t i = 0; i < total; i++)
+        if (!isfinite(grad_y[i]))
+            return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "grad_y: set %zu, point %zu, dimension %zu is not finite",
+                            i / (n_points * L.n), i / L.n % n_points, i % L.n);
+    return dpc_train_backward(&L, count, n_points, x, grad_y, grad_x, grad_kernels, threads);
 }

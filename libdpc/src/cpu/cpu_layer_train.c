@@ -1,0 +1,551 @@
+/* Training kernels: one PointFilter layer (docs/model-format.md §3) in float64, forward and
+ * backward (paper Appendix A, adapted to the scale-aware radius and the normalised subspace sum;
+ * the formulas are in dpc.h, "Training support").
+ *
+ * Work runs per set and per subspace: the set's points are counting-sorted into a toroidal cell
+ * grid over the subspace's dims (or kept in order for all pairs), the subspace's coordinates
+ * (and, backward, the scaled output gradients v) are packed in sorted order, and every point
+ * GATHERS from its candidate neighbours. The pair Jacobian is even in δ, so the backward needs no
+ * scatter: each point's sums are written by exactly one worker, in a fixed neighbour order.
+ *
+ * The one sum across points, the kernel gradient, is accumulated per chunk of consecutive sorted
+ * points; chunk sums are added in chunk order and set sums in set order. Chunk boundaries depend
+ * on m and b only, so every output is bit-identical for any thread count. Memory is O(m·n + cells)
+ * per worker, never O(m²). */
+#include "cpu/cpu_layer_train.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "common/error.h"
+
+#define MAX_THREADS 64u
+#define MAX_RANGES 512u          /* candidate index ranges per cell (2 per row of cells) */
+#define SET_PARALLEL_BELOW 8192u /* smaller sets go to threads whole: no spawn per subspace */
+#define MIN_CHUNK 256u
+
+#if defined(__GNUC__)
+#define ALWAYS_INLINE static inline __attribute__((always_inline))
+#else
+#define ALWAYS_INLINE static inline
+#endif
+
+/* ---- plan: everything that depends on the layer and m only -------------------------------- */
+
+typedef struct sub_plan {
+    unsigned k;                  /* |D_t| */
+    unsigned dim[DPC_MAX_DIMS];  /* subspace axis q -> point dimension */
+    double vscale[DPC_MAX_DIMS]; /* h_t / c_k for moving dims, 0 for fixed ones */
+    int moves;                   /* some dimension of D_t moves (else the subspace is skipped) */
+    double h, r, e;              /* spacing, radius, cutoff (absolute) */
+    double r2_skip;              /* d² >= this implies d >= r: skip the sqrt */
+    double scale;                /* (b - 1) / r */
+    const double *w;             /* b kernel values */
+    int grid;                    /* 0: all pairs */
+    uint32_t G, R;               /* cells per axis, cells searched each side */
+} sub_plan;
+
+typedef struct plan {
+    size_t m, n;
+    unsigned s, b;
+    sub_plan *sub;
+    double count[DPC_MAX_DIMS]; /* c_k, 0 where dimension k does not move */
+    size_t chunk, n_chunks;     /* kernel-gradient chunks over sorted positions */
+    size_t max_cells;
+    unsigned kmax;              /* largest k of a moving subspace */
+} plan;
+
+/* Grid or all pairs, and the grid resolution (the cell side is at least r / reach). */
+static void plan_grid(sub_plan *sp, size_t m) {
+    const unsigned k = sp->k;
+    sp->grid = 0;
+    if (k > 4 || m < 64) return;
+    const double reach = k <= 2 ? 2.0 : 1.0; /* finer cells visit less area in 1-D and 2-D */
+    /* Cell indices are rounded products x·G (error ~1e-12 cells): a margin of 1e-3 cells keeps
+     * every neighbour within R cells. */
+    const double margin = 1e-3;
+    double G = floor(reach / (sp->r * (1.0 + margin)));
+    const double cap = floor(pow(2.0 * (double)m, 1.0 / k) + 1e-9); /* at most ~2m cells */
+    if (G > cap) G = cap;
+    if (G > 16384) G = 16384;
+    if (G < 3) return;
+    const double R = ceil(sp->r * G + margin);
+    if (2 * R + 1 > G) return;                      /* a cell would be visited twice */
+    if (pow((2 * R + 1) / G, k) > 0.5) return;      /* most of the domain anyway: all pairs */
+    if (2 * pow(2 * R + 1, k - 1) > MAX_RANGES) return;
+    sp->grid = 1;
+    sp->G = (uint32_t)G;
+    sp->R = (uint32_t)R;
+}
+
+static dpc_status plan_init(plan *p, const dpc_train_layer *L, size_t m) {
+    memset(p, 0, sizeof *p);
+    p->m = m;
+    p->n = L->n;
+    p->s = L->s;
+    p->b = L->b;
+    p->sub = (sub_plan *)calloc(L->s, sizeof *p->sub);
+    if (!p->sub) return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory for a layer plan");
+    for (unsigned t = 0; t < L->s; t++)
+        for (unsigned d = 0; d < L->n; d++)
+            if (L->masks[t] >> d & 1) p->count[d] += 1.0;
+    for (unsigned d = 0; d < L->n; d++)
+        if (L->fixed >> d & 1) p->count[d] = 0.0;
+    p->max_cells = 1;
+    for (unsigned t = 0; t < L->s; t++) {
+        sub_plan *sp = &p->sub[t];
+        for (unsigned d = 0; d < L->n; d++)
+            if (L->masks[t] >> d & 1) sp->dim[sp->k++] = d;
+        sp->h = pow((double)m, -1.0 / sp->k);
+        for (unsigned q = 0; q < sp->k; q++) {
+            const double c = p->count[sp->dim[q]];
+            sp->vscale[q] = c > 0.0 ? sp->h / c : 0.0;
+            if (c > 0.0) sp->moves = 1;
+        }
+        const double r = L->radius[t] * sp->h;
+        sp->r = r < 0.5 ? r : 0.5;
+        sp->e = L->eps * sp->h;
+        sp->r2_skip = sp->r * sp->r * (1.0 + 0x1p-50); /* >= the exact r²: sqrt is monotone */
+        sp->scale = (double)(L->b - 1) / sp->r;
+        sp->w = L->w + (size_t)t * L->b;
+        if (!sp->moves) continue;
+        if (sp->k > p->kmax) p->kmax = sp->k;
+        plan_grid(sp, m);
+        if (sp->grid) {
+            size_t cells = 1;
+            for (unsigned q = 0; q < sp->k; q++) cells *= sp->G;
+            if (cells > p->max_cells) p->max_cells = cells;
+        }
+    }
+    /* Chunks: at least MIN_CHUNK points; few enough that n_chunks · b partial sums stay small. */
+    size_t max_chunks = ((size_t)1 << 22) / L->b;
+    if (max_chunks < 64) max_chunks = 64;
+    if (max_chunks > 4096) max_chunks = 4096;
+    p->chunk = (m + max_chunks - 1) / max_chunks;
+    if (p->chunk < MIN_CHUNK) p->chunk = MIN_CHUNK;
+    p->n_chunks = (m + p->chunk - 1) / p->chunk;
+    return DPC_OK;
+}
+
+/* ---- per-worker workspace ------------------------------------------------------------------ */
+
+typedef struct wspace {
+    double *P, *V;        /* m · kmax: subspace coordinates / v, in sorted order */
+    double *acc;          /* m · n: per-point sums over subspaces (caller's order) */
+    uint32_t *perm;       /* sorted position -> point */
+    uint32_t *cell;       /* sorted position -> cell id */
+    uint32_t *cell_start; /* max_cells + 1 */
+    double *gk;           /* s · b: this set's kernel gradient */
+    double *part;         /* b per chunk in flight: chunk partial sums of the kernel gradient */
+} wspace;
+
+static void wspace_free(wspace *w) {
+    free(w->P);
+    free(w->V);
+    free(w->acc);
+    free(w->perm);
+    free(w->cell);
+    free(w->cell_start);
+    free(w->gk);
+    free(w->part);
+    memset(w, 0, sizeof *w);
+}
+
+static dpc_status wspace_init(wspace *w, const plan *p, int backward, size_t parts) {
+    memset(w, 0, sizeof *w);
+    const size_t m = p->m, kmax = p->kmax ? p->kmax : 1;
+    w->P = (double *)malloc(m * kmax * sizeof(double));
+    w->acc = (double *)malloc(m * p->n * sizeof(double));
+    w->perm = (uint32_t *)malloc(m * sizeof(uint32_t));
+    w->cell = (uint32_t *)malloc(m * sizeof(uint32_t));
+    w->cell_start = (uint32_t *)malloc((p->max_cells + 1) * sizeof(uint32_t));
+    int ok = w->P && w->acc && w->perm && w->cell && w->cell_start;
+    if (backward) {
+        w->V = (double *)malloc(m * kmax * sizeof(double));
+        w->gk = (double *)malloc((size_t)p->s * p->b * sizeof(double));
+        w->part = (double *)malloc(parts * p->b * sizeof(double));
+        ok = ok && w->V && w->gk && w->part;
+    }
+    if (!ok) {
+        wspace_free(w);
+        return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory for a %zu x %zu training workspace", m, p->n);
+    }
+    return DPC_OK;
+}
+
+/* ---- one subspace of one set ---------------------------------------------------------------- */
+
+typedef struct pass {
+    const plan *p;
+    const sub_plan *sp;
+    wspace *ws;
+    const double *gy; /* this set's dL/dy, NULL forward */
+} pass;
+
+/* Sort the set's points by cell (stable counting sort) and pack the subspace's coordinates and,
+ * backward, v = h_t · G / c_k in sorted order. */
+static void prepare_pass(const pass *ps, const double *x) {
+    const sub_plan *sp = ps->sp;
+    wspace *ws = ps->ws;
+    const size_t m = ps->p->m, n = ps->p->n;
+    const unsigned k = sp->k;
+    if (!sp->grid) {
+        for (size_t i = 0; i < m; i++) ws->perm[i] = (uint32_t)i;
+    } else {
+        const uint32_t G = sp->G;
+        size_t cells = 1;
+        for (unsigned q = 0; q < k; q++) cells *= G;
+        uint32_t *start = ws->cell_start;
+        memset(start, 0, (cells + 1) * sizeof(uint32_t));
+        for (size_t i = 0; i < m; i++) {
+            uint32_t id = 0;
+            for (unsigned q = k; q-- > 0;) { /* axis 0 varies fastest */
+                uint32_t c = (uint32_t)(x[i * n + sp->dim[q]] * (double)G);
+                id = id * G + (c < G ? c : G - 1);
+            }
+            ws->cell[i] = id;
+            start[id + 1]++;
+        }
+        for (size_t c = 0; c < cells; c++) start[c + 1] += start[c];
+        for (size_t i = 0; i < m; i++) ws->perm[start[ws->cell[i]]++] = (uint32_t)i;
+        for (size_t c = cells; c > 0; c--) start[c] = start[c - 1]; /* the cursors ran one cell ahead */
+        start[0] = 0;
+        for (size_t c = 0; c < cells; c++) /* cell of each sorted position */
+            for (uint32_t s = start[c]; s < start[c + 1]; s++) ws->cell[s] = (uint32_t)c;
+    }
+    for (size_t s = 0; s < m; s++) {
+        const size_t i = ws->perm[s];
+        for (unsigned q = 0; q < k; q++) ws->P[s * k + q] = x[i * n + sp->dim[q]];
+        if (ps->gy)
+            for (unsigned q = 0; q < k; q++) ws->V[s * k + q] = sp->vscale[q] * ps->gy[i * n + sp->dim[q]];
+    }
+}
+
+/* Candidate index ranges for a point in cell `id`: rows of 2R+1 cells along axis 0. */
+static unsigned cell_ranges(const sub_plan *sp, const uint32_t *start, uint32_t id, uint32_t *ranges) {
+    const unsigned k = sp->k;
+    const int32_t G = (int32_t)sp->G, R = (int32_t)sp->R;
+    int32_t c[4], off[4];
+    for (unsigned q = 0; q < k; q++) {
+        c[q] = (int32_t)(id % (uint32_t)G);
+        id /= (uint32_t)G;
+        off[q] = -R;
+    }
+    unsigned nr = 0;
+    for (;;) {
+        uint32_t base = 0; /* cell id of (0, c1+o1, c2+o2, ...) */
+        for (unsigned q = k; q-- > 1;) {
+            int32_t v = c[q] + off[q];
+            v += v < 0 ? G : v >= G ? -G : 0;
+            base = base * (uint32_t)G + (uint32_t)v;
+        }
+        base *= (uint32_t)G;
+        const int32_t lo = c[0] - R, hi = c[0] + R; /* 2R+1 <= G: wraps at most once */
+        uint32_t a[2], b[2];
+        unsigned parts = 1;
+        if (lo < 0) {
+            a[0] = (uint32_t)(lo + G), b[0] = (uint32_t)G, a[1] = 0, b[1] = (uint32_t)(hi + 1), parts = 2;
+        } else if (hi >= G) {
+            a[0] = (uint32_t)lo, b[0] = (uint32_t)G, a[1] = 0, b[1] = (uint32_t)(hi - G + 1), parts = 2;
+        } else {
+            a[0] = (uint32_t)lo, b[0] = (uint32_t)(hi + 1);
+        }
+        for (unsigned z = 0; z < parts; z++) {
+            const uint32_t s0 = start[base + a[z]], s1 = start[base + b[z]];
+            if (s1 > s0) {
+                ranges[2 * nr] = s0;
+                ranges[2 * nr + 1] = s1;
+                nr++;
+            }
+        }
+        unsigned q = 1; /* odometer over axes 1..k-1 */
+        while (q < k && ++off[q] > R) off[q++] = -R;
+        if (q >= k) break;
+    }
+    return nr;
+}
+
+/* Toroidal difference of two coordinates in [0, 1): t − rint(t) (half-even; t ∈ (−1, 1)). The
+ * subtraction of 1 is exact there. */
+ALWAYS_INLINE double wrap_diff(double t) { return t > 0.5 ? t - 1.0 : t < -0.5 ? t + 1.0 : t; }
+
+/* The points of sorted positions [lo, hi) for subspace dimension K (a constant where inlined).
+ * Forward: acc_i += h · Σ_j g(d) δ/d. Backward: acc_i += Σ_j J(δ)(v_j − v_i) and the kernel
+ * gradient of the pairs (i, j) goes to part[0 .. b). */
+ALWAYS_INLINE void chunk_body(const pass *ps, size_t lo, size_t hi, double *part, const unsigned K) {
+    const plan *p = ps->p;
+    const sub_plan *sp = ps->sp;
+    wspace *ws = ps->ws;
+    const size_t m = p->m, n = p->n;
+    const double *P = ws->P, *V = ws->V, *w = sp->w;
+    const double r = sp->r, e = sp->e, r2_skip = sp->r2_skip, scale = sp->scale;
+    const double umax = (double)(p->b - 1);
+    const unsigned qmax = p->b - 2;
+    const int backward = ps->gy != NULL;
+    uint32_t ranges[2 * MAX_RANGES];
+    unsigned nr = 1;
+    ranges[0] = 0;
+    ranges[1] = (uint32_t)m;
+    uint32_t cur = UINT32_MAX;
+    for (size_t s = lo; s < hi; s++) {
+        if (sp->grid && ws->cell[s] != cur) { /* consecutive points of a cell share their ranges */
+            cur = ws->cell[s];
+            nr = cell_ranges(sp, ws->cell_start, cur, ranges);
+        }
+        double xi[DPC_MAX_DIMS], vi[DPC_MAX_DIMS], a[DPC_MAX_DIMS];
+        for (unsigned q = 0; q < K; q++) {
+            xi[q] = P[s * K + q];
+            vi[q] = backward ? V[s * K + q] : 0.0;
+            a[q] = 0.0;
+        }
+        for (unsigned z = 0; z < nr; z++) {
+            for (size_t j = ranges[2 * z], je = ranges[2 * z + 1]; j < je; j++) {
+                double dl[DPC_MAX_DIMS], d2 = 0.0;
+                for (unsigned q = 0; q < K; q++) {
+                    const double t = wrap_diff(P[j * K + q] - xi[q]);
+                    dl[q] = t;
+                    d2 += t * t;
+                }
+                if (d2 >= r2_skip) continue;
+                const double d = sqrt(d2);
+                if (!(d > e && d < r)) continue; /* also drops j = i: d = 0 */
+                double u = d * scale;
+                if (u > umax) u = umax;
+                unsigned qb = (unsigned)u;
+                if (qb > qmax) qb = qmax;
+                const double f = u - (double)qb;
+                const double w0 = w[qb], dw = w[qb + 1] - w0;
+                const double g = w0 + f * dw;
+                const double inv_d = 1.0 / d;
+                if (!backward) {
+                    const double c = g * inv_d;
+                    for (unsigned q = 0; q < K; q++) a[q] += c * dl[q];
+                    continue;
+                }
+                /* J(δ)(v_j − v_i) = g'·(n̂·Δv) n̂ + (g/d)(Δv − (n̂·Δv) n̂), n̂ = δ/d. */
+                double dv[DPC_MAX_DIMS], ndv = 0.0, nvi = 0.0;
+                for (unsigned q = 0; q < K; q++) {
+                    dl[q] *= inv_d;
+                    dv[q] = V[j * K + q] - vi[q];
+                    ndv += dl[q] * dv[q];
+                    nvi += dl[q] * vi[q];
+                }
+                const double gd = g * inv_d;
+                const double radial = (dw * scale - gd) * ndv;
+                for (unsigned q = 0; q < K; q++) a[q] += radial * dl[q] + gd * dv[q];
+                /* dg/dw[q] = 1 − f, dg/dw[q+1] = f; the pair's output sensitivity is n̂·v_i. */
+                part[qb] += (1.0 - f) * nvi;
+                part[qb + 1] += f * nvi;
+            }
+        }
+        double *out = ws->acc + (size_t)ws->perm[s] * n;
+        if (backward)
+            for (unsigned q = 0; q < K; q++) out[sp->dim[q]] += a[q];
+        else
+            for (unsigned q = 0; q < K; q++) out[sp->dim[q]] += sp->h * a[q];
+    }
+}
+
+/* Chunk j of the current pass; part (b doubles, backward only) receives its kernel gradient. */
+static void run_chunk(const pass *ps, size_t j, double *part) {
+    const size_t lo = j * ps->p->chunk;
+    const size_t hi = lo + ps->p->chunk < ps->p->m ? lo + ps->p->chunk : ps->p->m;
+    if (part) memset(part, 0, ps->p->b * sizeof(double));
+    switch (ps->sp->k) { /* constant K: the per-pair loops unroll and stay in registers */
+    case 1: chunk_body(ps, lo, hi, part, 1); break;
+    case 2: chunk_body(ps, lo, hi, part, 2); break;
+    case 3: chunk_body(ps, lo, hi, part, 3); break;
+    case 4: chunk_body(ps, lo, hi, part, 4); break;
+    default: chunk_body(ps, lo, hi, part, ps->sp->k); break;
+    }
+}
+
+/* ---- threads -------------------------------------------------------------------------------- */
+
+typedef void (*worker_fn)(void *ctx, unsigned slot);
+
+typedef struct worker {
+    worker_fn fn;
+    void *ctx;
+    unsigned slot;
+} worker;
+
+static void *worker_main(void *arg) {
+    worker *w = (worker *)arg;
+    w->fn(w->ctx, w->slot);
+    return NULL;
+}
+
+/* fn(ctx, slot) for slot = 0 .. T-1, slot 0 on the calling thread. A thread that cannot be
+ * created has its slot run here afterwards: slots are independent, so results do not change. */
+static void run_workers(unsigned T, worker_fn fn, void *ctx) {
+    if (T <= 1) {
+        fn(ctx, 0);
+        return;
+    }
+    worker ws[MAX_THREADS];
+    pthread_t ids[MAX_THREADS];
+    int started[MAX_THREADS];
+    for (unsigned t = 0; t < T; t++) ws[t] = (worker){fn, ctx, t};
+    for (unsigned t = 1; t < T; t++) started[t] = pthread_create(&ids[t], NULL, worker_main, &ws[t]) == 0;
+    fn(ctx, 0);
+    for (unsigned t = 1; t < T; t++) {
+        if (started[t]) pthread_join(ids[t], NULL);
+        else fn(ctx, t);
+    }
+}
+
+static unsigned resolve_threads(unsigned threads) {
+    if (threads == 0) {
+        long c = sysconf(_SC_NPROCESSORS_ONLN);
+        threads = c > 0 ? (unsigned)c : 1u;
+    }
+    return threads > MAX_THREADS ? MAX_THREADS : threads;
+}
+
+/* ---- whole sets ----------------------------------------------------------------------------- */
+
+typedef struct job {
+    const plan *p;
+    const double *x, *gy;
+    double *y, *gx;
+    size_t count;
+    unsigned T;    /* workers */
+    wspace *ws;    /* one per worker (set mode) or one (chunk mode) */
+    size_t first;  /* set mode: first set of the current wave */
+    const pass *ps; /* chunk mode: the current pass */
+} job;
+
+/* Per-point results of one set, from the sums in ws->acc. */
+static void finish_set(const plan *p, const wspace *ws, const double *x, const double *gy, double *y,
+                       double *gx) {
+    const size_t m = p->m, n = p->n;
+    if (gy) {
+        for (size_t i = 0; i < m * n; i++) gx[i] = gy[i] + ws->acc[i]; /* the residual path */
+        return;
+    }
+    for (size_t i = 0; i < m; i++)
+        for (size_t d = 0; d < n; d++) {
+            const double xv = x[i * n + d];
+            if (p->count[d] == 0.0) {
+                y[i * n + d] = xv;
+                continue;
+            }
+            double v = xv + ws->acc[i * n + d] / p->count[d];
+            v -= floor(v);
+            y[i * n + d] = (v >= 0.0 && v < 1.0) ? v : 0.0; /* -tiny + 1 rounds to 1; inf/NaN too */
+        }
+}
+
+static void add_into(double *dst, const double *src, size_t len) {
+    for (size_t i = 0; i < len; i++) dst[i] += src[i];
+}
+
+/* One set on one worker: subspaces in order, chunks in order. */
+static void run_set_serial(const plan *p, wspace *ws, const double *x, const double *gy) {
+    memset(ws->acc, 0, p->m * p->n * sizeof(double));
+    if (gy) memset(ws->gk, 0, (size_t)p->s * p->b * sizeof(double));
+    for (unsigned t = 0; t < p->s; t++) {
+        if (!p->sub[t].moves) continue;
+        pass ps = {p, &p->sub[t], ws, gy};
+        prepare_pass(&ps, x);
+        for (size_t j = 0; j < p->n_chunks; j++) {
+            run_chunk(&ps, j, gy ? ws->part : NULL);
+            if (gy) add_into(ws->gk + (size_t)t * p->b, ws->part, p->b);
+        }
+    }
+}
+
+static void set_worker(void *ctx, unsigned slot) {
+    const job *jb = (const job *)ctx;
+    const size_t c = jb->first + slot;
+    if (c >= jb->count) return;
+    const size_t mn = jb->p->m * jb->p->n;
+    const double *gy = jb->gy ? jb->gy + c * mn : NULL;
+    run_set_serial(jb->p, &jb->ws[slot], jb->x + c * mn, gy);
+    finish_set(jb->p, &jb->ws[slot], jb->x + c * mn, gy, jb->y ? jb->y + c * mn : NULL,
+               jb->gx ? jb->gx + c * mn : NULL);
+}
+
+static void chunk_worker(void *ctx, unsigned slot) {
+    const job *jb = (const job *)ctx;
+    const pass *ps = jb->ps;
+    for (size_t j = slot; j < jb->p->n_chunks; j += jb->T)
+        run_chunk(ps, j, ps->gy ? ps->ws->part + j * jb->p->b : NULL);
+}
+
+static dpc_status run(const dpc_train_layer *L, size_t count, size_t m, const double *x, const double *gy,
+                      double *y, double *gx, double *gw, unsigned threads) {
+    plan p;
+    dpc_status st = plan_init(&p, L, m);
+    if (st != DPC_OK) return st;
+    const int backward = gy != NULL;
+    const size_t mn = m * p.n, sb = (size_t)p.s * p.b;
+    unsigned T = resolve_threads(threads);
+    /* Set mode: whole sets per worker (small sets, or enough of them). Chunk mode: the chunks of
+     * one set across workers. Both compute every value by the same operations in the same order. */
+    const int set_mode = T <= 1 || count >= T || m < SET_PARALLEL_BELOW;
+    unsigned n_ws = 1;
+    if (set_mode) {
+        if (T > count) T = (unsigned)count;
+        n_ws = T;
+    } else if ((size_t)T > p.n_chunks) {
+        T = (unsigned)p.n_chunks;
+    }
+    double *total = NULL;
+    wspace ws[MAX_THREADS];
+    memset(ws, 0, sizeof ws);
+    if (backward) {
+        total = (double *)calloc(sb, sizeof(double));
+        if (!total) st = dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory for the kernel gradient");
+    }
+    for (unsigned t = 0; t < n_ws && st == DPC_OK; t++)
+        st = wspace_init(&ws[t], &p, backward, set_mode ? 1 : p.n_chunks);
+    if (st == DPC_OK) {
+        job jb = {&p, x, gy, y, gx, count, T, ws, 0, NULL};
+        if (set_mode) {
+            for (size_t c0 = 0; c0 < count; c0 += T) { /* waves of T sets; sums in set order */
+                jb.first = c0;
+                run_workers(T, set_worker, &jb);
+                if (backward)
+                    for (size_t c = c0; c < count && c < c0 + T; c++) add_into(total, ws[c - c0].gk, sb);
+            }
+        } else {
+            for (size_t c = 0; c < count; c++) {
+                const double *xc = x + c * mn, *gyc = backward ? gy + c * mn : NULL;
+                memset(ws[0].acc, 0, mn * sizeof(double));
+                if (backward) memset(ws[0].gk, 0, sb * sizeof(double));
+                for (unsigned t = 0; t < p.s; t++) {
+                    if (!p.sub[t].moves) continue;
+                    pass ps = {&p, &p.sub[t], &ws[0], gyc};
+                    prepare_pass(&ps, xc);
+                    jb.ps = &ps;
+                    run_workers(T, chunk_worker, &jb);
+                    if (backward)
+                        for (size_t j = 0; j < p.n_chunks; j++)
+                            add_into(ws[0].gk + (size_t)t * p.b, ws[0].part + j * p.b, p.b);
+                }
+                finish_set(&p, &ws[0], xc, gyc, backward ? NULL : y + c * mn, backward ? gx + c * mn : NULL);
+                if (backward) add_into(total, ws[0].gk, sb);
+            }
+        }
+        if (backward) memcpy(gw, total, sb * sizeof(double)); /* last: gw may not alias, but be safe */
+    }
+    for (unsigned t = 0; t < n_ws; t++) wspace_free(&ws[t]);
+    free(total);
+    free(p.sub);
+    return st;
+}
+
+dpc_status dpc_train_forward(const dpc_train_layer *L, size_t count, size_t m, const double *x, double *y,
+                             unsigned threads) {
+    return run(L, count, m, x, NULL, y, NULL, NULL, threads);
+}
+
+dpc_status dpc_train_backward(const dpc_train_layer *L, size_t count, size_t m, const double *x,
+                              const double *gy, double *grad_x, double *grad_w, unsigned threads) {
+    return run(L, count, m, x, gy, NULL, grad_x, grad_w, threads);
+}
