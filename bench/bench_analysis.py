@@ -111,8 +111,9 @@ def report(results: dict, info: dict) -> str:
     lines.append("| stage | " + " | ".join(label for label, *_ in CASES) + " |")
     lines.append("|---|" + "---|" * len(CASES))
     for st in stages:
-        lines.append(f"| {st} | " + " | ".join(
-            f"{results[label]['stages'].get(st, float('nan')):.2f}" for label, *_ in CASES) + " |")
+        cells = [results[label]["stages"].get(st) for label, *_ in CASES]
+        lines.append(f"| {st} | " + " | ".join("—" if v is None else f"{v:.2f}" for v in cells)
+                     + " |")
     lines += ["", "Notes written by the analysis:", ""]
     for label, *_ in CASES:
         for note in results[label]["notes"]:
@@ -121,11 +122,13 @@ def report(results: dict, info: dict) -> str:
         "",
         "How the time is kept down: the 2-D spectrum is a separable DFT done as one matrix",
         "product per set (`[cos X | sin X]^T [cos Y | sin Y]`, BLAS), single precision above",
-        "2^20 multiply-adds per set with phases reduced in float64; 1-D projection spectra use",
-        "the same blocking (q = B t + j); sets run one per core with single-threaded BLAS",
+        "2^20 multiply-adds per set with the phases reduced exactly in 32-bit fixed point; 1-D",
+        "projection spectra use the same blocking (q = B t + j); sets run one per core with",
+        "single-threaded BLAS",
         "(threadpoolctl). The 65,536-point grid is sampled every few integer frequencies",
         "(513 x 513 at most, exact at those frequencies) and the O(m^2) discrepancies are",
-        "limited to a pair budget (`--disc-budget`), see docs/analysis.md.",
+        "limited to a pair budget (`--disc-budget`), see docs/analysis.md. The first",
+        "discrepancy stage includes importing scipy.stats (about a second of CPU).",
         "",
         "The machine is shared with other work; a load average above the core count means the",
         "times include waiting for a core.",
