@@ -41,7 +41,7 @@ typedef struct sub_plan {
     double vscale[DPC_MAX_DIMS]; /* h_t / c_k for moving dims, 0 for fixed ones */
     int moves;                   /* some dimension of D_t moves (else the subspace is skipped) */
     double h, r, e;              /* spacing, radius, cutoff (absolute) */
-    double r2_skip;              /* d² >= this implies d >= r: skip the sqrt */
+    double r2_keep, e2_keep;     /* d² >= r2_keep implies d >= r, d² <= e2_keep implies d <= e */
     double scale;                /* (b - 1) / r */
     const double *w;             /* b kernel values */
     int grid;                    /* 0: all pairs */
@@ -108,7 +108,10 @@ static dpc_status plan_init(plan *p, const dpc_train_layer *L, size_t m) {
         const double r = L->radius[t] * sp->h;
         sp->r = r < 0.5 ? r : 0.5;
         sp->e = L->eps * sp->h;
-        sp->r2_skip = sp->r * sp->r * (1.0 + 0x1p-50); /* >= the exact r²: sqrt is monotone */
+        /* Bounds on the exact r² and e² (rounded sqrt is monotone), so a test on d² drops only
+         * pairs the exact test on d would drop too. */
+        sp->r2_keep = sp->r * sp->r * (1.0 + 0x1p-50);
+        sp->e2_keep = sp->e * sp->e * (1.0 - 0x1p-50);
         sp->scale = (double)(L->b - 1) / sp->r;
         sp->w = L->w + (size_t)t * L->b;
         if (!sp->moves) continue;
@@ -272,20 +275,75 @@ static unsigned cell_ranges(const sub_plan *sp, const uint32_t *start, uint32_t 
  * subtraction of 1 is exact there. */
 ALWAYS_INLINE double wrap_diff(double t) { return t > 0.5 ? t - 1.0 : t < -0.5 ? t + 1.0 : t; }
 
-/* The points of sorted positions [lo, hi) for subspace dimension K (a constant where inlined).
- * Forward: acc_i += h · Σ_j g(d) δ/d. Backward: acc_i += Σ_j J(δ)(v_j − v_i) and the kernel
- * gradient of the pairs (i, j) goes to part[0 .. b). */
-ALWAYS_INLINE void chunk_body(const pass *ps, size_t lo, size_t hi, double *part, const unsigned K) {
+#define LIST_CAP 128u /* candidates that passed the squared-distance test, per flush */
+
+/* Point s's interactions with the listed candidates (all with d² in (e2_keep, r2_keep)), in list
+ * order. Forward: a += Σ g(d) δ/d. Backward: a += Σ J(δ)(v_j − v_i), and the kernel gradient of
+ * each pair goes to part. K and BACKWARD are constants where inlined. */
+ALWAYS_INLINE void pair_sums(const pass *ps, size_t s, const uint32_t *list, unsigned len, double *a,
+                             double *part, const unsigned K, const int BACKWARD) {
+    const sub_plan *sp = ps->sp;
+    const double *P = ps->ws->P, *V = ps->ws->V, *w = sp->w;
+    const double r = sp->r, e = sp->e, scale = sp->scale;
+    const double umax = (double)(ps->p->b - 1);
+    const unsigned qmax = ps->p->b - 2;
+    double xi[DPC_MAX_DIMS], vi[DPC_MAX_DIMS];
+    for (unsigned q = 0; q < K; q++) {
+        xi[q] = P[s * K + q];
+        vi[q] = BACKWARD ? V[s * K + q] : 0.0;
+    }
+    for (unsigned z = 0; z < len; z++) {
+        const size_t j = list[z];
+        double dl[DPC_MAX_DIMS], d2 = 0.0;
+        for (unsigned q = 0; q < K; q++) { /* the same operations as the test: the same bits */
+            dl[q] = wrap_diff(P[j * K + q] - xi[q]);
+            d2 += dl[q] * dl[q];
+        }
+        const double d = sqrt(d2);
+        if (!(d > e && d < r)) continue; /* the exact window of §3 (differs only at the rounding edge) */
+        double u = d * scale;
+        u = u > umax ? umax : u;
+        unsigned qb = (unsigned)u;
+        qb = qb > qmax ? qmax : qb;
+        const double f = u - (double)qb;
+        const double w0 = w[qb], dw = w[qb + 1] - w0;
+        const double g = w0 + f * dw;
+        const double inv_d = 1.0 / d;
+        if (!BACKWARD) {
+            const double c = g * inv_d;
+            for (unsigned q = 0; q < K; q++) a[q] += c * dl[q];
+            continue;
+        }
+        /* J(δ)(v_j − v_i) = g'·(n̂·Δv) n̂ + (g/d)(Δv − (n̂·Δv) n̂), n̂ = δ/d. */
+        double dv[DPC_MAX_DIMS], ndv = 0.0, nvi = 0.0;
+        for (unsigned q = 0; q < K; q++) {
+            dl[q] *= inv_d;
+            dv[q] = V[j * K + q] - vi[q];
+            ndv += dl[q] * dv[q];
+            nvi += dl[q] * vi[q];
+        }
+        const double gd = g * inv_d;
+        const double radial = (dw * scale - gd) * ndv;
+        for (unsigned q = 0; q < K; q++) a[q] += radial * dl[q] + gd * dv[q];
+        /* dg/dw[q] = 1 − f, dg/dw[q+1] = f; the pair's output sensitivity is n̂·v_i. */
+        part[qb] += (1.0 - f) * nvi;
+        part[qb + 1] += f * nvi;
+    }
+}
+
+/* The points of sorted positions [lo, hi). Candidates are first filtered on d² without branches
+ * (append always, advance by the test: the window test is a coin flip for a branch predictor),
+ * then the survivors get the full computation in candidate order. */
+ALWAYS_INLINE void chunk_body(const pass *ps, size_t lo, size_t hi, double *part, const unsigned K,
+                              const int BACKWARD) {
     const plan *p = ps->p;
     const sub_plan *sp = ps->sp;
     wspace *ws = ps->ws;
     const size_t m = p->m, n = p->n;
-    const double *P = ws->P, *V = ws->V, *w = sp->w;
-    const double r = sp->r, e = sp->e, r2_skip = sp->r2_skip, scale = sp->scale;
-    const double umax = (double)(p->b - 1);
-    const unsigned qmax = p->b - 2;
-    const int backward = ps->gy != NULL;
+    const double *P = ws->P;
+    const double r2_keep = sp->r2_keep, e2_keep = sp->e2_keep;
     uint32_t ranges[2 * MAX_RANGES];
+    uint32_t list[LIST_CAP + 1];
     unsigned nr = 1;
     ranges[0] = 0;
     ranges[1] = (uint32_t)m;
@@ -295,57 +353,30 @@ ALWAYS_INLINE void chunk_body(const pass *ps, size_t lo, size_t hi, double *part
             cur = ws->cell[s];
             nr = cell_ranges(sp, ws->cell_start, cur, ranges);
         }
-        double xi[DPC_MAX_DIMS], vi[DPC_MAX_DIMS], a[DPC_MAX_DIMS];
+        double xi[DPC_MAX_DIMS], a[DPC_MAX_DIMS];
         for (unsigned q = 0; q < K; q++) {
             xi[q] = P[s * K + q];
-            vi[q] = backward ? V[s * K + q] : 0.0;
             a[q] = 0.0;
         }
+        unsigned len = 0;
         for (unsigned z = 0; z < nr; z++) {
-            for (size_t j = ranges[2 * z], je = ranges[2 * z + 1]; j < je; j++) {
-                double dl[DPC_MAX_DIMS], d2 = 0.0;
+            for (uint32_t j = ranges[2 * z], je = ranges[2 * z + 1]; j < je; j++) {
+                double d2 = 0.0;
                 for (unsigned q = 0; q < K; q++) {
-                    const double t = wrap_diff(P[j * K + q] - xi[q]);
-                    dl[q] = t;
+                    const double t = wrap_diff(P[(size_t)j * K + q] - xi[q]);
                     d2 += t * t;
                 }
-                if (d2 >= r2_skip) continue;
-                const double d = sqrt(d2);
-                if (!(d > e && d < r)) continue; /* also drops j = i: d = 0 */
-                double u = d * scale;
-                if (u > umax) u = umax;
-                unsigned qb = (unsigned)u;
-                if (qb > qmax) qb = qmax;
-                const double f = u - (double)qb;
-                const double w0 = w[qb], dw = w[qb + 1] - w0;
-                const double g = w0 + f * dw;
-                const double inv_d = 1.0 / d;
-                if (!backward) {
-                    const double c = g * inv_d;
-                    for (unsigned q = 0; q < K; q++) a[q] += c * dl[q];
-                    continue;
+                list[len] = j;
+                len += (d2 < r2_keep) & (d2 > e2_keep);
+                if (len == LIST_CAP) {
+                    pair_sums(ps, s, list, len, a, part, K, BACKWARD);
+                    len = 0;
                 }
-                /* J(δ)(v_j − v_i) = g'·(n̂·Δv) n̂ + (g/d)(Δv − (n̂·Δv) n̂), n̂ = δ/d. */
-                double dv[DPC_MAX_DIMS], ndv = 0.0, nvi = 0.0;
-                for (unsigned q = 0; q < K; q++) {
-                    dl[q] *= inv_d;
-                    dv[q] = V[j * K + q] - vi[q];
-                    ndv += dl[q] * dv[q];
-                    nvi += dl[q] * vi[q];
-                }
-                const double gd = g * inv_d;
-                const double radial = (dw * scale - gd) * ndv;
-                for (unsigned q = 0; q < K; q++) a[q] += radial * dl[q] + gd * dv[q];
-                /* dg/dw[q] = 1 − f, dg/dw[q+1] = f; the pair's output sensitivity is n̂·v_i. */
-                part[qb] += (1.0 - f) * nvi;
-                part[qb + 1] += f * nvi;
             }
         }
+        pair_sums(ps, s, list, len, a, part, K, BACKWARD);
         double *out = ws->acc + (size_t)ws->perm[s] * n;
-        if (backward)
-            for (unsigned q = 0; q < K; q++) out[sp->dim[q]] += a[q];
-        else
-            for (unsigned q = 0; q < K; q++) out[sp->dim[q]] += sp->h * a[q];
+        for (unsigned q = 0; q < K; q++) out[sp->dim[q]] += BACKWARD ? a[q] : sp->h * a[q];
     }
 }
 
@@ -353,14 +384,23 @@ ALWAYS_INLINE void chunk_body(const pass *ps, size_t lo, size_t hi, double *part
 static void run_chunk(const pass *ps, size_t j, double *part) {
     const size_t lo = j * ps->p->chunk;
     const size_t hi = lo + ps->p->chunk < ps->p->m ? lo + ps->p->chunk : ps->p->m;
+    const unsigned k = ps->sp->k;
     if (part) memset(part, 0, ps->p->b * sizeof(double));
-    switch (ps->sp->k) { /* constant K: the per-pair loops unroll and stay in registers */
-    case 1: chunk_body(ps, lo, hi, part, 1); break;
-    case 2: chunk_body(ps, lo, hi, part, 2); break;
-    case 3: chunk_body(ps, lo, hi, part, 3); break;
-    case 4: chunk_body(ps, lo, hi, part, 4); break;
-    default: chunk_body(ps, lo, hi, part, ps->sp->k); break;
+    /* Constant K: the per-pair loops unroll and stay in registers. */
+#define DPC_BODY(B)                                          \
+    switch (k) {                                             \
+    case 1: chunk_body(ps, lo, hi, part, 1, B); break;       \
+    case 2: chunk_body(ps, lo, hi, part, 2, B); break;       \
+    case 3: chunk_body(ps, lo, hi, part, 3, B); break;       \
+    case 4: chunk_body(ps, lo, hi, part, 4, B); break;       \
+    default: chunk_body(ps, lo, hi, part, k, B); break;      \
     }
+    if (part) {
+        DPC_BODY(1)
+    } else {
+        DPC_BODY(0)
+    }
+#undef DPC_BODY
 }
 
 /* ---- threads -------------------------------------------------------------------------------- */
