@@ -1,0 +1,1 @@
+"""dpc training: torch PointFilter op, cascade, loss language, trainer, export (docs/training.md)."""
