@@ -7,7 +7,8 @@ Two implementations of the same op, both differentiable w.r.t. points and kernel
 * ``impl="analytic"``: a ``torch.autograd.Function`` whose backward is the closed form of paper
   Appendix A (adapted to the scale-aware radius and the normalised subspace sum). It is the
   shape the C kernels will take.
-* ``impl="c"``: the libdpc kernels; raises ``NotImplementedError`` until the bindings exist.
+* ``impl="c"``: libdpc's C kernels (float64 forward and Appendix-A backward, CPU, parallel
+  over points) through the ``dpc`` bindings; the fast path for training on the CPU.
 
 Memory is O(m · neighbours): candidate pairs are found without grad (a toroidal cell grid for
 subspaces of up to 3 dimensions, chunked all-pairs distances otherwise), only pairs inside the
@@ -368,6 +369,40 @@ class _FilterAnalytic(torch.autograd.Function):
 
 
 # ----------------------------------------------------------------------------------------
+# impl="c": libdpc's float64 layer kernels (dpc_layer_forward / dpc_layer_backward)
+# ----------------------------------------------------------------------------------------
+
+class _FilterC(torch.autograd.Function):
+    """Forward and backward in libdpc (C, float64, parallel over points, bits independent of
+    the thread count), through the dpc bindings. Inputs of any float dtype are computed in
+    float64 and returned in their own dtype."""
+
+    @staticmethod
+    def forward(ctx, x, kernels, subspaces, radius, eps, fixed):
+        from dpc import _core  # the compiled bindings; imported here so impl="torch" needs none
+
+        x64 = x.detach().to(torch.float64).contiguous().numpy()
+        k64 = kernels.detach().to(torch.float64).contiguous().numpy()
+        args = (list(subspaces), list(radius), float(eps), int(fixed))
+        y = _core.layer_forward(x64, k64, *args, threads=torch.get_num_threads())
+        ctx.save_for_backward(x, kernels)
+        ctx.args = args
+        return torch.from_numpy(y).to(x.dtype)
+
+    @staticmethod
+    def backward(ctx, grad_y):
+        from dpc import _core
+
+        x, kernels = ctx.saved_tensors
+        x64 = x.detach().to(torch.float64).contiguous().numpy()
+        k64 = kernels.detach().to(torch.float64).contiguous().numpy()
+        g64 = grad_y.detach().to(torch.float64).contiguous().numpy()
+        gx, gk = _core.layer_backward(x64, k64, *ctx.args, grad_y=g64, threads=torch.get_num_threads())
+        return (torch.from_numpy(gx).to(x.dtype), torch.from_numpy(gk).to(kernels.dtype),
+                None, None, None, None)
+
+
+# ----------------------------------------------------------------------------------------
 # Public entry point
 # ----------------------------------------------------------------------------------------
 
@@ -401,10 +436,9 @@ def filter_layer(points: torch.Tensor, kernels: torch.Tensor, subspaces, radius,
     elif impl == "analytic":
         y = _FilterAnalytic.apply(x, kernels, subspaces, radius, float(eps), int(fixed), cands)
     elif impl == "c":
-        raise NotImplementedError(
-            "filter_layer(impl='c') needs the libdpc training kernels exposed by the dpc "
-            "bindings (forward/backward of one PointFilter layer); they do not exist yet. "
-            "Use impl='torch' (autograd reference) or impl='analytic' (closed-form backward).")
+        if x.device.type != "cpu":
+            raise FilterConfigError("impl='c' runs libdpc on the CPU; use impl='torch' on CUDA")
+        y = _FilterC.apply(x, kernels, subspaces, radius, float(eps), int(fixed))
     else:
         raise FilterConfigError(f"impl must be one of {IMPLS}, got {impl!r}")
     return y[0] if squeeze else y

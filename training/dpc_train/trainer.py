@@ -79,7 +79,7 @@ def measure_quality(model: Cascade, loss_fn, cfg: Config, device="cpu") -> dict:
     g = torch.Generator().manual_seed(0x5EED_0000 + cfg.train.seed)
     with torch.no_grad():
         x = model.input_points(n_sets, g, device=device)
-        y = model(x, impl="torch" if cfg.train.impl == "c" else cfg.train.impl)
+        y = model(x, impl=cfg.train.impl)
         torch.manual_seed(cfg.train.seed)
         q = {"eval_sets": n_sets, "eval_loss": float(loss_fn(y))}
         if sp.dims == 2 and not sp.grid_axes:
