@@ -28,6 +28,18 @@ FIGURES = ROOT / "docs" / "figures" / "models"
 SETS = 100
 
 
+TARGET = None  # the authors' BNOT radial target at m = 1,024, loaded in main()
+
+
+def target_distance(r) -> float:
+    """Mean relative L1 distance |P - T| / T of a radial spectrum to the BNOT target over
+    0.25 <= nu <= 3 (the target's own points; the spectrum interpolated there)."""
+    sel = (TARGET.nu >= 0.25) & (TARGET.nu <= 3.0)
+    ok = r.samples > 0
+    p = np.interp(TARGET.nu[sel], r.nu[ok], r.mean[ok])
+    return float(np.mean(np.abs(p - TARGET.power[sel]) / TARGET.power[sel]))
+
+
 def metrics(sets: np.ndarray) -> dict:
     r = analysis.radial_spectrum(sets, nu_max=4.0)
     peak, peak_nu = r.peak()
@@ -36,7 +48,7 @@ def metrics(sets: np.ndarray) -> dict:
     return {
         "sets": len(sets), "elow50": r.low_frequency_energy(0.5), "elow75": r.low_frequency_energy(0.75),
         "peak": peak, "peak_nu": peak_nu, "aniso": float(np.mean(r.anisotropy_db[band])),
-        "dmin_mean": md.mean_ratio, "dmin_min": md.min_ratio, "radial": r,
+        "dmin_mean": md.mean_ratio, "dmin_min": md.min_ratio, "radial": r, "l1": target_distance(r),
     }
 
 
@@ -59,13 +71,28 @@ def scale_rows(model) -> list[str]:
     return out
 
 
+def made_by(name: str, meta: dict) -> list[str]:
+    if "dpc.train.steps" not in meta:
+        return [f"- made by: `python {meta.get('dpc.source', '?')}` (hand-designed, not trained)"]
+    out = [f"- trained by: `python training/train.py --config training/configs/{name}.toml`, then "
+           f"`python training/export.py runs/{name}/checkpoint.pt -o models/{name}.onnx`",
+           f"- training: {meta['dpc.train.steps']} steps, {float(meta.get('dpc.train.wall_time_s', 'nan')):.0f} s "
+           f"of step time (torch {meta.get('dpc.train.torch', '?')})"]
+    if "dpc.loss" in meta:
+        out += ["- loss:", "", "```python", meta["dpc.loss"].strip(), "```"]
+    return out
+
+
 def row(name: str, m: dict) -> str:
     return (f"| {name} | {m['sets']} | {m['elow50']:.4f} | {m['elow75']:.4f} | {m['peak']:.2f} "
-            f"(ν = {m['peak_nu']:.2f}) | {m['aniso']:.2f} | {m['dmin_mean']:.3f} / {m['dmin_min']:.3f} |")
+            f"(ν = {m['peak_nu']:.2f}) | {m['aniso']:.2f} | {m['dmin_mean']:.3f} / {m['dmin_min']:.3f} | "
+            f"{m['l1']:.3f} |")
 
 
 def main() -> None:
     FIGURES.mkdir(parents=True, exist_ok=True)
+    global TARGET
+    TARGET = analysis.reference_radial_spectrum("bnot", 1024, 2)
     classics = {
         "authors' BNOT sets": metrics(baselines.reference_sets("bnot", 1024, 2)),
         "jitter": metrics(baselines.generate("jitter", 1024, 2, count=SETS, seed=0)),
@@ -79,8 +106,9 @@ def main() -> None:
              "E_low(ν) = mean m·P over 0 < ν' < ν (white noise = 1); anisotropy = mean over "
              "0.5 ≤ ν ≤ 4, in dB; δ_min = minimum toroidal distance / maximal packing distance "
              "(mean over sets / worst set).", ""]
-    header = ["| point sets | sets | E_low ν<0.5 | E_low ν<0.75 | peak | anisotropy (dB) | δ_min mean / worst |",
-              "|---|---:|---:|---:|---|---:|---|"]
+    header = ["| point sets | sets | E_low ν<0.5 | E_low ν<0.75 | peak | anisotropy (dB) | δ_min mean / worst "
+              "| rel. L1 to BNOT target, 0.25 ≤ ν ≤ 3 |",
+              "|---|---:|---:|---:|---|---:|---|---:|"]
     for name in dpc.available_models():
         model = dpc.load(name)
         if model.dims != 2 or model.grid_axes:
@@ -92,9 +120,7 @@ def main() -> None:
         lines += [f"## {name}", "", model.metadata.get("dpc.description", ""), "",
                   f"- file: `models/{path.name}` ({path.stat().st_size:,} bytes), sha256 `{sha}`",
                   f"- {model.dims}-D, trained point count {model.n_points:,}, {model.layers} layers",
-                  f"- made by: `{model.metadata.get('dpc.source', 'python training/train.py')}`"
-                  + (f"; trained: {model.metadata['dpc.trained']}" if "dpc.trained" in model.metadata else ""),
-                  "", *header, row(f"**{name}** (m = {model.n_points:,})", mm)]
+                  *made_by(name, model.metadata), "", *header, row(f"**{name}** (m = {model.n_points:,})", mm)]
         lines += [row(label, m) for label, m in classics.items()]
         fig, ax = plt.subplots(figsize=(7, 3.6))
         for label, m, style in [(name, mm, "-"), ("authors' BNOT sets", classics["authors' BNOT sets"], "--"),
