@@ -387,7 +387,9 @@ class _FilterC(torch.autograd.Function):
         y = _core.layer_forward(x64, k64, *args, threads=torch.get_num_threads())
         ctx.save_for_backward(x, kernels)
         ctx.args = args
-        return torch.from_numpy(y).to(x.dtype)
+        out = torch.from_numpy(y).to(x.dtype)
+        # In float32 a value just below 1 can round to 1.0: wrap it to 0 as libdpc does.
+        return torch.where(out >= 1.0, out - 1.0, out)
 
     @staticmethod
     def backward(ctx, grad_y):
