@@ -372,6 +372,13 @@ class _FilterAnalytic(torch.autograd.Function):
 # impl="c": libdpc's float64 layer kernels (dpc_layer_forward / dpc_layer_backward)
 # ----------------------------------------------------------------------------------------
 
+def to_torus_dtype(y: torch.Tensor, dtype: torch.dtype) -> torch.Tensor:
+    """Cast points in [0, 1) to dtype, keeping them in [0, 1): in float32 a float64 value just
+    below 1 rounds to 1.0, which wraps to 0 (as libdpc's float32 wrap does)."""
+    out = y.to(dtype)
+    return torch.where(out >= 1.0, out - 1.0, out)
+
+
 class _FilterC(torch.autograd.Function):
     """Forward and backward in libdpc (C, float64, parallel over points, bits independent of
     the thread count), through the dpc bindings. Inputs of any float dtype are computed in
@@ -387,9 +394,7 @@ class _FilterC(torch.autograd.Function):
         y = _core.layer_forward(x64, k64, *args, threads=torch.get_num_threads())
         ctx.save_for_backward(x, kernels)
         ctx.args = args
-        out = torch.from_numpy(y).to(x.dtype)
-        # In float32 a value just below 1 can round to 1.0: wrap it to 0 as libdpc does.
-        return torch.where(out >= 1.0, out - 1.0, out)
+        return to_torus_dtype(torch.from_numpy(y), x.dtype)
 
     @staticmethod
     def backward(ctx, grad_y):

