@@ -54,13 +54,17 @@ def main() -> None:
              "bnot-2d configuration (40 layers, 10 unique kernels, 32 bins, rho = 4 spacings, batch 4, "
              "radial-spectrum loss up to nu = 4, Adam), after one warm-up step.", "",
              "| m | op | threads | s/step | steps/s |", "|---:|---|---:|---:|---:|"]
+    best = 0.0
     for m, impl, threads in cases:
         steps = args.steps if impl == "c" else max(2, args.steps // 2)
         t = time_steps(m, impl, threads, steps)
+        if m == 1024:
+            best = max(best, 1 / t)
         lines.append(f"| {m:,} | {impl} | {threads} | {t:.3f} | {1 / t:.2f} |")
         print(lines[-1], flush=True)
     lines += ["", f"Load average while measuring: {os.getloadavg()[0]:.2f} (1 min) on {os.cpu_count()} CPUs. "
-              "Goal (issue 3): >= 4 steps/s at m = 1,024 on this 2-core machine.", ""]
+              f"Goal (issue 3): >= 4 steps/s at m = 1,024 on this 2-core machine: best measured "
+              f"{best:.2f} steps/s, {'met' if best >= 4 else '**not met**'}.", ""]
     section = "\n".join(lines)
     out = Path(args.out)
     old = out.read_text() if out.exists() else "# Performance\n"

@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "common/error.h"
+#include "cpu/cpu_grid.h"
 
 #define MAX_RANGES 512u          /* index ranges per point (2 per row of cells) */
 #define DPC_MAX_THREADS 64u
@@ -196,49 +197,6 @@ static void fill_soa(sub_pass *p, const float *x) {
     }
 }
 
-/* Candidate index ranges for a point in cell `id`: rows of 2R+1 cells along axis 0. */
-static unsigned grid_ranges(const sub_pass *p, uint32_t id, uint32_t *ranges) {
-    const unsigned k = p->job.k;
-    const int32_t G = (int32_t)p->G, R = (int32_t)p->R;
-    const uint32_t *start = p->ws->cell_start;
-    int32_t c[DPC_MAX_DIMS], off[DPC_MAX_DIMS];
-    for (unsigned q = 0; q < k; q++) {
-        c[q] = (int32_t)(id % (uint32_t)G);
-        id /= (uint32_t)G;
-        off[q] = -R;
-    }
-    unsigned n = 0;
-    for (;;) {
-        uint32_t base = 0; /* cell id of (0, c1+o1, c2+o2, ...) */
-        for (unsigned q = k; q-- > 1;) {
-            int32_t v = c[q] + off[q];
-            v += v < 0 ? G : v >= G ? -G : 0;
-            base = base * (uint32_t)G + (uint32_t)v;
-        }
-        base *= (uint32_t)G;
-        const int32_t lo = c[0] - R, hi = c[0] + R;
-#define ADD_RANGE(a, b)                                      \
-    do {                                                     \
-        uint32_t s_ = start[base + (a)], e_ = start[base + (b)]; \
-        if (e_ > s_) { ranges[2 * n] = s_; ranges[2 * n + 1] = e_; n++; } \
-    } while (0)
-        if (lo < 0) {
-            ADD_RANGE((uint32_t)(lo + G), (uint32_t)G);
-            ADD_RANGE(0u, (uint32_t)(hi + 1));
-        } else if (hi >= G) {
-            ADD_RANGE((uint32_t)lo, (uint32_t)G);
-            ADD_RANGE(0u, (uint32_t)(hi - G + 1));
-        } else {
-            ADD_RANGE((uint32_t)lo, (uint32_t)(hi + 1));
-        }
-#undef ADD_RANGE
-        unsigned q = 1; /* odometer over axes 1..k-1 */
-        while (q < k && ++off[q] > R) off[q++] = -R;
-        if (q >= k) break;
-    }
-    return n;
-}
-
 static void sub_pass_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
     const sub_pass *p = (const sub_pass *)ctx;
     workspace *ws = p->ws;
@@ -257,7 +215,7 @@ static void sub_pass_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
         if (p->grid) {
             const uint32_t cell = ws->cell_of[ws->perm[s]];
             while (e < hi && e - s < block_cap && ws->cell_of[ws->perm[e]] == cell) e++;
-            n_ranges = grid_ranges(p, cell, ranges);
+            n_ranges = dpc_grid_ranges(k, p->G, p->R, ws->cell_start, cell, ranges);
         } else {
             e = s + block_cap < hi ? s + block_cap : hi;
         }

@@ -21,6 +21,7 @@
 #include <unistd.h>
 
 #include "common/error.h"
+#include "cpu/cpu_grid.h"
 
 #define MAX_THREADS 64u
 #define MAX_RANGES 512u          /* candidate index ranges per cell (2 per row of cells) */
@@ -227,49 +228,6 @@ static void prepare_pass(const pass *ps, const double *x) {
     }
 }
 
-/* Candidate index ranges for a point in cell `id`: rows of 2R+1 cells along axis 0. */
-static unsigned cell_ranges(const sub_plan *sp, const uint32_t *start, uint32_t id, uint32_t *ranges) {
-    const unsigned k = sp->k;
-    const int32_t G = (int32_t)sp->G, R = (int32_t)sp->R;
-    int32_t c[4], off[4];
-    for (unsigned q = 0; q < k; q++) {
-        c[q] = (int32_t)(id % (uint32_t)G);
-        id /= (uint32_t)G;
-        off[q] = -R;
-    }
-    unsigned nr = 0;
-    for (;;) {
-        uint32_t base = 0; /* cell id of (0, c1+o1, c2+o2, ...) */
-        for (unsigned q = k; q-- > 1;) {
-            int32_t v = c[q] + off[q];
-            v += v < 0 ? G : v >= G ? -G : 0;
-            base = base * (uint32_t)G + (uint32_t)v;
-        }
-        base *= (uint32_t)G;
-        const int32_t lo = c[0] - R, hi = c[0] + R; /* 2R+1 <= G: wraps at most once */
-        uint32_t a[2], b[2];
-        unsigned parts = 1;
-        if (lo < 0) {
-            a[0] = (uint32_t)(lo + G), b[0] = (uint32_t)G, a[1] = 0, b[1] = (uint32_t)(hi + 1), parts = 2;
-        } else if (hi >= G) {
-            a[0] = (uint32_t)lo, b[0] = (uint32_t)G, a[1] = 0, b[1] = (uint32_t)(hi - G + 1), parts = 2;
-        } else {
-            a[0] = (uint32_t)lo, b[0] = (uint32_t)(hi + 1);
-        }
-        for (unsigned z = 0; z < parts; z++) {
-            const uint32_t s0 = start[base + a[z]], s1 = start[base + b[z]];
-            if (s1 > s0) {
-                ranges[2 * nr] = s0;
-                ranges[2 * nr + 1] = s1;
-                nr++;
-            }
-        }
-        unsigned q = 1; /* odometer over axes 1..k-1 */
-        while (q < k && ++off[q] > R) off[q++] = -R;
-        if (q >= k) break;
-    }
-    return nr;
-}
 
 /* Toroidal difference of two coordinates in [0, 1): t − rint(t) (half-even; t ∈ (−1, 1)). The
  * subtraction of 1 is exact there. */
@@ -351,7 +309,7 @@ ALWAYS_INLINE void chunk_body(const pass *ps, size_t lo, size_t hi, double *part
     for (size_t s = lo; s < hi; s++) {
         if (sp->grid && ws->cell[s] != cur) { /* consecutive points of a cell share their ranges */
             cur = ws->cell[s];
-            nr = cell_ranges(sp, ws->cell_start, cur, ranges);
+            nr = dpc_grid_ranges(sp->k, sp->G, sp->R, ws->cell_start, cur, ranges);
         }
         double xi[DPC_MAX_DIMS], a[DPC_MAX_DIMS];
         for (unsigned q = 0; q < K; q++) {

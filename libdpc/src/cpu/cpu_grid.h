@@ -1,0 +1,56 @@
+/* The toroidal cell grid shared by the inference engine (cpu_cascade.c) and the training
+ * kernels (cpu_layer_train.c): points sorted by cell id c_0 + G (c_1 + G (c_2 + ...)), so a row
+ * of cells along axis 0 is one contiguous index range (two where it wraps). */
+#ifndef DPC_CPU_GRID_H
+#define DPC_CPU_GRID_H
+
+#include <stdint.h>
+
+/* Candidate index ranges for a point in cell `id` of a k-D grid with G cells per axis: the
+ * (2R+1)^(k-1) rows of 2R+1 cells around it, in a fixed order. start[c] is the first sorted
+ * index of cell c. Needs 2R+1 <= G (each row wraps at most once) and k <= 8; ranges has room
+ * for 2 (2R+1)^(k-1) pairs. Returns the number of non-empty ranges written. */
+static inline unsigned dpc_grid_ranges(unsigned k, uint32_t G_, uint32_t R_, const uint32_t *start,
+                                       uint32_t id, uint32_t *ranges) {
+    const int32_t G = (int32_t)G_, R = (int32_t)R_;
+    int32_t c[8], off[8];
+    for (unsigned q = 0; q < k; q++) {
+        c[q] = (int32_t)(id % (uint32_t)G);
+        id /= (uint32_t)G;
+        off[q] = -R;
+    }
+    unsigned n = 0;
+    for (;;) {
+        uint32_t base = 0; /* cell id of (0, c1+o1, c2+o2, ...) */
+        for (unsigned q = k; q-- > 1;) {
+            int32_t v = c[q] + off[q];
+            v += v < 0 ? G : v >= G ? -G : 0;
+            base = base * (uint32_t)G + (uint32_t)v;
+        }
+        base *= (uint32_t)G;
+        const int32_t lo = c[0] - R, hi = c[0] + R;
+        uint32_t a[2], b[2];
+        unsigned parts = 1;
+        if (lo < 0) {
+            a[0] = (uint32_t)(lo + G), b[0] = (uint32_t)G, a[1] = 0, b[1] = (uint32_t)(hi + 1), parts = 2;
+        } else if (hi >= G) {
+            a[0] = (uint32_t)lo, b[0] = (uint32_t)G, a[1] = 0, b[1] = (uint32_t)(hi - G + 1), parts = 2;
+        } else {
+            a[0] = (uint32_t)lo, b[0] = (uint32_t)(hi + 1);
+        }
+        for (unsigned z = 0; z < parts; z++) {
+            const uint32_t s0 = start[base + a[z]], s1 = start[base + b[z]];
+            if (s1 > s0) {
+                ranges[2 * n] = s0;
+                ranges[2 * n + 1] = s1;
+                n++;
+            }
+        }
+        unsigned q = 1; /* odometer over axes 1..k-1 */
+        while (q < k && ++off[q] > R) off[q++] = -R;
+        if (q >= k) break;
+    }
+    return n;
+}
+
+#endif
