@@ -166,10 +166,10 @@ def test_zero_kernel_is_identity_and_wraps():
     assert ((y >= 0) & (y < 1)).all()
 
 
-def test_c_impl_raises_clearly():
-    x = torch.rand(10, 2)
-    with pytest.raises(NotImplementedError, match="bindings"):
-        filter_layer(x, torch.zeros(1, 4), [3], [2.0], impl="c")
+def test_unknown_impl_is_a_config_error():
+    x = torch.rand(10, 2, dtype=torch.float64)
+    with pytest.raises(FilterConfigError, match="impl"):
+        filter_layer(x, torch.zeros(1, 4, dtype=torch.float64), [3], [2.0], impl="cuda-magic")
 
 
 @pytest.mark.parametrize("bad", [
