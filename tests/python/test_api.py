@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cpu_isa import HAVE_AVX2, HAVE_AVX512, VECTOR_ISAS  # noqa: E402,F401
 
 dpc = pytest.importorskip("dpc")
 
@@ -18,19 +19,6 @@ GRID = DATA / "model_grid_3to1.onnx"
 M10 = DATA / "model_10d.onnx"
 
 
-def _cpu_flags() -> set[str]:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("flags"):
-                return set(line.split(":", 1)[1].split())
-    except OSError:
-        pass
-    return set()
-
-
-HAVE_AVX2 = {"avx2", "fma"} <= _cpu_flags()
-HAVE_AVX512 = HAVE_AVX2 and "avx512f" in _cpu_flags()
-VECTOR_ISAS = (["avx2"] if HAVE_AVX2 else []) + (["avx512"] if HAVE_AVX512 else [])
 
 
 def _is_c_float32(a: np.ndarray, shape) -> bool:

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 import reference_cascade as rc
+from cpu_isa import HAVE_AVX2, HAVE_AVX512, VECTOR_ISAS  # noqa: E402,F401
 
 dpc = pytest.importorskip("dpc")
 
@@ -26,19 +27,7 @@ SEEDS = [0, 1, 2**64 - 1]
 TOL = 1e-5
 
 
-def _cpu_flags() -> set[str]:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("flags"):
-                return set(line.split(":", 1)[1].split())
-    except OSError:
-        pass
-    return set()
-
-
-HAVE_AVX2 = {"avx2", "fma"} <= _cpu_flags()
-HAVE_AVX512 = HAVE_AVX2 and "avx512f" in _cpu_flags()
-ISAS = ["scalar"] + (["avx2"] if HAVE_AVX2 else []) + (["avx512"] if HAVE_AVX512 else [])
+ISAS = ["scalar"] + VECTOR_ISAS
 
 _ref_cache: dict[str, rc.RefModel] = {}
 _max_diff: dict[str, float] = {}

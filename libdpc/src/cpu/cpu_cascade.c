@@ -167,8 +167,6 @@ static void sort_cells(sub_pass *p, const float *x) {
         const uint32_t G = p->G;
         size_t cells = 1;
         for (unsigned q = 0; q < k; q++) cells *= G;
-        uint32_t *start = ws->cell_start;
-        memset(start, 0, (cells + 1) * sizeof(uint32_t));
         for (size_t i = 0; i < m; i++) {
             uint32_t id = 0;
             for (unsigned q = k; q-- > 0;) {
@@ -176,13 +174,8 @@ static void sort_cells(sub_pass *p, const float *x) {
                 id = id * G + (c < G ? c : G - 1);
             }
             ws->cell_of[i] = id;
-            start[id + 1]++;
         }
-        for (size_t c = 0; c < cells; c++) start[c + 1] += start[c];
-        /* Place with a moving cursor, then restore the starts (cursor ends at the next start). */
-        for (size_t i = 0; i < m; i++) ws->perm[start[ws->cell_of[i]]++] = (uint32_t)i;
-        for (size_t c = cells; c > 0; c--) start[c] = start[c - 1];
-        start[0] = 0;
+        dpc_grid_sort(ws->cell_of, m, cells, ws->cell_start, ws->perm);
     }
 }
 

@@ -4,7 +4,23 @@
 #ifndef DPC_CPU_GRID_H
 #define DPC_CPU_GRID_H
 
+#include <stddef.h>
 #include <stdint.h>
+#include <string.h>
+
+/* Stable counting sort of m points by their cell ids cell_of[i] < cells: perm[s] is the point at
+ * sorted position s, start[c] the first sorted position of cell c (start has cells + 1 entries,
+ * start[cells] = m). Points keep their index order within a cell, so the result is fixed. */
+static inline void dpc_grid_sort(const uint32_t *cell_of, size_t m, size_t cells, uint32_t *start,
+                                 uint32_t *perm) {
+    memset(start, 0, (cells + 1) * sizeof(uint32_t));
+    for (size_t i = 0; i < m; i++) start[cell_of[i] + 1]++;
+    for (size_t c = 0; c < cells; c++) start[c + 1] += start[c];
+    /* Place with a moving cursor, then restore the starts (each cursor ends at the next start). */
+    for (size_t i = 0; i < m; i++) perm[start[cell_of[i]]++] = (uint32_t)i;
+    for (size_t c = cells; c > 0; c--) start[c] = start[c - 1];
+    start[0] = 0;
+}
 
 /* Candidate index ranges for a point in cell `id` of a k-D grid with G cells per axis: the
  * (2R+1)^(k-1) rows of 2R+1 cells around it, in a fixed order. start[c] is the first sorted

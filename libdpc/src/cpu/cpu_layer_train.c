@@ -202,8 +202,6 @@ static void prepare_pass(const pass *ps, const double *x) {
         const uint32_t G = sp->G;
         size_t cells = 1;
         for (unsigned q = 0; q < k; q++) cells *= G;
-        uint32_t *start = ws->cell_start;
-        memset(start, 0, (cells + 1) * sizeof(uint32_t));
         for (size_t i = 0; i < m; i++) {
             uint32_t id = 0;
             for (unsigned q = k; q-- > 0;) { /* axis 0 varies fastest */
@@ -211,12 +209,9 @@ static void prepare_pass(const pass *ps, const double *x) {
                 id = id * G + (c < G ? c : G - 1);
             }
             ws->cell[i] = id;
-            start[id + 1]++;
         }
-        for (size_t c = 0; c < cells; c++) start[c + 1] += start[c];
-        for (size_t i = 0; i < m; i++) ws->perm[start[ws->cell[i]]++] = (uint32_t)i;
-        for (size_t c = cells; c > 0; c--) start[c] = start[c - 1]; /* the cursors ran one cell ahead */
-        start[0] = 0;
+        dpc_grid_sort(ws->cell, m, cells, ws->cell_start, ws->perm);
+        const uint32_t *start = ws->cell_start;
         for (size_t c = 0; c < cells; c++) /* cell of each sorted position */
             for (uint32_t s = start[c]; s < start[c + 1]; s++) ws->cell[s] = (uint32_t)c;
     }
