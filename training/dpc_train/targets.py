@@ -51,13 +51,23 @@ def load_radial_file(name: str, k: int, m: int) -> np.ndarray:
     raise LossError(f"no radial target file for {name!r}, d={k}, n={m}; have: {avail}")
 
 
-def radial_target(name: str, m: int, k: int = 2, nu_max: float = 4.0) -> torch.Tensor:
-    """Radial target of length radial_bins(m, k, nu_max), to compare with radspec(X, nu_max)."""
+def radial_target(name: str, m: int, k: int = 2, nu_max: float = 4.0,
+                  source: str = "auto") -> torch.Tensor:
+    """Radial target of length radial_bins(m, k, nu_max), to compare with radspec(X, nu_max).
+
+    source: "auto" (analytic profile for `step` and square-m 2-D `jitter`, else the authors'
+    file), "file" (always the authors' `*-powspec-radialmean-*` file), "analytic".
+    """
+    if source not in ("auto", "file", "analytic"):
+        raise LossError(f"radial_target source must be auto, file or analytic, got {source!r}")
     nb = radial_bins(m, k, nu_max)
-    if name == "step":
-        return step_radial(m, k, nu_max)
-    if name == "jitter" and k == 2 and round(math.sqrt(m)) ** 2 == m:
-        return jitter_radial(m, nu_max)
+    if source != "file":
+        if name == "step":
+            return step_radial(m, k, nu_max)
+        if name == "jitter" and k == 2 and round(math.sqrt(m)) ** 2 == m:
+            return jitter_radial(m, nu_max)
+        if source == "analytic":
+            raise LossError(f"no analytic radial profile for {name!r} (d={k}, n={m})")
     prof = load_radial_file(name, k, m)
     if len(prof) < nb:
         raise LossError(f"target {name!r} (d={k}, n={m}) has {len(prof)} radii, need {nb} for "
@@ -72,6 +82,22 @@ def spectrum2d_target(name: str, m: int, K: int) -> torch.Tensor:
     if not p.is_file():
         raise LossError(f"no 2-D spectrum file {p.name}")
     return _crop_centred(np.load(p).astype(np.float64), K, p.name)
+
+
+def spectrum2d_radial(name: str, m: int, nu_max: float = 4.0) -> torch.Tensor:
+    """Radial mean of a 2-D spectrum file (`{name}-powspec-d2-n{m}.npy`) with radspec's binning
+    (floor(|q|), DC = 0): an isotropic target from the authors' measured 2-D spectra (green and
+    pink noise ship only as 2-D spectra)."""
+    nb = radial_bins(m, 2, nu_max)
+    R = nb - 1
+    P = spectrum2d_target(name, m, R)
+    q = torch.arange(-R, R + 1, dtype=torch.float64)
+    idx = torch.floor(torch.sqrt(q[:, None] ** 2 + q[None, :] ** 2) + 1e-9).long().reshape(-1)
+    ok = idx <= R
+    sums = torch.zeros(nb, dtype=torch.float64).index_add(0, idx[ok], P.reshape(-1)[ok])
+    out = sums / torch.bincount(idx[ok], minlength=nb).double()
+    out[0] = 0
+    return out
 
 
 def _crop_centred(a: np.ndarray, K: int, what: str) -> torch.Tensor:
