@@ -13,7 +13,8 @@
  * - Handles are opaque. dpc_model_free(NULL) is a no-op. Output buffers belong to the caller.
  * - A loaded model is immutable: any number of threads may call any function on the same model
  *   at the same time. Results are a pure function of (model file, seed, point count) and are
- *   bit-identical across runs and thread counts for one build and one ISA path.
+ *   bit-identical across runs and thread counts for one build and one ISA path (on the Vulkan
+ *   backend: for one build, device and driver; it agrees with the CPU to float32 rounding).
  * - The header is C99 and C++ clean.
  */
 #ifndef DPC_DPC_H
@@ -94,13 +95,36 @@ typedef enum dpc_isa {
     DPC_ISA_AVX512 = 3  /* x86-64 AVX-512F */
 } dpc_isa;
 
+/* What runs the cascade.
+ * - AUTO: a GPU through Vulkan when this libdpc was built with the Vulkan backend (CMake option
+ *   DPC_VULKAN) and the machine has a hardware GPU with a Vulkan driver (looked up once per
+ *   process); otherwise the CPU. AUTO never fails for want of a GPU, and never picks a software
+ *   Vulkan driver (e.g. lavapipe), which is slower than the CPU backend.
+ * - CPU: the CPU backend (isa and threads below).
+ * - VULKAN: the Vulkan backend on the best device present, software drivers included. Without a
+ *   usable device, or in a build without the Vulkan backend, loading fails with
+ *   DPC_ERROR_UNSUPPORTED and a message saying why. The Vulkan loader (libvulkan.so.1) is opened
+ *   at run time, so a build with the backend still loads where Vulkan is missing.
+ * Every model on the Vulkan backend owns its device queue, command buffer and work buffers (kept
+ * at the size of its largest call until the model is freed), guarded by one mutex per model:
+ * concurrent calls on one model are safe and wait for each other; different models run
+ * concurrently. Vulkan failures are statuses with the VkResult named in dpc_last_error(). */
+typedef enum dpc_backend {
+    DPC_BACKEND_AUTO = 0,
+    DPC_BACKEND_CPU = 1,
+    DPC_BACKEND_VULKAN = 2
+} dpc_backend;
+
 /* Options fixed at load time. Initialise with dpc_load_options_init(). */
 typedef struct dpc_load_options {
     uint32_t struct_size; /* sizeof(dpc_load_options), set by dpc_load_options_init */
     dpc_isa isa;          /* default DPC_ISA_AUTO */
     /* Worker threads one generate call may use: 1 (default) runs on the calling thread only;
-     * 0 means one per online CPU. Output bits do not depend on this. */
+     * 0 means one per online CPU. Output bits do not depend on this. CPU backend only. */
     uint32_t threads;
+    /* Default DPC_BACKEND_AUTO. The field was added after the first release: a struct_size of
+     * the struct without it (offsetof(dpc_load_options, backend)) is still accepted, as AUTO. */
+    dpc_backend backend;
 } dpc_load_options;
 
 /* Fill *options with the defaults. */
@@ -136,6 +160,12 @@ typedef struct dpc_model_info {
 } dpc_model_info;
 
 DPC_API dpc_status dpc_model_get_info(const dpc_model *model, dpc_model_info *out_info);
+
+/* The backend this handle runs on: DPC_BACKEND_CPU or DPC_BACKEND_VULKAN, never AUTO. */
+DPC_API dpc_status dpc_model_get_backend(const dpc_model *model, dpc_backend *out_backend);
+/* What runs the cascade, for people: "cpu", or the Vulkan device's name (e.g. "NVIDIA H100 PCIe",
+ * "llvmpipe (LLVM 15.0.6, 256 bits)"). "" for NULL. Valid while the model lives. */
+DPC_API const char *dpc_model_device(const dpc_model *model);
 
 /* Model name (metadata "dpc.name"), or "" when the file has none. Valid while the model lives. */
 DPC_API const char *dpc_model_name(const dpc_model *model);

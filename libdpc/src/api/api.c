@@ -3,6 +3,7 @@
 #include <float.h>
 #include <math.h>
 #include <pthread.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,12 +14,19 @@
 #include "cpu/cpu_cascade.h"
 #include "cpu/cpu_layer_train.h"
 #include "model/model.h"
+#if defined(DPC_HAVE_VULKAN)
+#include "vulkan/vk_backend.h"
+#endif
 
 #define MAX_FLOATS_PER_SET (1ull << 28) /* n_points * dims: 1 GiB of floats */
 
 struct dpc_model {
     dpc_cascade cascade;
-    dpc_cpu_engine engine;
+    dpc_cpu_engine engine; /* CPU backend; also what info.isa / info.threads report */
+    dpc_backend backend;   /* resolved: CPU or VULKAN */
+#if defined(DPC_HAVE_VULKAN)
+    dpc_vk_engine *vk; /* the Vulkan backend, when backend == DPC_BACKEND_VULKAN */
+#endif
 };
 
 #define STR2(x) #x
@@ -50,6 +58,30 @@ void dpc_load_options_init(dpc_load_options *options) {
     options->struct_size = (uint32_t)sizeof *options;
     options->isa = DPC_ISA_AUTO;
     options->threads = 1;
+    options->backend = DPC_BACKEND_AUTO;
+}
+
+/* Resolve the backend of a freshly parsed model: AUTO takes a Vulkan GPU if there is one and
+ * falls back to the CPU on any failure; VULKAN reports why it cannot run. */
+static dpc_status choose_backend(dpc_model *model, dpc_backend requested) {
+    model->backend = DPC_BACKEND_CPU;
+    if (requested == DPC_BACKEND_CPU) return DPC_OK;
+#if defined(DPC_HAVE_VULKAN)
+    if (requested == DPC_BACKEND_AUTO) {
+        if (dpc_vk_gpu_present() && dpc_vk_engine_create(&model->cascade, 1, &model->vk) == DPC_OK)
+            model->backend = DPC_BACKEND_VULKAN;
+        dpc_clear_error(); /* falling back to the CPU is not an error */
+        return DPC_OK;
+    }
+    dpc_status st = dpc_vk_engine_create(&model->cascade, 0, &model->vk);
+    if (st == DPC_OK) model->backend = DPC_BACKEND_VULKAN;
+    return st;
+#else
+    if (requested == DPC_BACKEND_AUTO) return DPC_OK;
+    return dpc_fail(DPC_ERROR_UNSUPPORTED,
+                    "backend VULKAN requested, but this libdpc was built without the Vulkan backend "
+                    "(configure with -DDPC_VULKAN=ON)");
+#endif
 }
 
 /* ---- loading ----------------------------------------------------------------------------- */
@@ -63,17 +95,32 @@ dpc_status dpc_model_load_memory(const void *data, size_t size, const dpc_load_o
     dpc_load_options opts;
     dpc_load_options_init(&opts);
     if (options) {
-        if (options->struct_size != sizeof opts)
+        /* Older callers pass the struct without `backend`: read what they have, default the rest. */
+        const size_t before_backend = offsetof(dpc_load_options, backend);
+        if (options->struct_size == sizeof opts) {
+            opts = *options;
+        } else if (options->struct_size == before_backend) {
+            memcpy(&opts, options, before_backend);
+        } else {
             return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
                             "options.struct_size is %u, expected %u: initialise with dpc_load_options_init",
                             options->struct_size, (unsigned)sizeof opts);
-        opts = *options;
+        }
     }
+    if (opts.backend != DPC_BACKEND_AUTO && opts.backend != DPC_BACKEND_CPU && opts.backend != DPC_BACKEND_VULKAN)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "options.backend is %d: use DPC_BACKEND_AUTO, _CPU or _VULKAN",
+                        (int)opts.backend);
     dpc_model *model = (dpc_model *)calloc(1, sizeof *model);
     if (!model) return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory");
     dpc_status st = dpc_cpu_engine_init(&model->engine, opts.isa, opts.threads);
     if (st == DPC_OK) st = dpc_cascade_parse((const uint8_t *)data, size, &model->cascade);
     if (st != DPC_OK) {
+        free(model);
+        return st;
+    }
+    st = choose_backend(model, opts.backend);
+    if (st != DPC_OK) {
+        dpc_cascade_release(&model->cascade);
         free(model);
         return st;
     }
@@ -127,6 +174,9 @@ dpc_status dpc_model_load_file(const char *path, const dpc_load_options *options
 
 void dpc_model_free(dpc_model *model) {
     if (!model) return;
+#if defined(DPC_HAVE_VULKAN)
+    dpc_vk_engine_destroy(model->vk);
+#endif
     dpc_cascade_release(&model->cascade);
     free(model);
 }
@@ -149,6 +199,21 @@ dpc_status dpc_model_get_info(const dpc_model *model, dpc_model_info *out_info) 
     out_info->isa = model->engine.isa;
     out_info->threads = model->engine.threads;
     return DPC_OK;
+}
+
+dpc_status dpc_model_get_backend(const dpc_model *model, dpc_backend *out_backend) {
+    dpc_clear_error();
+    if (!model || !out_backend) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "model or out_backend is NULL");
+    *out_backend = model->backend;
+    return DPC_OK;
+}
+
+const char *dpc_model_device(const dpc_model *model) {
+    if (!model) return "";
+#if defined(DPC_HAVE_VULKAN)
+    if (model->backend == DPC_BACKEND_VULKAN) return dpc_vk_engine_device(model->vk);
+#endif
+    return "cpu";
 }
 
 const char *dpc_model_name(const dpc_model *model) {
@@ -225,11 +290,40 @@ static dpc_status generate_one(const dpc_model *model, const dpc_cpu_engine *eng
     return dpc_cpu_filter(c, engine, m, out);
 }
 
+#if defined(DPC_HAVE_VULKAN)
+/* Inputs of a Vulkan run: the CPU backend's input points (same code), or the caller's points. */
+typedef struct vk_inputs {
+    const dpc_model *model;
+    uint64_t seed;
+    size_t m;
+    const float *given; /* dpc_filter: the caller's points */
+} vk_inputs;
+
+static void vk_fill(void *ctx, size_t set, float *x) {
+    const vk_inputs *in = (const vk_inputs *)ctx;
+    const dpc_cascade *c = &in->model->cascade;
+    if (in->given) {
+        memcpy(x, in->given, in->m * c->dims * sizeof(float));
+        return;
+    }
+    fill_uniform(in->seed + set, in->m * c->dims, x);
+    fill_grid(c, in->m, x);
+}
+
+static dpc_status vk_generate(const dpc_model *model, uint64_t seed, size_t count, size_t m, float *out) {
+    vk_inputs in = {model, seed, m, NULL};
+    return dpc_vk_run(model->vk, &model->cascade, count, m, vk_fill, &in, out);
+}
+#endif
+
 dpc_status dpc_generate_n(const dpc_model *model, uint64_t seed, size_t n_points, float *out) {
     dpc_clear_error();
     if (!model || !out) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "model or out is NULL");
     dpc_status st = check_count(model, &n_points);
     if (st != DPC_OK) return st;
+#if defined(DPC_HAVE_VULKAN)
+    if (model->backend == DPC_BACKEND_VULKAN) return vk_generate(model, seed, 1, n_points, out);
+#endif
     return generate_one(model, &model->engine, seed, n_points, out);
 }
 
@@ -272,6 +366,9 @@ dpc_status dpc_generate_batch(const dpc_model *model, uint64_t seed, size_t coun
     if (st != DPC_OK) return st;
     const size_t stride = n_points * model->cascade.dims;
     if (count > SIZE_MAX / stride) return dpc_fail(DPC_ERROR_LIMIT, "count * n_points * dims overflows");
+#if defined(DPC_HAVE_VULKAN)
+    if (model->backend == DPC_BACKEND_VULKAN) return vk_generate(model, seed, count, n_points, out); /* many sets per dispatch */
+#endif
     unsigned threads = model->engine.threads;
     if (threads > count) threads = (unsigned)count;
     if (threads <= 1 || n_points >= 65536) { /* big sets parallelise inside each set instead */
@@ -309,6 +406,12 @@ dpc_status dpc_filter(const dpc_model *model, size_t n_points, float *points) {
         if (!(points[i] >= 0.0f && points[i] < 1.0f))
             return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "point %zu, dimension %zu is %g: points must lie in [0, 1)",
                             i / model->cascade.dims, i % model->cascade.dims, (double)points[i]);
+#if defined(DPC_HAVE_VULKAN)
+    if (model->backend == DPC_BACKEND_VULKAN) {
+        vk_inputs in = {model, 0, n_points, points};
+        return dpc_vk_run(model->vk, &model->cascade, 1, n_points, vk_fill, &in, points);
+    }
+#endif
     return dpc_cpu_filter(&model->cascade, &model->engine, n_points, points);
 }
 
