@@ -11,8 +11,13 @@
  * The one sum across points, the kernel gradient, is accumulated per chunk of consecutive sorted
  * points; chunk sums are added in chunk order and set sums in set order. Chunk boundaries depend
  * on m and b only, so every output is bit-identical for any thread count. Memory is O(m·n + cells)
- * per worker, never O(m²). */
-#include "cpu/cpu_layer_train.h"
+ * per worker, never O(m²).
+ *
+ * The pair loop (filter candidates on d², then the pair math on the survivors) is per ISA:
+ * cpu_layer_train_scalar.c, _avx2.c, _avx512.c, chosen like the inference kernels (DPC_ISA, else
+ * cpuid). Vector paths sum in lanes, so they differ from the scalar path by rounding; each path
+ * on its own is deterministic and thread-count independent. */
+#include "cpu/cpu_layer_train_impl.h"
 
 #include <math.h>
 #include <pthread.h>
@@ -21,43 +26,20 @@
 #include <unistd.h>
 
 #include "common/error.h"
+#include "cpu/cpu_cascade.h"
 #include "cpu/cpu_grid.h"
 
 #define MAX_THREADS 64u
-#define MAX_RANGES 512u          /* candidate index ranges per cell (2 per row of cells) */
+#define MAX_RANGES DPC_TRAIN_MAX_RANGES
 #define SET_PARALLEL_BELOW 8192u /* smaller sets go to threads whole: no spawn per subspace */
 #define MIN_CHUNK 256u
 
-#if defined(__GNUC__)
-#define ALWAYS_INLINE static inline __attribute__((always_inline))
-#else
-#define ALWAYS_INLINE static inline
-#endif
-
 /* ---- plan: everything that depends on the layer and m only -------------------------------- */
 
-typedef struct sub_plan {
-    unsigned k;                  /* |D_t| */
-    unsigned dim[DPC_MAX_DIMS];  /* subspace axis q -> point dimension */
-    double vscale[DPC_MAX_DIMS]; /* h_t / c_k for moving dims, 0 for fixed ones */
-    int moves;                   /* some dimension of D_t moves (else the subspace is skipped) */
-    double h, r, e;              /* spacing, radius, cutoff (absolute) */
-    double r2_keep, e2_keep;     /* d² >= r2_keep implies d >= r, d² <= e2_keep implies d <= e */
-    double scale;                /* (b - 1) / r */
-    const double *w;             /* b kernel values */
-    int grid;                    /* 0: all pairs */
-    uint32_t G, R;               /* cells per axis, cells searched each side */
-} sub_plan;
-
-typedef struct plan {
-    size_t m, n;
-    unsigned s, b;
-    sub_plan *sub;
-    double count[DPC_MAX_DIMS]; /* c_k, 0 where dimension k does not move */
-    size_t chunk, n_chunks;     /* kernel-gradient chunks over sorted positions */
-    size_t max_cells;
-    unsigned kmax;              /* largest k of a moving subspace */
-} plan;
+typedef dpc_train_sub sub_plan;
+typedef dpc_train_plan plan;
+typedef dpc_train_ws wspace;
+typedef dpc_train_pass pass;
 
 /* Grid or all pairs, and the grid resolution (the cell side is at least r / reach). */
 static void plan_grid(sub_plan *sp, size_t m) {
@@ -82,9 +64,28 @@ static void plan_grid(sub_plan *sp, size_t m) {
     sp->R = (uint32_t)R;
 }
 
+/* The pair loop for the ISA the inference engine would pick (DPC_ISA, else the best of cpuid),
+ * with the same errors for a bad DPC_ISA or a path the CPU lacks. */
+static dpc_status pick_chunk_fn(dpc_train_chunk_fn *fn) {
+    dpc_cpu_engine e;
+    const dpc_status st = dpc_cpu_engine_init(&e, DPC_ISA_AUTO, 1);
+    if (st != DPC_OK) return st;
+    switch (e.isa) {
+#if defined(DPC_HAVE_AVX2)
+    case DPC_ISA_AVX2: *fn = dpc_train_chunk_avx2; break;
+    case DPC_ISA_AVX512: *fn = dpc_train_chunk_avx512; break;
+#endif
+    default: *fn = dpc_train_chunk_scalar; break;
+    }
+    return DPC_OK;
+}
+
 static dpc_status plan_init(plan *p, const dpc_train_layer *L, size_t m) {
     memset(p, 0, sizeof *p);
+    const dpc_status st = pick_chunk_fn(&p->chunk_fn);
+    if (st != DPC_OK) return st;
     p->m = m;
+    p->stride = (m + DPC_TRAIN_PAD + 7) & ~(size_t)7;
     p->n = L->n;
     p->s = L->s;
     p->b = L->b;
@@ -136,16 +137,6 @@ static dpc_status plan_init(plan *p, const dpc_train_layer *L, size_t m) {
 
 /* ---- per-worker workspace ------------------------------------------------------------------ */
 
-typedef struct wspace {
-    double *P, *V;        /* m · kmax: subspace coordinates / v, in sorted order */
-    double *acc;          /* m · n: per-point sums over subspaces (caller's order) */
-    uint32_t *perm;       /* sorted position -> point */
-    uint32_t *cell;       /* sorted position -> cell id */
-    uint32_t *cell_start; /* max_cells + 1 */
-    double *gk;           /* s · b: this set's kernel gradient */
-    double *part;         /* b per chunk in flight: chunk partial sums of the kernel gradient */
-} wspace;
-
 static void wspace_free(wspace *w) {
     free(w->P);
     free(w->V);
@@ -161,14 +152,15 @@ static void wspace_free(wspace *w) {
 static dpc_status wspace_init(wspace *w, const plan *p, int backward, size_t parts) {
     memset(w, 0, sizeof *w);
     const size_t m = p->m, kmax = p->kmax ? p->kmax : 1;
-    w->P = (double *)malloc(m * kmax * sizeof(double));
+    /* calloc: the padding past m in each column is read (and masked) by the vector paths. */
+    w->P = (double *)calloc(p->stride * kmax, sizeof(double));
     w->acc = (double *)malloc(m * p->n * sizeof(double));
     w->perm = (uint32_t *)malloc(m * sizeof(uint32_t));
     w->cell = (uint32_t *)malloc(m * sizeof(uint32_t));
     w->cell_start = (uint32_t *)malloc((p->max_cells + 1) * sizeof(uint32_t));
     int ok = w->P && w->acc && w->perm && w->cell && w->cell_start;
     if (backward) {
-        w->V = (double *)malloc(m * kmax * sizeof(double));
+        w->V = (double *)calloc(p->stride * kmax, sizeof(double));
         w->gk = (double *)malloc((size_t)p->s * p->b * sizeof(double));
         w->part = (double *)malloc(parts * p->b * sizeof(double));
         ok = ok && w->V && w->gk && w->part;
@@ -182,19 +174,12 @@ static dpc_status wspace_init(wspace *w, const plan *p, int backward, size_t par
 
 /* ---- one subspace of one set ---------------------------------------------------------------- */
 
-typedef struct pass {
-    const plan *p;
-    const sub_plan *sp;
-    wspace *ws;
-    const double *gy; /* this set's dL/dy, NULL forward */
-} pass;
-
 /* Sort the set's points by cell (stable counting sort) and pack the subspace's coordinates and,
- * backward, v = h_t · G / c_k in sorted order. */
+ * backward, v = h_t · G / c_k, column by column in sorted order. */
 static void prepare_pass(const pass *ps, const double *x) {
     const sub_plan *sp = ps->sp;
     wspace *ws = ps->ws;
-    const size_t m = ps->p->m, n = ps->p->n;
+    const size_t m = ps->p->m, n = ps->p->n, st = ps->p->stride;
     const unsigned k = sp->k;
     if (!sp->grid) {
         for (size_t i = 0; i < m; i++) ws->perm[i] = (uint32_t)i;
@@ -217,143 +202,19 @@ static void prepare_pass(const pass *ps, const double *x) {
     }
     for (size_t s = 0; s < m; s++) {
         const size_t i = ws->perm[s];
-        for (unsigned q = 0; q < k; q++) ws->P[s * k + q] = x[i * n + sp->dim[q]];
+        for (unsigned q = 0; q < k; q++) ws->P[q * st + s] = x[i * n + sp->dim[q]];
         if (ps->gy)
-            for (unsigned q = 0; q < k; q++) ws->V[s * k + q] = sp->vscale[q] * ps->gy[i * n + sp->dim[q]];
+            for (unsigned q = 0; q < k; q++) ws->V[q * st + s] = sp->vscale[q] * ps->gy[i * n + sp->dim[q]];
     }
 }
 
-
-/* Toroidal difference of two coordinates in [0, 1): t − rint(t) (half-even; t ∈ (−1, 1)). The
- * subtraction of 1 is exact there. */
-ALWAYS_INLINE double wrap_diff(double t) { return t > 0.5 ? t - 1.0 : t < -0.5 ? t + 1.0 : t; }
-
-#define LIST_CAP 128u /* candidates that passed the squared-distance test, per flush */
-
-/* Point s's interactions with the listed candidates (all with d² in (e2_keep, r2_keep)), in list
- * order. Forward: a += Σ g(d) δ/d. Backward: a += Σ J(δ)(v_j − v_i), and the kernel gradient of
- * each pair goes to part. K and BACKWARD are constants where inlined. */
-ALWAYS_INLINE void pair_sums(const pass *ps, size_t s, const uint32_t *list, unsigned len, double *a,
-                             double *part, const unsigned K, const int BACKWARD) {
-    const sub_plan *sp = ps->sp;
-    const double *P = ps->ws->P, *V = ps->ws->V, *w = sp->w;
-    const double r = sp->r, e = sp->e, scale = sp->scale;
-    const double umax = (double)(ps->p->b - 1);
-    const unsigned qmax = ps->p->b - 2;
-    double xi[DPC_MAX_DIMS], vi[DPC_MAX_DIMS];
-    for (unsigned q = 0; q < K; q++) {
-        xi[q] = P[s * K + q];
-        vi[q] = BACKWARD ? V[s * K + q] : 0.0;
-    }
-    for (unsigned z = 0; z < len; z++) {
-        const size_t j = list[z];
-        double dl[DPC_MAX_DIMS], d2 = 0.0;
-        for (unsigned q = 0; q < K; q++) { /* the same operations as the test: the same bits */
-            dl[q] = wrap_diff(P[j * K + q] - xi[q]);
-            d2 += dl[q] * dl[q];
-        }
-        const double d = sqrt(d2);
-        if (!(d > e && d < r)) continue; /* the exact window of §3 (differs only at the rounding edge) */
-        double u = d * scale;
-        u = u > umax ? umax : u;
-        unsigned qb = (unsigned)u;
-        qb = qb > qmax ? qmax : qb;
-        const double f = u - (double)qb;
-        const double w0 = w[qb], dw = w[qb + 1] - w0;
-        const double g = w0 + f * dw;
-        const double inv_d = 1.0 / d;
-        if (!BACKWARD) {
-            const double c = g * inv_d;
-            for (unsigned q = 0; q < K; q++) a[q] += c * dl[q];
-            continue;
-        }
-        /* J(δ)(v_j − v_i) = g'·(n̂·Δv) n̂ + (g/d)(Δv − (n̂·Δv) n̂), n̂ = δ/d. */
-        double dv[DPC_MAX_DIMS], ndv = 0.0, nvi = 0.0;
-        for (unsigned q = 0; q < K; q++) {
-            dl[q] *= inv_d;
-            dv[q] = V[j * K + q] - vi[q];
-            ndv += dl[q] * dv[q];
-            nvi += dl[q] * vi[q];
-        }
-        const double gd = g * inv_d;
-        const double radial = (dw * scale - gd) * ndv;
-        for (unsigned q = 0; q < K; q++) a[q] += radial * dl[q] + gd * dv[q];
-        /* dg/dw[q] = 1 − f, dg/dw[q+1] = f; the pair's output sensitivity is n̂·v_i. */
-        part[qb] += (1.0 - f) * nvi;
-        part[qb + 1] += f * nvi;
-    }
-}
-
-/* The points of sorted positions [lo, hi). Candidates are first filtered on d² without branches
- * (append always, advance by the test: the window test is a coin flip for a branch predictor),
- * then the survivors get the full computation in candidate order. */
-ALWAYS_INLINE void chunk_body(const pass *ps, size_t lo, size_t hi, double *part, const unsigned K,
-                              const int BACKWARD) {
-    const plan *p = ps->p;
-    const sub_plan *sp = ps->sp;
-    wspace *ws = ps->ws;
-    const size_t m = p->m, n = p->n;
-    const double *P = ws->P;
-    const double r2_keep = sp->r2_keep, e2_keep = sp->e2_keep;
-    uint32_t ranges[2 * MAX_RANGES];
-    uint32_t list[LIST_CAP + 1];
-    unsigned nr = 1;
-    ranges[0] = 0;
-    ranges[1] = (uint32_t)m;
-    uint32_t cur = UINT32_MAX;
-    for (size_t s = lo; s < hi; s++) {
-        if (sp->grid && ws->cell[s] != cur) { /* consecutive points of a cell share their ranges */
-            cur = ws->cell[s];
-            nr = dpc_grid_ranges(sp->k, sp->G, sp->R, ws->cell_start, cur, ranges);
-        }
-        double xi[DPC_MAX_DIMS], a[DPC_MAX_DIMS];
-        for (unsigned q = 0; q < K; q++) {
-            xi[q] = P[s * K + q];
-            a[q] = 0.0;
-        }
-        unsigned len = 0;
-        for (unsigned z = 0; z < nr; z++) {
-            for (uint32_t j = ranges[2 * z], je = ranges[2 * z + 1]; j < je; j++) {
-                double d2 = 0.0;
-                for (unsigned q = 0; q < K; q++) {
-                    const double t = wrap_diff(P[(size_t)j * K + q] - xi[q]);
-                    d2 += t * t;
-                }
-                list[len] = j;
-                len += (d2 < r2_keep) & (d2 > e2_keep);
-                if (len == LIST_CAP) {
-                    pair_sums(ps, s, list, len, a, part, K, BACKWARD);
-                    len = 0;
-                }
-            }
-        }
-        pair_sums(ps, s, list, len, a, part, K, BACKWARD);
-        double *out = ws->acc + (size_t)ws->perm[s] * n;
-        for (unsigned q = 0; q < K; q++) out[sp->dim[q]] += BACKWARD ? a[q] : sp->h * a[q];
-    }
-}
 
 /* Chunk j of the current pass; part (b doubles, backward only) receives its kernel gradient. */
 static void run_chunk(const pass *ps, size_t j, double *part) {
     const size_t lo = j * ps->p->chunk;
     const size_t hi = lo + ps->p->chunk < ps->p->m ? lo + ps->p->chunk : ps->p->m;
-    const unsigned k = ps->sp->k;
     if (part) memset(part, 0, ps->p->b * sizeof(double));
-    /* Constant K: the per-pair loops unroll and stay in registers. */
-#define DPC_BODY(B)                                          \
-    switch (k) {                                             \
-    case 1: chunk_body(ps, lo, hi, part, 1, B); break;       \
-    case 2: chunk_body(ps, lo, hi, part, 2, B); break;       \
-    case 3: chunk_body(ps, lo, hi, part, 3, B); break;       \
-    case 4: chunk_body(ps, lo, hi, part, 4, B); break;       \
-    default: chunk_body(ps, lo, hi, part, k, B); break;      \
-    }
-    if (part) {
-        DPC_BODY(1)
-    } else {
-        DPC_BODY(0)
-    }
-#undef DPC_BODY
+    ps->p->chunk_fn(ps, lo, hi, part);
 }
 
 /* ---- threads -------------------------------------------------------------------------------- */

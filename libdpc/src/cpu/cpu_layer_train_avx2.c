@@ -1,0 +1,55 @@
+/* AVX2 + FMA pair loop of the training kernels: 4 doubles per vector. Compiled with -mavx2
+ * -mfma for this file only; chosen at run time when cpuid reports both (cpu_layer_train.c). */
+#include <immintrin.h>
+#include <stdint.h>
+
+#define W 4u
+typedef __m256d vd;
+typedef __m128i vx;
+typedef __m256d vm;
+
+#define V_SET1(x) _mm256_set1_pd(x)
+#define V_ZERO() _mm256_setzero_pd()
+#define V_LOADU(p) _mm256_loadu_pd(p)
+#define V_STORE(p, v) _mm256_storeu_pd(p, v)
+#define V_SUB(a, b) _mm256_sub_pd(a, b)
+#define V_MUL(a, b) _mm256_mul_pd(a, b)
+#define V_DIV(a, b) _mm256_div_pd(a, b)
+#define V_MIN(a, b) _mm256_min_pd(a, b)
+#define V_FMA(a, b, c) _mm256_fmadd_pd(a, b, c)
+#define V_SQRT(a) _mm256_sqrt_pd(a)
+#define V_ROUND(a) _mm256_round_pd(a, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC)
+#define V_TRUNC(a) _mm256_round_pd(a, _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC)
+#define V_CVTT(a) _mm256_cvttpd_epi32(a)
+#define V_GATHER(base, idx) _mm256_i32gather_pd(base, idx, 8)
+#define V_LT(a, b) _mm256_cmp_pd(a, b, _CMP_LT_OQ)
+#define V_GT(a, b) _mm256_cmp_pd(a, b, _CMP_GT_OQ)
+#define V_SEL(m, a, b) _mm256_blendv_pd(b, a, m)
+#define M_AND(a, b) _mm256_and_pd(a, b)
+#define M_BITS(m) ((unsigned)_mm256_movemask_pd(m))
+#define I_LOADU(p) _mm_loadu_si128((const __m128i *)(const void *)(p))
+#define I_STORE(p, v) _mm_storeu_si128((__m128i *)(void *)(p), v)
+
+/* Lane positions of the set bits of a 4-bit mask, packed to the front. */
+static const int32_t packed_lanes[16][4] = {
+    {0, 0, 0, 0}, {0, 0, 0, 0}, {1, 0, 0, 0}, {0, 1, 0, 0}, {2, 0, 0, 0}, {0, 2, 0, 0},
+    {1, 2, 0, 0}, {0, 1, 2, 0}, {3, 0, 0, 0}, {0, 3, 0, 0}, {1, 3, 0, 0}, {0, 1, 3, 0},
+    {2, 3, 0, 0}, {0, 2, 3, 0}, {1, 2, 3, 0}, {0, 1, 2, 3}};
+
+/* list[len ..] = j + (positions of the set bits); one 4-wide store, no branch. */
+static inline unsigned compress_append(uint32_t *list, unsigned len, uint32_t j, unsigned bits) {
+    const __m128i v = _mm_add_epi32(_mm_set1_epi32((int32_t)j), _mm_loadu_si128((const __m128i *)packed_lanes[bits]));
+    _mm_storeu_si128((__m128i *)(void *)(list + len), v);
+    return len + (unsigned)__builtin_popcount(bits);
+}
+#define COMPRESS_APPEND compress_append
+
+/* Lane sum in a fixed order: (l0 + l2) + (l1 + l3). */
+static inline double hsum(vd v) {
+    const __m128d s = _mm_add_pd(_mm256_castpd256_pd128(v), _mm256_extractf128_pd(v, 1));
+    return _mm_cvtsd_f64(_mm_add_sd(s, _mm_unpackhi_pd(s, s)));
+}
+#define V_HSUM hsum
+
+#define TRAIN_CHUNK_FN dpc_train_chunk_avx2
+#include "cpu/cpu_layer_train_simd.h"

@@ -1,0 +1,169 @@
+/* The vector pair loop of the training kernels, written once for cpu_layer_train_avx2.c and
+ * cpu_layer_train_avx512.c. The including file defines W (doubles per vector), the types vd
+ * (W doubles), vx (W int32) and vm (a lane mask), the primitives used below, and
+ * TRAIN_CHUNK_FN (the exported name).
+ *
+ * Per point: (1) filter, W candidates at a time from the packed columns, on d² against the
+ * r2_keep / e2_keep bounds, compacting the survivors' sorted positions into a list; (2) the pair
+ * math on the list, W pairs at a time (gathered coordinates), into per-lane partial sums that
+ * are reduced in a fixed order at the end of the point. The list order is the candidate order,
+ * so every sum has a fixed order that depends on the data only, never on threads. d² in (2) is
+ * computed by the same operations as in (1): the same bits, so the exact window test d ∈ (e, r)
+ * drops only pairs the filter bounds allow. Kernel-gradient terms are added to part in list
+ * order, lane by lane. */
+#ifndef TRAIN_CHUNK_FN
+#error "define the ISA primitives and TRAIN_CHUNK_FN before including cpu_layer_train_simd.h"
+#endif
+
+#include "cpu/cpu_grid.h"
+#include "cpu/cpu_layer_train_impl.h"
+
+#define ALWAYS_INLINE static inline __attribute__((always_inline))
+
+#define LIST_CAP 256u                   /* survivors per flush */
+#define LIST_SIZE (LIST_CAP + 2u * W)   /* room for a full-vector compress store and the padding */
+
+/* Toroidal difference, t − rint(t) for t = x_j − x_i ∈ (−1, 1). */
+ALWAYS_INLINE vd wrap(vd t) { return V_SUB(t, V_ROUND(t)); }
+
+/* Pair math for list[0, len) of point s (see the file comment); acc[q] are the lane sums. */
+ALWAYS_INLINE void pair_sums(const dpc_train_pass *ps, size_t s, uint32_t *list, unsigned len, vd *acc,
+                             double *part, const unsigned K, const int BACKWARD) {
+    const dpc_train_sub *sp = ps->sp;
+    const size_t st = ps->p->stride;
+    const double *P = ps->ws->P, *V = ps->ws->V, *w = sp->w;
+    const vd r = V_SET1(sp->r), e = V_SET1(sp->e), scale = V_SET1(sp->scale), one = V_SET1(1.0);
+    const vd umax = V_SET1((double)(ps->p->b - 1)), qmax = V_SET1((double)(ps->p->b - 2));
+    vd xi[DPC_MAX_DIMS], vi[DPC_MAX_DIMS];
+    for (unsigned q = 0; q < K; q++) {
+        xi[q] = V_SET1(P[q * st + s]);
+        vi[q] = BACKWARD ? V_SET1(V[q * st + s]) : V_ZERO();
+    }
+    /* Padding lanes are the point itself: d = 0 fails d > e >= 0. */
+    for (unsigned z = 0; z < W; z++) list[len + z] = (uint32_t)s;
+    for (unsigned z = 0; z < len; z += W) {
+        const vx idx = I_LOADU(list + z);
+        vd dl[DPC_MAX_DIMS];
+        vd d2 = V_ZERO();
+        for (unsigned q = 0; q < K; q++) {
+            dl[q] = wrap(V_SUB(V_GATHER(P + q * st, idx), xi[q]));
+            d2 = V_FMA(dl[q], dl[q], d2);
+        }
+        vd d = V_SQRT(d2);
+        const vm in = M_AND(V_GT(d, e), V_LT(d, r));
+        const unsigned bits = M_BITS(in);
+        if (!bits) continue;
+        d = V_SEL(in, d, one); /* finite 1/d and an in-range bin in the dead lanes */
+        const vd u = V_MIN(V_MUL(d, scale), umax);
+        const vd qf = V_MIN(V_TRUNC(u), qmax);
+        const vd f = V_SUB(u, qf);
+        const vx qb = V_CVTT(qf);
+        const vd w0 = V_SEL(in, V_GATHER(w, qb), V_ZERO());
+        const vd dw = V_SEL(in, V_SUB(V_GATHER(w + 1, qb), w0), V_ZERO());
+        const vd g = V_FMA(f, dw, w0);
+        const vd inv_d = V_DIV(one, d);
+        if (!BACKWARD) {
+            const vd c = V_MUL(g, inv_d);
+            for (unsigned q = 0; q < K; q++) acc[q] = V_FMA(c, dl[q], acc[q]);
+            continue;
+        }
+        /* J(δ)(v_j − v_i) = g'·(n̂·Δv) n̂ + (g/d)(Δv − (n̂·Δv) n̂), n̂ = δ/d. */
+        vd dv[DPC_MAX_DIMS];
+        vd ndv = V_ZERO(), nvi = V_ZERO();
+        for (unsigned q = 0; q < K; q++) {
+            dl[q] = V_MUL(dl[q], inv_d);
+            dv[q] = V_SUB(V_GATHER(V + q * st, idx), vi[q]);
+            ndv = V_FMA(dl[q], dv[q], ndv);
+            nvi = V_FMA(dl[q], vi[q], nvi);
+        }
+        const vd gd = V_MUL(g, inv_d);
+        const vd radial = V_MUL(V_SUB(V_MUL(dw, scale), gd), ndv);
+        for (unsigned q = 0; q < K; q++) acc[q] = V_FMA(radial, dl[q], V_FMA(gd, dv[q], acc[q]));
+        /* dg/dw[q] = 1 − f, dg/dw[q+1] = f; the pair's output sensitivity is n̂·v_i. */
+        double lo_t[W], hi_t[W];
+        int32_t qb_t[W];
+        V_STORE(lo_t, V_MUL(V_SUB(one, f), nvi));
+        V_STORE(hi_t, V_MUL(f, nvi));
+        I_STORE(qb_t, qb);
+        for (unsigned b = bits; b; b &= b - 1) {
+            const unsigned l = (unsigned)__builtin_ctz(b);
+            part[qb_t[l]] += lo_t[l];
+            part[qb_t[l] + 1] += hi_t[l];
+        }
+    }
+}
+
+ALWAYS_INLINE void chunk_body(const dpc_train_pass *ps, size_t lo, size_t hi, double *part, const unsigned K,
+                              const int BACKWARD) {
+    const dpc_train_plan *p = ps->p;
+    const dpc_train_sub *sp = ps->sp;
+    dpc_train_ws *ws = ps->ws;
+    const size_t m = p->m, n = p->n, st = p->stride;
+    const double *P = ws->P;
+    const vd r2_keep = V_SET1(sp->r2_keep), e2_keep = V_SET1(sp->e2_keep);
+    uint32_t ranges[2 * DPC_TRAIN_MAX_RANGES];
+    uint32_t list[LIST_SIZE];
+    unsigned nr = 1;
+    ranges[0] = 0;
+    ranges[1] = (uint32_t)m;
+    uint32_t cur = UINT32_MAX;
+    for (size_t s = lo; s < hi; s++) {
+        /* K <= 8: grids have k <= 4 (plan_grid); the bound lets the compiler see dpc_grid_ranges in bounds. */
+        if (K <= 8 && sp->grid && ws->cell[s] != cur) { /* a cell's consecutive points share ranges */
+            cur = ws->cell[s];
+            nr = dpc_grid_ranges(sp->k, sp->G, sp->R, ws->cell_start, cur, ranges);
+        }
+        vd xi[DPC_MAX_DIMS], acc[DPC_MAX_DIMS];
+        for (unsigned q = 0; q < K; q++) {
+            xi[q] = V_SET1(P[q * st + s]);
+            acc[q] = V_ZERO();
+        }
+        unsigned len = 0;
+        for (unsigned z = 0; z < nr; z++) {
+            const uint32_t je = ranges[2 * z + 1];
+            for (uint32_t j = ranges[2 * z]; j < je; j += W) {
+                /* Columns are readable W - 1 doubles past m; the lanes past je are masked. */
+                vd d2 = V_ZERO();
+                for (unsigned q = 0; q < K; q++) {
+                    const vd t = wrap(V_SUB(V_LOADU(P + q * st + j), xi[q]));
+                    d2 = V_FMA(t, t, d2);
+                }
+                unsigned bits = M_BITS(M_AND(V_LT(d2, r2_keep), V_GT(d2, e2_keep)));
+                if (je - j < W) bits &= (1u << (je - j)) - 1u;
+                len = COMPRESS_APPEND(list, len, j, bits);
+                if (len >= LIST_CAP) {
+                    pair_sums(ps, s, list, len, acc, part, K, BACKWARD);
+                    len = 0;
+                }
+            }
+        }
+        if (len) pair_sums(ps, s, list, len, acc, part, K, BACKWARD);
+        double *out = ws->acc + (size_t)ws->perm[s] * n;
+        for (unsigned q = 0; q < K; q++) {
+            const double a = V_HSUM(acc[q]);
+            out[sp->dim[q]] += BACKWARD ? a : sp->h * a;
+        }
+    }
+}
+
+void TRAIN_CHUNK_FN(const dpc_train_pass *ps, size_t lo, size_t hi, double *part) {
+    const unsigned k = ps->sp->k;
+    /* Constant K for the common subspace sizes: per-dimension vectors stay in registers. */
+#define DPC_BODY(B)                                          \
+    switch (k) {                                             \
+    case 1: chunk_body(ps, lo, hi, part, 1, B); break;       \
+    case 2: chunk_body(ps, lo, hi, part, 2, B); break;       \
+    case 3: chunk_body(ps, lo, hi, part, 3, B); break;       \
+    case 4: chunk_body(ps, lo, hi, part, 4, B); break;       \
+    case 5: chunk_body(ps, lo, hi, part, 5, B); break;       \
+    case 6: chunk_body(ps, lo, hi, part, 6, B); break;       \
+    case 10: chunk_body(ps, lo, hi, part, 10, B); break;     \
+    default: chunk_body(ps, lo, hi, part, k, B); break;      \
+    }
+    if (part) {
+        DPC_BODY(1)
+    } else {
+        DPC_BODY(0)
+    }
+#undef DPC_BODY
+}
