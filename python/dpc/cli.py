@@ -1,4 +1,4 @@
-"""The ``dpc`` command line: list, generate, analyze, compare.
+"""The ``dpc`` command line: list, generate, analyze, compare, dither.
 
 UTK-style short flags: -m model, -n points, -d dims, -s seed, -c sets, -i input, -o output.
 Errors print one line ``dpc: error: ...`` and exit with 2 (bad usage) or 1 (anything else);
@@ -396,6 +396,51 @@ def _compare_plots(results, out: Path, nu_max: float) -> None:
         ax.set_yticks([])
         ax.set_title(f"{r.label} (m={r.n_points})", fontsize=9)
     fig.savefig(out / "points.png", dpi=110, bbox_inches="tight")
+
+
+@cli.command("dither")
+@click.argument("image", type=click.Path(exists=True, dir_okay=False))
+@click.option("-m", "--model", default="dither-32", show_default=True,
+              help="Gridded model (bundled name or .onnx) whose points give the threshold mask.")
+@click.option("-s", "--seed", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Seed of the mask realisation.")
+@click.option("-o", "--output", required=True, type=click.Path(dir_okay=False, writable=True),
+              help="Dithered image (.png): black and white.")
+@click.option("--mask-output", type=click.Path(dir_okay=False, writable=True), default=None,
+              help="Also write the mask: .npy (values in (0, 1)) or .png (8-bit grey).")
+@click.option("--white-noise", is_flag=True,
+              help="Use a white-noise mask of the same size instead (for comparison).")
+def dither_cmd(image, model, seed, output, mask_output, white_noise):
+    """Ordered dithering of IMAGE with a blue-noise mask from a gridded model (tiled)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.image as mpimg
+
+    from .analysis import dither as D
+
+    if Path(output).suffix.lower() != ".png":
+        raise click.UsageError("the output image must be a .png file")
+    if mask_output is not None and Path(mask_output).suffix.lower() not in (".npy", ".png"):
+        raise click.UsageError("--mask-output must end in .npy or .png")
+    mdl = _load_model(model)
+    mask = D.model_mask(mdl, seed=seed)
+    if white_noise:
+        mask = D.rank_normalise(np.random.default_rng(seed).random(mask.shape))
+    try:
+        img = mpimg.imread(image)
+    except (OSError, SyntaxError, ValueError) as e:  # Pillow/libpng failures on bad files
+        raise InvalidArgumentError(f"cannot read image {image}: {e}") from e
+    out = D.dither(img, mask)
+    mpimg.imsave(output, out.astype(np.uint8) * 255, cmap="gray", vmin=0, vmax=255)
+    if mask_output is not None:
+        if mask_output.lower().endswith(".npy"):
+            np.save(mask_output, mask)
+        else:
+            mpimg.imsave(mask_output, mask, cmap="gray", vmin=0.0, vmax=1.0)
+    click.echo(f"wrote {output} ({out.shape[1]} x {out.shape[0]}, {out.mean():.3f} white) with a "
+               f"{mask.shape[1]} x {mask.shape[0]} mask from "
+               f"{'white noise' if white_noise else model}", err=True)
 
 
 # ---------------------------------------------------------------- entry point
