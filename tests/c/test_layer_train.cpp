@@ -1,10 +1,13 @@
 // The float64 training kernels of one filter layer (dpc_layer_forward / dpc_layer_backward) from
 // C: argument checking and limits (NULLs the Python bindings cannot pass), a two-point layer
 // worked out by hand (across the torus seam too), in-place calls, and bit-identical results for
-// any thread count on the chunk-parallel, set-parallel, all-pairs and many-subspace paths.
+// any thread count on the chunk-parallel, set-parallel, all-pairs and many-subspace paths, for
+// every ISA path (DPC_ISA); each vector path against the scalar one to 1e-12 relative on grid,
+// all-pairs (3-D .. 10-D), subspace, fixed-dimension and generic-size layers.
 // Public header dpc/dpc.h only. Gradients against finite differences: tests/python/test_layer_grad.py.
 #include "test_util.h"
 
+#include <cstdlib>
 #include <cstring>
 #include <random>
 #include <vector>
@@ -38,6 +41,18 @@ std::vector<double> uniform(size_t count, uint64_t seed, double lo = 0.0, double
     std::uniform_real_distribution<double> u(lo, hi);
     std::vector<double> v(count);
     for (double &x : v) x = u(gen);
+    return v;
+}
+
+// DPC_ISA for the scope (the training kernels read it on every call); restored to "" (auto).
+struct IsaScope {
+    explicit IsaScope(dpc_isa isa) { setenv("DPC_ISA", dpct::isa_name(isa).c_str(), 1); }
+    ~IsaScope() { setenv("DPC_ISA", "", 1); }
+};
+
+std::vector<dpc_isa> all_isas() {
+    std::vector<dpc_isa> v = {DPC_ISA_SCALAR};
+    for (dpc_isa isa : dpct::vector_isas()) v.push_back(isa);
     return v;
 }
 
@@ -188,11 +203,12 @@ TEST(LayerTrain, InPlaceAndZeroKernels) {
     EXPECT_EQ(0, std::memcmp(g.data(), gx.data(), total * sizeof(double)));
 }
 
-// Bits for threads 1, 3 and 0 (one per CPU) on each scheduling path.
+// Bits for threads 1, 3 and 0 (one per CPU) on each scheduling path, for every ISA path.
 TEST(LayerTrain, ThreadCountDoesNotChangeBits) {
     struct Case {
         Layer layer;
         size_t count, m;
+        bool vector_only = false; /* too slow for the scalar path, whose scheduling is covered above */
     };
     std::vector<uint64_t> many;
     std::vector<double> many_r;
@@ -203,8 +219,14 @@ TEST(LayerTrain, ThreadCountDoesNotChangeBits) {
         {Layer(3, {7, 4}, {2.0, 3.0}, 16, 1e-4, 1), 4, 700},   // sets over threads, a fixed dim
         {Layer(5, {31, 1}, {1.5, 3.0}, 8), 3, 400},             // 5-D: all pairs, generic K
         {Layer(7, many, many_r, 4), 2, 300},                    // 64 subspaces
+        {Layer(4, {15}, {2.0}, 32), 1, 9000, true},             // 4-D all pairs, chunks over threads
+        {Layer(10, {1023}, {1.0}, 32), 3, 1001},                // 10-D all pairs, m not a multiple of 8
     };
+    for (dpc_isa isa : all_isas())
     for (const Case &c : cases) {
+        if (c.vector_only && isa == DPC_ISA_SCALAR) continue;
+        SCOPED_TRACE(dpct::isa_name(isa));
+        const IsaScope scope(isa);
         const dpc_layer_desc d = c.layer.desc();
         const size_t n = d.dims, total = c.count * c.m * n, sb = (size_t)d.n_subspaces * d.bins;
         std::vector<double> w = uniform(sb, 7, -0.05, 0.05), x = uniform(total, 8), g = uniform(total, 9, -1, 1);
@@ -224,5 +246,127 @@ TEST(LayerTrain, ThreadCountDoesNotChangeBits) {
             EXPECT_EQ(0, std::memcmp(gx.data(), gx1.data(), total * sizeof(double))) << "dims " << n;
             EXPECT_EQ(0, std::memcmp(gk.data(), gk1.data(), sb * sizeof(double))) << "dims " << n;
         }
+    }
+}
+
+namespace {
+
+// Largest |a - b| over max |b|, where the values are displacements a = y - x on the torus (or
+// gradient terms): the scale is that of what the pairs contributed.
+double rel_err(const std::vector<double> &a, const std::vector<double> &b, const std::vector<double> &base,
+               bool torus) {
+    double err = 0.0, scale = 0.0;
+    for (size_t i = 0; i < a.size(); i++) {
+        double da = a[i] - base[i], db = b[i] - base[i];
+        if (torus) da -= std::rint(da), db -= std::rint(db);
+        err = std::max(err, std::fabs(da - db));
+        scale = std::max(scale, std::fabs(db));
+    }
+    return scale > 0.0 ? err / scale : err;
+}
+
+}  // namespace
+
+// Each vector path against the scalar path: forward displacements, grad_x pair terms and the
+// kernel gradient to 1e-12 relative, on grid and all-pairs layers of 1 .. 10 dimensions, several
+// subspaces, fixed dimensions, a generic subspace size (7), tails (m not a multiple of 8),
+// duplicate points with eps = 0, and points on the torus seam.
+TEST(LayerTrain, VectorPathsMatchScalar) {
+    const std::vector<dpc_isa> isas = dpct::vector_isas();
+    if (isas.empty()) GTEST_SKIP() << "no vector ISA on this CPU";
+    struct Case {
+        const char *name;
+        Layer layer;
+        size_t count, m;
+    };
+    const std::vector<Case> cases = {
+        {"2d_grid", Layer(2, {3}, {4.0}, 32), 2, 1024},
+        {"1d_grid", Layer(1, {1}, {3.0}, 16), 2, 999},
+        {"3d_grid", Layer(3, {7}, {2.5}, 32), 2, 1024},
+        {"3d_subspaces", Layer(3, {3, 5, 6, 4}, {2.0, 2.5, 3.0, 4.0}, 24), 2, 777},
+        {"4d_all_pairs", Layer(4, {15}, {2.0}, 32), 2, 1024},
+        {"5d_all_pairs", Layer(5, {31}, {2.0}, 32), 2, 701},
+        {"7d_generic", Layer(7, {127, 3}, {1.5, 3.0}, 20), 2, 513},
+        {"10d_all_pairs", Layer(10, {1023}, {1.0}, 32), 2, 1024},
+        {"10d_large_radius", Layer(10, {1023, 0x3e0}, {3.0, 2.0}, 32), 1, 333},
+        {"fixed_dims", Layer(4, {15, 12}, {2.0, 3.0}, 16, 1e-4, 3), 2, 600},
+        {"eps0_duplicates", Layer(3, {7}, {3.0}, 8, 0.0), 2, 400},
+    };
+    for (const Case &c : cases) {
+        SCOPED_TRACE(c.name);
+        const dpc_layer_desc d = c.layer.desc();
+        const size_t n = d.dims, total = c.count * c.m * n, sb = (size_t)d.n_subspaces * d.bins;
+        std::vector<double> w = uniform(sb, 17, -0.05, 0.05), x = uniform(total, 18), g = uniform(total, 19, -1, 1);
+        for (size_t i = 0; i < 6 && i < c.m; i++)  // the seam: near 0 and near 1 in every dimension
+            for (size_t k = 0; k < n; k++) x[i * n + k] = i % 2 ? 1.0 - 1e-9 * (double)(i + 1) : 1e-9 * (double)i;
+        for (size_t i = c.m / 2; i < c.m / 2 + 3; i++)  // duplicates: d = 0 is never a pair
+            for (size_t k = 0; k < n; k++) x[i * n + k] = x[(c.m / 3) * n + k];
+        std::vector<double> y0(total), gx0(total), gk0(sb);
+        {
+            const IsaScope scope(DPC_ISA_SCALAR);
+            ASSERT_EQ(dpc_layer_forward(&d, w.data(), c.count, c.m, x.data(), y0.data(), 1), DPC_OK) << dpc_last_error();
+            ASSERT_EQ(dpc_layer_backward(&d, w.data(), c.count, c.m, x.data(), g.data(), gx0.data(), gk0.data(), 1),
+                      DPC_OK);
+        }
+        ASSERT_GT(rel_err(x, y0, x, true), 0.0);
+        double moved = 0.0;
+        for (size_t i = 0; i < total; i++) moved = std::max(moved, std::fabs(std::remainder(y0[i] - x[i], 1.0)));
+        EXPECT_GT(moved, 1e-6) << "the layer barely moved the points: a vacuous comparison";
+        const std::vector<double> zero(sb, 0.0);
+        for (dpc_isa isa : isas) {
+            SCOPED_TRACE(dpct::isa_name(isa));
+            const IsaScope scope(isa);
+            std::vector<double> y(total), gx(total), gk(sb);
+            ASSERT_EQ(dpc_layer_forward(&d, w.data(), c.count, c.m, x.data(), y.data(), 2), DPC_OK) << dpc_last_error();
+            ASSERT_EQ(dpc_layer_backward(&d, w.data(), c.count, c.m, x.data(), g.data(), gx.data(), gk.data(), 2),
+                      DPC_OK);
+            // Displacements y - x, relative to the largest one.
+            std::vector<double> disp(total), disp0(total);
+            double scale = 0.0, err = 0.0;
+            for (size_t i = 0; i < total; i++) {
+                disp[i] = std::remainder(y[i] - x[i], 1.0);
+                disp0[i] = std::remainder(y0[i] - x[i], 1.0);
+                scale = std::max(scale, std::fabs(disp0[i]));
+                err = std::max(err, std::fabs(disp[i] - disp0[i]));
+            }
+            EXPECT_LE(err, 1e-12 * scale) << "forward";
+            EXPECT_LE(rel_err(gx, gx0, g, false), 1e-12) << "grad_x";
+            EXPECT_LE(rel_err(gk, gk0, zero, false), 1e-12) << "grad_kernels";
+            for (size_t i = 0; i < total; i++) {  // fixed dimensions never move, on any path
+                if (d.fixed >> (i % n) & 1) {
+                    ASSERT_EQ(y[i], x[i]);
+                }
+            }
+        }
+    }
+}
+
+// The vector paths are really taken (their lane sums round differently from the scalar
+// path somewhere in a large layer), and a bad DPC_ISA is refused as for the inference engine.
+TEST(LayerTrain, IsaSelection) {
+    const Layer L(4, {15}, {2.0}, 32);
+    const dpc_layer_desc d = L.desc();
+    const size_t m = 1024, total = m * 4;
+    std::vector<double> w = uniform(32, 21, -0.05, 0.05), x = uniform(total, 22), y0(total);
+    {
+        const IsaScope scope(DPC_ISA_SCALAR);
+        ASSERT_EQ(dpc_layer_forward(&d, w.data(), 1, m, x.data(), y0.data(), 1), DPC_OK);
+    }
+    for (dpc_isa isa : dpct::vector_isas()) {
+        const IsaScope scope(isa);
+        std::vector<double> y(total);
+        ASSERT_EQ(dpc_layer_forward(&d, w.data(), 1, m, x.data(), y.data(), 1), DPC_OK);
+        EXPECT_NE(0, std::memcmp(y.data(), y0.data(), total * sizeof(double))) << dpct::isa_name(isa);
+    }
+    setenv("DPC_ISA", "sse9", 1);
+    std::vector<double> y(total), gk(32);
+    expect_failure(dpc_layer_forward(&d, w.data(), 1, m, x.data(), y.data(), 1), DPC_ERROR_INVALID_ARGUMENT, "DPC_ISA");
+    expect_failure(dpc_layer_backward(&d, w.data(), 1, m, x.data(), x.data(), y.data(), gk.data(), 1),
+                   DPC_ERROR_INVALID_ARGUMENT, "DPC_ISA");
+    setenv("DPC_ISA", "", 1);
+    if (!dpct::cpu_has_avx512()) {
+        setenv("DPC_ISA", "avx512", 1);
+        expect_failure(dpc_layer_forward(&d, w.data(), 1, m, x.data(), y.data(), 1), DPC_ERROR_UNSUPPORTED, "AVX-512");
+        setenv("DPC_ISA", "", 1);
     }
 }
