@@ -1,0 +1,21 @@
+# Regenerates the SPIR-V header into OUT and fails unless it equals CHECKED_IN. Prints "dpc-skip:"
+# (a ctest skip, see vulkan_tests.cmake) when CHECKED_IN was written by another glslc version.
+execute_process(COMMAND "${GLSLC}" --version OUTPUT_VARIABLE version)
+string(REGEX MATCH "^[^\n]*" version "${version}")
+file(STRINGS "${CHECKED_IN}" first LIMIT_COUNT 1)
+if(NOT first MATCHES "with ${version}$")
+  message("dpc-skip: ${CHECKED_IN} was made by another glslc (${first}); this one is ${version}")
+  return()
+endif()
+get_filename_component(here "${CMAKE_CURRENT_LIST_DIR}" ABSOLUTE)
+execute_process(COMMAND ${CMAKE_COMMAND} -DGLSLC=${GLSLC} -DOUT=${OUT}
+                        -P ${here}/../../libdpc/src/vulkan/gen_spirv.cmake RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "regenerating the SPIR-V failed")
+endif()
+file(READ "${OUT}" fresh)
+file(READ "${CHECKED_IN}" kept)
+if(NOT fresh STREQUAL kept)
+  message(FATAL_ERROR "libdpc/src/vulkan/vk_spirv.h is stale: rebuild it with `cmake --build <dir> --target dpc_vulkan_shaders`")
+endif()
+message(STATUS "vk_spirv.h matches the shaders (${version})")
