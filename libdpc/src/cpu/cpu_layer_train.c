@@ -66,24 +66,29 @@ static void plan_grid(sub_plan *sp, size_t m) {
 
 /* The pair loop for the ISA the inference engine would pick (DPC_ISA, else the best of cpuid),
  * with the same errors for a bad DPC_ISA or a path the CPU lacks. */
-static dpc_status pick_chunk_fn(dpc_train_chunk_fn *fn) {
+static dpc_status pick_isa(plan *p) {
     dpc_cpu_engine e;
     const dpc_status st = dpc_cpu_engine_init(&e, DPC_ISA_AUTO, 1);
     if (st != DPC_OK) return st;
+    p->chunk_fn = dpc_train_chunk_scalar;
+    p->set_fn = NULL;
     switch (e.isa) {
 #if defined(DPC_HAVE_AVX2)
-    case DPC_ISA_AVX2: *fn = dpc_train_chunk_avx2; break;
-    case DPC_ISA_AVX512: *fn = dpc_train_chunk_avx512; break;
+    case DPC_ISA_AVX2: p->chunk_fn = dpc_train_chunk_avx2, p->set_fn = dpc_train_set_avx2; break;
+    case DPC_ISA_AVX512: p->chunk_fn = dpc_train_chunk_avx512, p->set_fn = dpc_train_set_avx512; break;
 #endif
-    default: *fn = dpc_train_chunk_scalar; break;
+    default: break;
     }
     return DPC_OK;
 }
 
 static dpc_status plan_init(plan *p, const dpc_train_layer *L, size_t m) {
     memset(p, 0, sizeof *p);
-    const dpc_status st = pick_chunk_fn(&p->chunk_fn);
+    const dpc_status st = pick_isa(p);
     if (st != DPC_OK) return st;
+    /* Unordered pairs need a whole set per worker: only sets that always run in set mode use
+     * them, whatever the thread count (run() picks set mode for every m below this). */
+    if (m >= SET_PARALLEL_BELOW) p->set_fn = NULL;
     p->m = m;
     p->stride = (m + DPC_TRAIN_PAD + 7) & ~(size_t)7;
     p->n = L->n;
@@ -140,6 +145,7 @@ static dpc_status plan_init(plan *p, const dpc_train_layer *L, size_t m) {
 static void wspace_free(wspace *w) {
     free(w->P);
     free(w->V);
+    free(w->A);
     free(w->acc);
     free(w->perm);
     free(w->cell);
@@ -159,6 +165,10 @@ static dpc_status wspace_init(wspace *w, const plan *p, int backward, size_t par
     w->cell = (uint32_t *)malloc(m * sizeof(uint32_t));
     w->cell_start = (uint32_t *)malloc((p->max_cells + 1) * sizeof(uint32_t));
     int ok = w->P && w->acc && w->perm && w->cell && w->cell_start;
+    if (p->set_fn) {
+        w->A = (double *)malloc(p->stride * kmax * sizeof(double));
+        ok = ok && w->A;
+    }
     if (backward) {
         w->V = (double *)calloc(p->stride * kmax, sizeof(double));
         w->gk = (double *)malloc((size_t)p->s * p->b * sizeof(double));
@@ -306,6 +316,12 @@ static void run_set_serial(const plan *p, wspace *ws, const double *x, const dou
         if (!p->sub[t].moves) continue;
         pass ps = {p, &p->sub[t], ws, gy};
         prepare_pass(&ps, x);
+        if (p->set_fn) {
+            if (gy) memset(ws->part, 0, p->b * sizeof(double));
+            p->set_fn(&ps, gy ? ws->part : NULL);
+            if (gy) add_into(ws->gk + (size_t)t * p->b, ws->part, p->b);
+            continue;
+        }
         for (size_t j = 0; j < p->n_chunks; j++) {
             run_chunk(&ps, j, gy ? ws->part : NULL);
             if (gy) add_into(ws->gk + (size_t)t * p->b, ws->part, p->b);

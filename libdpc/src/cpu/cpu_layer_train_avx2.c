@@ -52,4 +52,5 @@ static inline double hsum(vd v) {
 #define V_HSUM hsum
 
 #define TRAIN_CHUNK_FN dpc_train_chunk_avx2
+#define TRAIN_SET_FN dpc_train_set_avx2
 #include "cpu/cpu_layer_train_simd.h"

@@ -31,6 +31,10 @@ typedef struct dpc_train_pass dpc_train_pass;
  * (backward) the chunk's kernel gradient to part (b doubles, zeroed by the caller). */
 typedef void (*dpc_train_chunk_fn)(const dpc_train_pass *ps, size_t lo, size_t hi, double *part);
 
+/* The whole pass on one worker, each unordered pair once (vector paths; see cpu_layer_train_simd.h):
+ * sums go to ws->acc, the kernel gradient to part (zeroed by the caller). */
+typedef void (*dpc_train_set_fn)(const dpc_train_pass *ps, double *part);
+
 typedef struct dpc_train_plan {
     size_t m, n;
     unsigned s, b;
@@ -41,10 +45,12 @@ typedef struct dpc_train_plan {
     unsigned kmax;              /* largest k of a moving subspace */
     size_t stride;              /* doubles per packed column: m + DPC_TRAIN_PAD, rounded up to 8 */
     dpc_train_chunk_fn chunk_fn; /* the ISA's pair loop */
+    dpc_train_set_fn set_fn;     /* the ISA's unordered-pair pass; NULL: chunks only */
 } dpc_train_plan;
 
 typedef struct dpc_train_ws {
     double *P, *V;        /* kmax columns of `stride`: subspace coordinates / v, in sorted order */
+    double *A;            /* kmax columns of `stride`: per-point sums of set_fn, in sorted order */
     double *acc;          /* m · n: per-point sums over subspaces (caller's order) */
     uint32_t *perm;       /* sorted position -> point */
     uint32_t *cell;       /* sorted position -> cell id */
@@ -69,6 +75,8 @@ void dpc_train_chunk_scalar(const dpc_train_pass *ps, size_t lo, size_t hi, doub
 #if defined(DPC_HAVE_AVX2)
 void dpc_train_chunk_avx2(const dpc_train_pass *ps, size_t lo, size_t hi, double *part);
 void dpc_train_chunk_avx512(const dpc_train_pass *ps, size_t lo, size_t hi, double *part);
+void dpc_train_set_avx2(const dpc_train_pass *ps, double *part);
+void dpc_train_set_avx512(const dpc_train_pass *ps, double *part);
 #endif
 
 #endif

@@ -1,7 +1,7 @@
 /* The vector pair loop of the training kernels, written once for cpu_layer_train_avx2.c and
  * cpu_layer_train_avx512.c. The including file defines W (doubles per vector), the types vd
  * (W doubles), vx (W int32) and vm (a lane mask), the primitives used below, and
- * TRAIN_CHUNK_FN (the exported name).
+ * TRAIN_CHUNK_FN / TRAIN_SET_FN (the exported names).
  *
  * Per point: (1) filter, W candidates at a time from the packed columns, on d² against the
  * r2_keep / e2_keep bounds, compacting the survivors' sorted positions into a list; (2) the pair
@@ -11,9 +11,11 @@
  * computed by the same operations as in (1): the same bits, so the exact window test d ∈ (e, r)
  * drops only pairs the filter bounds allow. Kernel-gradient terms are added to part in list
  * order, lane by lane. */
-#ifndef TRAIN_CHUNK_FN
+#if !defined(TRAIN_CHUNK_FN) || !defined(TRAIN_SET_FN)
 #error "define the ISA primitives and TRAIN_CHUNK_FN before including cpu_layer_train_simd.h"
 #endif
+
+#include <string.h>
 
 #include "cpu/cpu_grid.h"
 #include "cpu/cpu_layer_train_impl.h"
@@ -144,6 +146,162 @@ ALWAYS_INLINE void chunk_body(const dpc_train_pass *ps, size_t lo, size_t hi, do
             out[sp->dim[q]] += BACKWARD ? a : sp->h * a;
         }
     }
+}
+
+/* ---- whole-set pass over unordered pairs ----------------------------------------------------
+ * Every pair term is odd in δ (forward g(d) δ/d; backward J(δ)(v_j − v_i) with J even), and the
+ * kernel-gradient terms of (i, j) and (j, i) share d: (1 − f)·n̂·(v_i − v_j) together. So each
+ * unordered pair is found once, from its lower sorted position s (candidates j > s only), and
+ * its term is added to s and subtracted from j. Every point's sum runs in ascending partner
+ * position (partners below it arrive while they are processed, those above while it is), one
+ * term at a time: a fixed order, but one that needs the whole set on one worker. */
+
+ALWAYS_INLINE void sym_pairs(const dpc_train_pass *ps, size_t s, uint32_t *list, unsigned len, double *a,
+                             double *part, const unsigned K, const int BACKWARD) {
+    const dpc_train_sub *sp = ps->sp;
+    const size_t st = ps->p->stride;
+    const double *P = ps->ws->P, *V = ps->ws->V, *w = sp->w;
+    double *A = ps->ws->A;
+    const vd r = V_SET1(sp->r), e = V_SET1(sp->e), scale = V_SET1(sp->scale), one = V_SET1(1.0);
+    const vd umax = V_SET1((double)(ps->p->b - 1)), qmax = V_SET1((double)(ps->p->b - 2));
+    vd xi[DPC_MAX_DIMS], vi[DPC_MAX_DIMS];
+    for (unsigned q = 0; q < K; q++) {
+        xi[q] = V_SET1(P[q * st + s]);
+        vi[q] = BACKWARD ? V_SET1(V[q * st + s]) : V_ZERO();
+    }
+    for (unsigned z = 0; z < W; z++) list[len + z] = (uint32_t)s; /* d = 0: never a pair */
+    double t[DPC_MAX_DIMS * W];
+    for (unsigned z = 0; z < len; z += W) {
+        const vx idx = I_LOADU(list + z);
+        vd dl[DPC_MAX_DIMS];
+        vd d2 = V_ZERO();
+        for (unsigned q = 0; q < K; q++) {
+            dl[q] = wrap(V_SUB(V_GATHER(P + q * st, idx), xi[q]));
+            d2 = V_FMA(dl[q], dl[q], d2);
+        }
+        vd d = V_SQRT(d2);
+        const vm in = M_AND(V_GT(d, e), V_LT(d, r));
+        const unsigned bits = M_BITS(in);
+        if (!bits) continue;
+        d = V_SEL(in, d, one);
+        const vd u = V_MIN(V_MUL(d, scale), umax);
+        const vd qf = V_MIN(V_TRUNC(u), qmax);
+        const vd f = V_SUB(u, qf);
+        const vx qb = V_CVTT(qf);
+        const vd w0 = V_GATHER(w, qb);
+        const vd dw = V_SUB(V_GATHER(w + 1, qb), w0);
+        const vd g = V_FMA(f, dw, w0);
+        const vd inv_d = V_DIV(one, d);
+        double lo_t[W], hi_t[W];
+        int32_t qb_t[W];
+        if (!BACKWARD) {
+            const vd c = V_MUL(g, inv_d);
+            for (unsigned q = 0; q < K; q++) V_STORE(t + q * W, V_MUL(c, dl[q]));
+        } else {
+            vd dv[DPC_MAX_DIMS];
+            vd ndv = V_ZERO();
+            for (unsigned q = 0; q < K; q++) {
+                dl[q] = V_MUL(dl[q], inv_d);
+                dv[q] = V_SUB(V_GATHER(V + q * st, idx), vi[q]);
+                ndv = V_FMA(dl[q], dv[q], ndv);
+            }
+            const vd gd = V_MUL(g, inv_d);
+            const vd radial = V_MUL(V_SUB(V_MUL(dw, scale), gd), ndv);
+            for (unsigned q = 0; q < K; q++) V_STORE(t + q * W, V_FMA(radial, dl[q], V_MUL(gd, dv[q])));
+            /* n̂·(v_i − v_j) = −n̂·Δv */
+            V_STORE(lo_t, V_MUL(V_SUB(f, one), ndv));
+            V_STORE(hi_t, V_MUL(f, V_SUB(V_ZERO(), ndv)));
+            I_STORE(qb_t, qb);
+        }
+        for (unsigned b = bits; b; b &= b - 1) {
+            const unsigned l = (unsigned)__builtin_ctz(b);
+            const size_t j = list[z + l];
+            for (unsigned q = 0; q < K; q++) {
+                a[q] += t[q * W + l];
+                A[q * st + j] -= t[q * W + l];
+            }
+            if (BACKWARD) {
+                part[qb_t[l]] += lo_t[l];
+                part[qb_t[l] + 1] += hi_t[l];
+            }
+        }
+    }
+}
+
+ALWAYS_INLINE void set_body(const dpc_train_pass *ps, double *part, const unsigned K, const int BACKWARD) {
+    const dpc_train_plan *p = ps->p;
+    const dpc_train_sub *sp = ps->sp;
+    dpc_train_ws *ws = ps->ws;
+    const size_t m = p->m, n = p->n, st = p->stride;
+    const double *P = ws->P;
+    double *A = ws->A;
+    const vd r2_keep = V_SET1(sp->r2_keep), e2_keep = V_SET1(sp->e2_keep);
+    uint32_t ranges[2 * DPC_TRAIN_MAX_RANGES];
+    uint32_t list[LIST_SIZE];
+    unsigned nr = 1;
+    ranges[0] = 0;
+    ranges[1] = (uint32_t)m;
+    uint32_t cur = UINT32_MAX;
+    for (unsigned q = 0; q < K; q++) memset(A + q * st, 0, m * sizeof(double));
+    for (size_t s = 0; s < m; s++) {
+        if (K <= 8 && sp->grid && ws->cell[s] != cur) { /* see chunk_body */
+            cur = ws->cell[s];
+            nr = dpc_grid_ranges(sp->k, sp->G, sp->R, ws->cell_start, cur, ranges);
+        }
+        vd xi[DPC_MAX_DIMS];
+        double a[DPC_MAX_DIMS];
+        for (unsigned q = 0; q < K; q++) {
+            xi[q] = V_SET1(P[q * st + s]);
+            a[q] = A[q * st + s]; /* the terms of partners below s, in ascending order */
+        }
+        unsigned len = 0;
+        for (unsigned z = 0; z < nr; z++) {
+            const uint32_t je = ranges[2 * z + 1];
+            uint32_t j = ranges[2 * z];
+            if (j <= s) j = (uint32_t)s + 1;
+            for (; j < je; j += W) {
+                vd d2 = V_ZERO();
+                for (unsigned q = 0; q < K; q++) {
+                    const vd tq = wrap(V_SUB(V_LOADU(P + q * st + j), xi[q]));
+                    d2 = V_FMA(tq, tq, d2);
+                }
+                unsigned bits = M_BITS(M_AND(V_LT(d2, r2_keep), V_GT(d2, e2_keep)));
+                if (je - j < W) bits &= (1u << (je - j)) - 1u;
+                len = COMPRESS_APPEND(list, len, j, bits);
+                if (len >= LIST_CAP) {
+                    sym_pairs(ps, s, list, len, a, part, K, BACKWARD);
+                    len = 0;
+                }
+            }
+        }
+        if (len) sym_pairs(ps, s, list, len, a, part, K, BACKWARD);
+        for (unsigned q = 0; q < K; q++) A[q * st + s] = a[q];
+    }
+    for (size_t s = 0; s < m; s++) {
+        double *out = ws->acc + (size_t)ws->perm[s] * n;
+        for (unsigned q = 0; q < K; q++) out[sp->dim[q]] += BACKWARD ? A[q * st + s] : sp->h * A[q * st + s];
+    }
+}
+
+void TRAIN_SET_FN(const dpc_train_pass *ps, double *part) {
+    const unsigned k = ps->sp->k;
+#define DPC_BODY(B)                                    \
+    switch (k) {                                       \
+    case 1: set_body(ps, part, 1, B); break;           \
+    case 2: set_body(ps, part, 2, B); break;           \
+    case 3: set_body(ps, part, 3, B); break;           \
+    case 4: set_body(ps, part, 4, B); break;           \
+    case 5: set_body(ps, part, 5, B); break;           \
+    case 6: set_body(ps, part, 6, B); break;           \
+    case 10: set_body(ps, part, 10, B); break;         \
+    default: set_body(ps, part, k, B); break;          \
+    }
+    if (part) {
+        DPC_BODY(1)
+    } else {
+        DPC_BODY(0)
+    }
+#undef DPC_BODY
 }
 
 void TRAIN_CHUNK_FN(const dpc_train_pass *ps, size_t lo, size_t hi, double *part) {
