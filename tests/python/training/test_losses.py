@@ -236,3 +236,28 @@ def test_2d_spectrum_files_radially_average_to_the_radial_files(name):
     rad /= torch.bincount(idx[ok], minlength=K + 1)
     tgt = T.radial_target(name, 1024, 2, nu_max=4.0)[: K + 1]
     assert (rad - tgt)[1:].abs().max() < 1e-6
+
+
+def test_radial_target_sources_and_2d_spectrum_radials():
+    import numpy as np
+    from dpc_train import targets as T
+
+    step_file = T.radial_target("step", 1024, 2, nu_max=4.0, source="file")
+    raw = T.load_radial_file("step", 2, 1024)
+    assert torch.equal(step_file, torch.from_numpy(raw[:len(step_file)]))
+    assert not torch.equal(step_file, T.radial_target("step", 1024, 2, nu_max=4.0))  # analytic ν0 = 0.8
+    with pytest.raises(T.LossError):
+        T.radial_target("bnot", 1024, 2, source="analytic")
+    with pytest.raises(T.LossError):
+        T.radial_target("bnot", 1024, 2, source="nope")
+    # ring means of the stored 2-D spectrum, by an independent numpy loop
+    g = T.spectrum2d_radial("pink", 1024, nu_max=1.0)
+    a = np.load(T.data_dir() / "spectra" / "pink-powspec-d2-n1024.npy").astype(np.float64)
+    c = a.shape[0] // 2
+    for b in (1, 7, 20, len(g) - 1):
+        vals = [a[c + i, c + j] for i in range(-b - 1, b + 2) for j in range(-b - 1, b + 2)
+                if b <= np.hypot(i, j) < b + 1]
+        assert abs(float(g[b]) - np.mean(vals)) < 1e-9
+    assert g[0] == 0
+    with pytest.raises(T.LossError):
+        T.spectrum2d_radial("green", 1024, nu_max=4.0)  # stored only to ν ≈ 1.97
