@@ -8,6 +8,9 @@
   bin edges), seam points included; torch.autograd.gradcheck on a Function wrapping the bindings;
 * bit-identical results for 1 and 4 threads (chunk-parallel and set-parallel paths), batches equal
   to per-set calls;
+* every ISA path (DPC_ISA = scalar, avx2, avx512 where the CPU has them) on its own against the
+  reference and finite differences, and each vector path against the scalar one to 1e-12 relative
+  (2-D grid, 3-D grid, 4-D and 10-D all pairs, subspaces, fixed dimensions);
 * every bad input raises a typed dpc.errors exception.
 """
 
@@ -19,11 +22,20 @@ import numpy as np
 import pytest
 
 import reference_cascade as rc
+from cpu_isa import VECTOR_ISAS
 
 dpc = pytest.importorskip("dpc")
 from dpc import _core, errors  # noqa: E402
 
 EPS = 1e-4
+ISAS = ["scalar"] + VECTOR_ISAS
+
+
+@pytest.fixture(params=ISAS)
+def isa(request, monkeypatch):
+    """Run the test on one ISA path (the kernels read DPC_ISA on every call)."""
+    monkeypatch.setenv("DPC_ISA", request.param)
+    return request.param
 
 # name: (n, subspaces, radius, fixed, grid shape of the fixed dims or None, m)
 LAYERS = {
@@ -68,7 +80,7 @@ def run_ref(x, w, subspaces, radius, eps, fixed):
 
 
 @pytest.mark.parametrize("name", sorted(LAYERS))
-def test_forward_matches_reference(name):
+def test_forward_matches_reference(name, isa):
     n, subs, rad, fixed, grid, m = LAYERS[name]
     rng = np.random.default_rng(sorted(LAYERS).index(name))
     x = seam_points(rng, m, n, grid)
@@ -157,7 +169,7 @@ FD_CASES = {
 
 
 @pytest.mark.parametrize("name", sorted(FD_CASES))
-def test_backward_matches_finite_differences(name):
+def test_backward_matches_finite_differences(name, isa):
     n, subs, rad, fixed, grid, m, b = FD_CASES[name]
     step = 1e-6
     x, rng = smooth_points(n, m, subs, rad, fixed, b, margin=20 * step, grid=grid)
@@ -270,7 +282,7 @@ def _both(x, w, subs, rad, fixed, g, threads):
     ((2, 9000, 3), [0b011, 0b101, 0b110], [2.0, 2.0, 2.0]),  # fewer sets than threads, big sets
     ((5, 1500, 3), [0b111, 0b100], [2.0, 3.0]),        # sets across threads
 ])
-def test_thread_count_does_not_change_bits(shape, subs, rad):
+def test_thread_count_does_not_change_bits(shape, subs, rad, isa):
     rng = np.random.default_rng(11)
     x = rng.random(shape)
     w = kernels_for(rng, len(subs), 32)
@@ -280,6 +292,58 @@ def test_thread_count_does_not_change_bits(shape, subs, rad):
         other = _both(x, w, subs, rad, 0, g, threads)
         for a, b in zip(one, other):
             assert np.array_equal(_bits(a), _bits(b)), f"threads={threads}"
+
+
+@pytest.mark.parametrize("shape,subs,rad,fixed", [
+    ((3, 1024, 4), [0b1111], [2.0], 0),                 # 4-D all pairs
+    ((2, 700, 10), [0b1111111111, 0b11], [1.0, 3.0], 0),  # 10-D all pairs + a 2-D grid subspace
+    ((2, 1500, 3), [0b111, 0b100], [2.5, 3.0], 0b001),  # 3-D grid, a fixed dimension
+])
+def test_vector_thread_count_does_not_change_bits(shape, subs, rad, fixed, monkeypatch):
+    rng = np.random.default_rng(13)
+    x = rng.random(shape)
+    w = kernels_for(rng, len(subs), 32)
+    g = rng.normal(size=shape)
+    for isa_name in VECTOR_ISAS:
+        monkeypatch.setenv("DPC_ISA", isa_name)
+        one = _both(x, w, subs, rad, fixed, g, 1)
+        for threads in (2, 3, 0):
+            other = _both(x, w, subs, rad, fixed, g, threads)
+            for a, b in zip(one, other):
+                assert np.array_equal(_bits(a), _bits(b)), f"{isa_name} threads={threads}"
+
+
+VECTOR_CASES = {
+    # name: (n, subspaces, radius, fixed, grid shape of the fixed dims or None, count, m)
+    "2d_grid": (2, [0b11], [4.0], 0, None, 2, 1024),
+    "3d_grid": (3, [0b111], [2.5], 0, None, 2, 1024),
+    "4d_all_pairs": (4, [0b1111], [2.0], 0, None, 2, 1024),
+    "10d_all_pairs": (10, [(1 << 10) - 1], [1.0], 0, None, 2, 1024),
+    "subspaces": (3, [0b011, 0b101, 0b110, 0b111], [2.5, 3.0, 2.0, 2.0], 0, None, 2, 999),
+    "gridded": (3, [0b111, 0b100, 0b011], [2.0, 3.0, 1.5], 0b011, (16, 16), 1, 256),
+}
+
+
+@pytest.mark.skipif(not VECTOR_ISAS, reason="no vector ISA on this CPU")
+@pytest.mark.parametrize("name", sorted(VECTOR_CASES))
+def test_vector_paths_match_scalar(name, monkeypatch):
+    n, subs, rad, fixed, grid, count, m = VECTOR_CASES[name]
+    rng = np.random.default_rng(sorted(VECTOR_CASES).index(name) + 40)
+    x = np.stack([seam_points(rng, m, n, grid) for _ in range(count)])
+    w = kernels_for(rng, len(subs), 32)
+    g = rng.normal(size=x.shape)
+    monkeypatch.setenv("DPC_ISA", "scalar")
+    y0, gx0, gk0 = _both(x, w, subs, rad, fixed, g, 1)
+    disp0 = rc.torus_diff(y0, x)
+    assert disp0.max() > 1e-4, "the layer barely moves the points: a vacuous comparison"
+    for isa_name in VECTOR_ISAS:
+        monkeypatch.setenv("DPC_ISA", isa_name)
+        y, gx, gk = _both(x, w, subs, rad, fixed, g, 2)
+        d = y - y0
+        d -= np.rint(d)
+        assert np.abs(d).max() <= 1e-12 * disp0.max(), f"{isa_name}: forward"
+        assert np.abs(gx - gx0).max() <= 1e-12 * np.abs(gx0 - g).max(), f"{isa_name}: grad_x"
+        assert np.abs(gk - gk0).max() <= 1e-12 * np.abs(gk0).max(), f"{isa_name}: grad_kernels"
 
 
 def test_batch_equals_sets():
