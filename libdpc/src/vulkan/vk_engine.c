@@ -20,8 +20,9 @@
 #include "vulkan/vk_spirv.h"
 
 /* Pipelines. */
-enum { P_CELLS, P_SCAN_REDUCE, P_SCAN_PARTIALS, P_SCAN_DOWN, P_SCATTER, P_CELLSORT, P_GRID_SUM,
-       P_PAIRS4, P_PAIRS16, P_PAIRS64, P_APPLY, P_COUNT };
+enum { P_CELLS, P_SCAN_REDUCE, P_SCAN_PARTIALS, P_SCAN_DOWN, P_SCATTER, P_CELLSORT, P_GRID_SUM, P_APPLY,
+       P_PAIRS, /* + ceil(k / 4) - 1: one all-pairs variant per vec4 count, 1 .. 16 */
+       P_COUNT = P_PAIRS + DPC_MAX_DIMS / 4 };
 /* Storage buffer bindings (shaders/common.glsl). */
 enum { B_X, B_DELTA, B_CELL_OF, B_COUNTS, B_STARTS, B_SORTED, B_COORDS, B_TABLES, B_PARTIALS, B_COUNT };
 
@@ -325,14 +326,15 @@ static dpc_status create_layout(dpc_vk_engine *e) {
     return DPC_OK;
 }
 
-static dpc_status create_pipeline(dpc_vk_engine *e, const uint32_t *code, size_t bytes, uint32_t kmax, VkPipeline *out) {
+/* spec: the value of specialization constant 0 (all-pairs: vec4s per point), 0 for none. */
+static dpc_status create_pipeline(dpc_vk_engine *e, const uint32_t *code, size_t bytes, uint32_t spec_value, VkPipeline *out) {
     VkShaderModuleCreateInfo mi = {VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO, NULL, 0, bytes, code};
     VkShaderModule module;
     VK_TRY(e->fn.vkCreateShaderModule(e->device, &mi, NULL, &module), "vkCreateShaderModule");
     VkSpecializationMapEntry entry = {0, 0, sizeof(uint32_t)};
-    VkSpecializationInfo spec = {1, &entry, sizeof kmax, &kmax};
+    VkSpecializationInfo spec = {1, &entry, sizeof spec_value, &spec_value};
     VkPipelineShaderStageCreateInfo stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, NULL, 0,
-                                             VK_SHADER_STAGE_COMPUTE_BIT, module, "main", kmax ? &spec : NULL};
+                                             VK_SHADER_STAGE_COMPUTE_BIT, module, "main", spec_value ? &spec : NULL};
     VkComputePipelineCreateInfo ci = {VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO, NULL, 0, stage, e->layout,
                                       VK_NULL_HANDLE, -1};
     VkResult r = e->fn.vkCreateComputePipelines(e->device, VK_NULL_HANDLE, 1, &ci, NULL, out);
@@ -345,36 +347,33 @@ static dpc_status create_pipeline(dpc_vk_engine *e, const uint32_t *code, size_t
 }
 
 static dpc_status create_pipelines(dpc_vk_engine *e, const dpc_cascade *c) {
-    struct {
+    static const struct {
         int id;
         const uint32_t *code;
         size_t bytes;
-        uint32_t kmax;
     } list[] = {
-        {P_CELLS, dpc_spv_cells, sizeof dpc_spv_cells, 0},
-        {P_SCAN_REDUCE, dpc_spv_scan_reduce, sizeof dpc_spv_scan_reduce, 0},
-        {P_SCAN_PARTIALS, dpc_spv_scan_partials, sizeof dpc_spv_scan_partials, 0},
-        {P_SCAN_DOWN, dpc_spv_scan_down, sizeof dpc_spv_scan_down, 0},
-        {P_SCATTER, dpc_spv_scatter, sizeof dpc_spv_scatter, 0},
-        {P_CELLSORT, dpc_spv_cellsort, sizeof dpc_spv_cellsort, 0},
-        {P_GRID_SUM, dpc_spv_grid_sum, sizeof dpc_spv_grid_sum, 0},
-        {P_PAIRS4, dpc_spv_pairs, sizeof dpc_spv_pairs, 4},
-        {P_PAIRS16, dpc_spv_pairs, sizeof dpc_spv_pairs, 16},
-        {P_PAIRS64, dpc_spv_pairs, sizeof dpc_spv_pairs, 64},
-        {P_APPLY, dpc_spv_apply, sizeof dpc_spv_apply, 0},
+        {P_CELLS, dpc_spv_cells, sizeof dpc_spv_cells},
+        {P_SCAN_REDUCE, dpc_spv_scan_reduce, sizeof dpc_spv_scan_reduce},
+        {P_SCAN_PARTIALS, dpc_spv_scan_partials, sizeof dpc_spv_scan_partials},
+        {P_SCAN_DOWN, dpc_spv_scan_down, sizeof dpc_spv_scan_down},
+        {P_SCATTER, dpc_spv_scatter, sizeof dpc_spv_scatter},
+        {P_CELLSORT, dpc_spv_cellsort, sizeof dpc_spv_cellsort},
+        {P_GRID_SUM, dpc_spv_grid_sum, sizeof dpc_spv_grid_sum},
+        {P_APPLY, dpc_spv_apply, sizeof dpc_spv_apply},
     };
-    /* The wider all-pairs variants only where the model has subspaces that need them. */
-    unsigned kmax = 0;
-    for (uint32_t l = 0; l < c->n_layers; l++)
-        for (uint32_t t = 0; t < c->layers[l].n_sub; t++) {
-            unsigned k = (unsigned)__builtin_popcountll(c->layers[l].masks[t]);
-            if (k > kmax) kmax = k;
-        }
     for (size_t i = 0; i < sizeof list / sizeof list[0]; i++) {
-        if ((list[i].id == P_PAIRS16 && kmax <= 4) || (list[i].id == P_PAIRS64 && kmax <= 16)) continue;
-        dpc_status st = create_pipeline(e, list[i].code, list[i].bytes, list[i].kmax, &e->pipe[list[i].id]);
+        dpc_status st = create_pipeline(e, list[i].code, list[i].bytes, 0, &e->pipe[list[i].id]);
         if (st != DPC_OK) return st;
     }
+    /* All-pairs variants for the subspace sizes the model has (any subspace may need all pairs:
+     * few points, or a radius near the domain size). */
+    for (uint32_t l = 0; l < c->n_layers; l++)
+        for (uint32_t t = 0; t < c->layers[l].n_sub; t++) {
+            const unsigned nv4 = ((unsigned)__builtin_popcountll(c->layers[l].masks[t]) + 3) / 4;
+            if (e->pipe[P_PAIRS + nv4 - 1]) continue;
+            dpc_status st = create_pipeline(e, dpc_spv_pairs, sizeof dpc_spv_pairs, nv4, &e->pipe[P_PAIRS + nv4 - 1]);
+            if (st != DPC_OK) return st;
+        }
     return DPC_OK;
 }
 
@@ -657,8 +656,7 @@ static void record_layer(dpc_vk_engine *e, const dpc_cascade *c, uint32_t l, siz
             dispatch(e, P_CELLSORT, &p, groups(p.cells, 128, e->max_groups_x), sets);
             dispatch(e, P_GRID_SUM, &p, gx_points, sets);
         } else {
-            const int pipe = k <= 4 ? P_PAIRS4 : k <= 16 ? P_PAIRS16 : P_PAIRS64;
-            dispatch(e, pipe, &p, groups(m, 64, e->max_groups_x), sets);
+            dispatch(e, P_PAIRS + (int)(k + 3) / 4 - 1, &p, groups(m, 64, e->max_groups_x), sets);
         }
         moved = 1;
     }

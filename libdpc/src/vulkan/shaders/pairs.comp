@@ -2,14 +2,15 @@
 #extension GL_GOOGLE_include_directive : require
 // All-pairs filter sum for subspaces where a grid does not pay (few points, more than 4
 // dimensions, radius near the domain size): each workgroup holds 64 points and streams every
-// point of the set through shared memory in tiles. KMAX (a specialization constant: 4, 16 or
-// 64) bounds the subspace dimensions so per-point arrays stay small.
+// point of the set through shared memory in tiles. Coordinates are packed in NV4 vec4s per point
+// (a specialization constant, ceil(k / 4); unused lanes are 0 and contribute nothing), so the
+// per-point loops have constant trip counts and the arrays stay in registers.
 #include "common.glsl"
 layout(local_size_x = 64) in;
-layout(constant_id = 0) const uint KMAX = 4u;
+layout(constant_id = 0) const uint NV4 = 1u;
 
-#define TILE_FLOATS 2048u
-shared float tile[TILE_FLOATS];
+#define TILE_VEC4 512u
+shared vec4 tile[TILE_VEC4];
 shared uint sdim[64];
 
 void main() {
@@ -23,31 +24,36 @@ void main() {
         }
     }
     barrier();
-    const uint per_tile = TILE_FLOATS / k;
+    const uint per_tile = TILE_VEC4 / NV4, lanes = 4u * NV4;
     const uint blocks = (pc.m + 63u) / 64u;
     for (uint blk = gl_WorkGroupID.x; blk < blocks; blk += gl_NumWorkGroups.x) {
         const uint i = blk * 64u + lid;
         const bool live = i < pc.m;
-        float xi[KMAX], sum[KMAX];
-        for (uint q = 0u; q < k; q++) {
-            xi[q] = live ? x[(pbase + i) * pc.n + sdim[q]] : 0.0;
-            sum[q] = 0.0;
+        vec4 xi[NV4], sum[NV4], t[NV4];
+        for (uint c = 0u; c < NV4; c++) {
+            vec4 v = vec4(0.0);
+            for (uint l = 0u; l < 4u; l++) {
+                const uint q = 4u * c + l;
+                if (live && q < k) v[l] = x[(pbase + i) * pc.n + sdim[q]];
+            }
+            xi[c] = v;
+            sum[c] = vec4(0.0);
         }
         for (uint j0 = 0u; j0 < pc.m; j0 += per_tile) {
             const uint cnt = min(per_tile, pc.m - j0);
             barrier(); // the previous tile has been read
-            for (uint e = lid; e < cnt * k; e += 64u) {
-                const uint p = e / k, q = e - p * k;
-                tile[e] = x[(pbase + j0 + p) * pc.n + sdim[q]];
+            for (uint e = lid; e < cnt * lanes; e += 64u) {
+                const uint p = e / lanes, q = e - p * lanes;
+                tile[e >> 2u][e & 3u] = q < k ? x[(pbase + j0 + p) * pc.n + sdim[q]] : 0.0;
             }
             barrier();
             if (!live) continue;
             for (uint p = 0u; p < cnt; p++) {
                 float d2 = 0.0;
-                for (uint q = 0u; q < k; q++) {
-                    float t = tile[p * k + q] - xi[q];
-                    t -= roundEven(t);
-                    d2 += t * t;
+                for (uint c = 0u; c < NV4; c++) {
+                    t[c] = tile[p * NV4 + c] - xi[c];
+                    t[c] -= roundEven(t[c]); // minimum-image toroidal difference
+                    d2 += dot(t[c], t[c]);
                 }
                 const float d = sqrt(d2);
                 if (!(d > pc.cutoff && d < pc.radius)) continue;
@@ -55,14 +61,14 @@ void main() {
                 const int b = min(int(u), pc.qmax);
                 const float f = u - float(b);
                 const float coef = (tables[pc.w_off + uint(b)] + f * tables[pc.dw_off + uint(b)]) / d;
-                for (uint q = 0u; q < k; q++) {
-                    float t = tile[p * k + q] - xi[q];
-                    t -= roundEven(t);
-                    sum[q] += coef * t;
-                }
+                for (uint c = 0u; c < NV4; c++) sum[c] += coef * t[c];
             }
         }
         if (live)
-            for (uint q = 0u; q < k; q++) delta[(pbase + i) * pc.n + sdim[q]] += pc.h * sum[q];
+            for (uint c = 0u; c < NV4; c++)
+                for (uint l = 0u; l < 4u; l++) {
+                    const uint q = 4u * c + l;
+                    if (q < k) delta[(pbase + i) * pc.n + sdim[q]] += pc.h * sum[c][l];
+                }
     }
 }
