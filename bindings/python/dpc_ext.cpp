@@ -36,13 +36,15 @@ void call(F &&f) {
 
 class Model {
   public:
-    Model(const std::string &path, int isa, unsigned threads) {
+    Model(const std::string &path, int isa, unsigned threads, int backend) {
         dpc_load_options options;
         dpc_load_options_init(&options);
         options.isa = static_cast<dpc_isa>(isa);
         options.threads = threads;
+        options.backend = static_cast<dpc_backend>(backend);
         call([&] { return dpc_model_load_file(path.c_str(), &options, &model_); });
         call([&] { return dpc_model_get_info(model_, &info_); });
+        call([&] { return dpc_model_get_backend(model_, &backend_); });
     }
     ~Model() { dpc_model_free(model_); }
     Model(const Model &) = delete;
@@ -62,6 +64,8 @@ class Model {
         d["grid_shape"] = shape;
         d["isa"] = static_cast<int>(info_.isa);
         d["threads"] = info_.threads;
+        d["backend"] = static_cast<int>(backend_);
+        d["device"] = std::string(dpc_model_device(model_));
         return d;
     }
 
@@ -103,6 +107,7 @@ class Model {
   private:
     dpc_model *model_ = nullptr;
     dpc_model_info info_{};
+    dpc_backend backend_ = DPC_BACKEND_CPU;
 };
 
 py::array_t<float> uniform(uint64_t seed, size_t m, size_t n) {
@@ -213,7 +218,8 @@ PYBIND11_MODULE(_core, mod) {
     mod.attr("__version__") = dpc_version_string();
     mod.attr("FORMAT_VERSION") = DPC_FORMAT_VERSION;
     py::class_<Model>(mod, "Model")
-        .def(py::init<const std::string &, int, unsigned>(), py::arg("path"), py::arg("isa"), py::arg("threads"))
+        .def(py::init<const std::string &, int, unsigned, int>(), py::arg("path"), py::arg("isa"), py::arg("threads"),
+             py::arg("backend"))
         .def("info", &Model::info)
         .def("metadata", &Model::metadata)
         .def("generate", &Model::generate, py::arg("seed"), py::arg("n_points"))

@@ -13,6 +13,8 @@ from .errors import InvalidArgumentError, ModelNotFoundError
 
 _ISA = {"auto": 0, "scalar": 1, "avx2": 2, "avx512": 3}
 _ISA_NAME = {v: k for k, v in _ISA.items()}
+_BACKEND = {"auto": 0, "cpu": 1, "vulkan": 2}
+_BACKEND_NAME = {v: k for k, v in _BACKEND.items()}
 
 
 def _bundled_dirs() -> list[Path]:
@@ -57,13 +59,15 @@ def uniform(seed: int, m: int, n: int) -> np.ndarray:
 class Model:
     """A loaded dpc model. Create with :func:`load`."""
 
-    def __init__(self, path, *, isa: str = "auto", threads: int = 0):
+    def __init__(self, path, *, isa: str = "auto", threads: int = 0, backend: str = "auto"):
         if isa not in _ISA:
             raise InvalidArgumentError(f"isa must be one of {sorted(_ISA)}, got {isa!r}")
+        if backend not in _BACKEND:
+            raise InvalidArgumentError(f"backend must be one of {sorted(_BACKEND)}, got {backend!r}")
         if int(threads) < 0:
             raise InvalidArgumentError("threads must be >= 0 (0 = one per CPU)")
         self.path = Path(path)
-        self._h = _core.Model(os.fspath(self.path), _ISA[isa], int(threads))
+        self._h = _core.Model(os.fspath(self.path), _ISA[isa], int(threads), _BACKEND[backend])
         info = self._h.info()
         self.dims: int = info["dims"]
         self.n_points: int = info["n_points"]
@@ -72,12 +76,14 @@ class Model:
         self.grid_shape: tuple[int, ...] = tuple(info["grid_shape"])
         self.isa: str = _ISA_NAME[info["isa"]]
         self.threads: int = info["threads"]
+        self.backend: str = _BACKEND_NAME[info["backend"]]  # "cpu" or "vulkan": what runs the cascade
+        self.device: str = info["device"]  # "cpu", or the Vulkan device's name
         self.metadata: dict[str, str] = dict(self._h.metadata())
         self.name: str = self.metadata.get("dpc.name", self.path.stem)
 
     def __repr__(self) -> str:
         return (f"dpc.Model({self.name!r}, dims={self.dims}, n_points={self.n_points}, "
-                f"layers={self.layers}, isa={self.isa!r})")
+                f"layers={self.layers}, isa={self.isa!r}, backend={self.backend!r})")
 
     @staticmethod
     def _count(n_points) -> int:
@@ -107,9 +113,13 @@ class Model:
         return pts
 
 
-def load(path_or_name, *, isa: str = "auto", threads: int = 0) -> Model:
+def load(path_or_name, *, isa: str = "auto", threads: int = 0, backend: str = "auto") -> Model:
     """Load a model file, or a bundled model by name (see :func:`available_models`).
 
     ``isa``: "auto" (best the CPU supports), "scalar", "avx2" or "avx512". ``threads``: worker threads per
-    call, 0 = one per CPU; the output bits do not depend on it."""
-    return Model(model_path(path_or_name), isa=isa, threads=threads)
+    call, 0 = one per CPU; the output bits do not depend on it.
+    ``backend``: "auto" (a GPU through Vulkan where libdpc has the Vulkan backend and the machine a
+    hardware GPU, else the CPU), "cpu", or "vulkan" (any Vulkan device, software drivers included;
+    :class:`UnsupportedError` saying why when there is none or the package was built without
+    Vulkan). ``model.backend`` tells which one runs, ``model.device`` on what."""
+    return Model(model_path(path_or_name), isa=isa, threads=threads, backend=backend)
