@@ -2,9 +2,10 @@
 # Runs every dpc test suite on a fresh Debian 12 machine, installing what it needs first.
 #   bash tests/run_all.sh            # everything (about 10 minutes on 2 cores)
 #   DPC_FUZZ_SECONDS=10 bash tests/run_all.sh   # shorter fuzzing
-# Suites: C tests (GoogleTest via ctest) under ASan+UBSan, the thread tests under TSan, a
-# Release build's ctest (every ISA path the CPU has), the reader fuzzer (libFuzzer), and pytest
-# against the pip-installed package. Any failure, or a suite that runs no test, fails the script.
+# Suites: C tests (GoogleTest via ctest) under ASan+UBSan, the same with the Vulkan backend on
+# lavapipe (Mesa's CPU Vulkan driver), the thread tests under TSan, a Release build's ctest (every
+# ISA path the CPU has), the reader fuzzer (libFuzzer), and pytest against the pip-installed
+# package (built with the Vulkan backend). Any failure, or a suite that runs no test, fails the script.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$(pwd)
@@ -14,7 +15,8 @@ FUZZ_SECONDS=${DPC_FUZZ_SECONDS:-60}
 step() { printf '\n==== %s\n' "$*"; }
 
 step "system packages"
-APT_PKGS="libgtest-dev clang libclang-rt-14-dev cmake ninja-build"
+# mesa-vulkan-drivers (lavapipe), libvulkan-dev (headers, loader), glslc: the Vulkan backend's tests.
+APT_PKGS="libgtest-dev clang libclang-rt-14-dev cmake ninja-build mesa-vulkan-drivers libvulkan-dev glslc"
 missing=$(for p in $APT_PKGS; do dpkg -s "$p" >/dev/null 2>&1 || echo "$p"; done)
 if [ -n "$missing" ]; then
   SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
@@ -26,7 +28,9 @@ step "python packages"
 # torch first and pinned: the CPU build of 2.13.0 is on this image's disk; anything else pulls CUDA.
 python3 -m pip install -q --disable-pip-version-check torch==2.13.0
 python3 -m pip install -q --disable-pip-version-check scikit-build-core pybind11 ninja cmake
-python3 -m pip install -q --disable-pip-version-check --no-build-isolation "$ROOT[test,train]"
+python3 -m pip install -q --disable-pip-version-check --no-build-isolation -C cmake.define.DPC_VULKAN=ON "$ROOT[test,train]"
+# lavapipe is installed above: the Vulkan tests must find a device, not skip.
+export DPC_TEST_REQUIRE_VULKAN=1
 
 run_ctest() { # build dir, extra ctest args...
   local dir=$1; shift
@@ -39,6 +43,15 @@ step "C tests, ASan + UBSan"
 cmake -S . -B build/test-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DDPC_BUILD_TESTS=ON -DDPC_SANITIZE=address >/dev/null
 cmake --build build/test-asan -j "$JOBS"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 run_ctest build/test-asan
+
+step "C tests with the Vulkan backend (lavapipe), ASan + UBSan"
+cmake -S . -B build/test-vulkan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DDPC_BUILD_TESTS=ON -DDPC_SANITIZE=address \
+      -DDPC_VULKAN=ON >/dev/null
+cmake --build build/test-vulkan -j "$JOBS"
+# The CPU tests again, in a build that has the backend (AUTO probes Vulkan, finds no GPU, runs on
+# the CPU), with leak detection on; then the Vulkan tests with it off (the driver leaks a little).
+ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 run_ctest build/test-vulkan -LE vulkan
+ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 run_ctest build/test-vulkan -L vulkan
 
 step "C thread tests, TSan"
 cmake -S . -B build/test-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DDPC_BUILD_TESTS=ON -DDPC_SANITIZE=thread >/dev/null

@@ -38,6 +38,13 @@ dpc_backend backend_of(const dpc_model *m) {
     return b;
 }
 
+// DPC_TEST_REQUIRE_VULKAN=1 (run_all.sh, which installs lavapipe): a missing device fails
+// instead of skipping, so a broken driver install cannot turn the suite into skips.
+bool device_required() {
+    const char *v = std::getenv("DPC_TEST_REQUIRE_VULKAN");
+    return v && std::strcmp(v, "1") == 0;
+}
+
 // A model on the Vulkan backend, or null with *skip set to why it cannot be had here.
 ModelPtr load_vulkan(const std::string &path, std::string *skip) {
     if (!DPC_TEST_HAVE_VULKAN) {
@@ -48,6 +55,7 @@ ModelPtr load_vulkan(const std::string &path, std::string *skip) {
     dpc_status st = load_with(path, DPC_BACKEND_VULKAN, &m);
     if (st == DPC_ERROR_UNSUPPORTED) {
         *skip = std::string("no usable Vulkan device: ") + dpc_last_error();
+        if (device_required()) ADD_FAILURE() << "DPC_TEST_REQUIRE_VULKAN=1 but " << *skip;
         return nullptr;
     }
     EXPECT_EQ(st, DPC_OK) << dpc_status_string(st) << ": " << dpc_last_error();

@@ -1,10 +1,12 @@
 """The backend choice from Python: ``dpc.load(..., backend="auto"|"cpu"|"vulkan")``, ``model.backend``
 and ``model.device``; typed errors; and, where a Vulkan device exists (lavapipe in CI), the Vulkan
 backend against the CPU backend on every test model. Tests that need a device skip, saying why,
-when the package was built without the Vulkan backend or the machine has no device."""
+when the package was built without the Vulkan backend or the machine has no device (they fail
+instead when DPC_TEST_REQUIRE_VULKAN=1, as tests/run_all.sh sets after installing lavapipe)."""
 
 from __future__ import annotations
 
+import os
 import threading
 from pathlib import Path
 
@@ -28,6 +30,8 @@ def _load_vulkan(path):
     try:
         return dpc.load(path, backend="vulkan")
     except dpc.UnsupportedError as e:
+        if os.environ.get("DPC_TEST_REQUIRE_VULKAN") == "1":  # run_all.sh installs lavapipe
+            pytest.fail(f"DPC_TEST_REQUIRE_VULKAN=1 but the Vulkan backend cannot run: {e}")
         if "built without the Vulkan backend" in str(e):
             pytest.skip(f"this dpc package was built without the Vulkan backend: {e}")
         pytest.skip(f"no usable Vulkan device: {e}")
