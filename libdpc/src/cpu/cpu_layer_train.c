@@ -90,7 +90,7 @@ static dpc_status plan_init(plan *p, const dpc_train_layer *L, size_t m) {
      * them, whatever the thread count (run() picks set mode for every m below this). */
     if (m >= SET_PARALLEL_BELOW) p->set_fn = NULL;
     p->m = m;
-    p->stride = (m + DPC_TRAIN_PAD + 7) & ~(size_t)7;
+    p->stride = (m + DPC_TRAIN_PAD + 15) & ~(size_t)15;
     p->n = L->n;
     p->s = L->s;
     p->b = L->b;
@@ -119,6 +119,23 @@ static dpc_status plan_init(plan *p, const dpc_train_layer *L, size_t m) {
          * pairs the exact test on d would drop too. */
         sp->r2_keep = sp->r * sp->r * (1.0 + 0x1p-50);
         sp->e2_keep = sp->e * sp->e * (1.0 - 0x1p-50);
+        /* Float32 filter: coordinates rounded to float (error <= 2^-25 each) and their rounded
+         * difference (<= 2^-25 more) put each component within 2^-23 of the exact one, so the
+         * float distance is within sqrt(k) 2^-23 of d, plus a relative error below
+         * (k + 2) 2^-24 from the float sum of squares. Twice both margins keep every pair with
+         * e < d < r; the exact test in double follows. e_lo <= 0: keep d² = 0 too (points that
+         * differ below float resolution). */
+        {
+            const double tol = sqrt((double)sp->k) * 0x1p-22, rel = (double)(sp->k + 2) * 0x1p-23;
+            const double hi = (sp->r + tol) * (1.0 + rel), lo = (sp->e - tol) * (1.0 - rel);
+            sp->r2_f = (float)(hi * hi);
+            if ((double)sp->r2_f < hi * hi) sp->r2_f = nextafterf(sp->r2_f, INFINITY);
+            sp->e2_f = -1.0f;
+            if (lo > 0.0) {
+                sp->e2_f = (float)(lo * lo);
+                if ((double)sp->e2_f > lo * lo) sp->e2_f = nextafterf(sp->e2_f, 0.0f);
+            }
+        }
         sp->scale = (double)(L->b - 1) / sp->r;
         sp->w = L->w + (size_t)t * L->b;
         if (!sp->moves) continue;
@@ -146,6 +163,7 @@ static void wspace_free(wspace *w) {
     free(w->P);
     free(w->V);
     free(w->A);
+    free(w->Pf);
     free(w->acc);
     free(w->perm);
     free(w->cell);
@@ -168,6 +186,10 @@ static dpc_status wspace_init(wspace *w, const plan *p, int backward, size_t par
     if (p->set_fn) {
         w->A = (double *)malloc(p->stride * kmax * sizeof(double));
         ok = ok && w->A;
+    }
+    if (p->chunk_fn != dpc_train_chunk_scalar) { /* calloc: the padding is read (and masked) */
+        w->Pf = (float *)calloc(p->stride * kmax, sizeof(float));
+        ok = ok && w->Pf;
     }
     if (backward) {
         w->V = (double *)calloc(p->stride * kmax, sizeof(double));
@@ -213,6 +235,8 @@ static void prepare_pass(const pass *ps, const double *x) {
     for (size_t s = 0; s < m; s++) {
         const size_t i = ws->perm[s];
         for (unsigned q = 0; q < k; q++) ws->P[q * st + s] = x[i * n + sp->dim[q]];
+        if (ws->Pf)
+            for (unsigned q = 0; q < k; q++) ws->Pf[q * st + s] = (float)x[i * n + sp->dim[q]];
         if (ps->gy)
             for (unsigned q = 0; q < k; q++) ws->V[q * st + s] = sp->vscale[q] * ps->gy[i * n + sp->dim[q]];
     }

@@ -30,6 +30,17 @@ typedef __m256d vm;
 #define I_LOADU(p) _mm_loadu_si128((const __m128i *)(const void *)(p))
 #define I_STORE(p, v) _mm_storeu_si128((__m128i *)(void *)(p), v)
 
+#define WF 8u
+typedef __m256 vf;
+#define F_SET1(x) _mm256_set1_ps(x)
+#define F_ZERO() _mm256_setzero_ps()
+#define F_LOADU(p) _mm256_loadu_ps(p)
+#define F_SUB(a, b) _mm256_sub_ps(a, b)
+#define F_FMA(a, b, c) _mm256_fmadd_ps(a, b, c)
+#define F_ROUND(a) _mm256_round_ps(a, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC)
+#define F_BITS(d2, r2, e2) \
+    ((unsigned)_mm256_movemask_ps(_mm256_and_ps(_mm256_cmp_ps(d2, r2, _CMP_LT_OQ), _mm256_cmp_ps(d2, e2, _CMP_GT_OQ))))
+
 /* Lane positions of the set bits of a 4-bit mask, packed to the front. */
 static const int32_t packed_lanes[16][4] = {
     {0, 0, 0, 0}, {0, 0, 0, 0}, {1, 0, 0, 0}, {0, 1, 0, 0}, {2, 0, 0, 0}, {0, 2, 0, 0},
@@ -43,6 +54,12 @@ static inline unsigned compress_append(uint32_t *list, unsigned len, uint32_t j,
     return len + (unsigned)__builtin_popcount(bits);
 }
 #define COMPRESS_APPEND compress_append
+
+static inline unsigned compress_append8(uint32_t *list, unsigned len, uint32_t j, unsigned bits) {
+    len = compress_append(list, len, j, bits & 15u);
+    return compress_append(list, len, j + 4, bits >> 4);
+}
+#define COMPRESS_APPEND_F compress_append8
 
 /* Lane sum in a fixed order: (l0 + l2) + (l1 + l3). */
 static inline double hsum(vd v) {

@@ -31,6 +31,17 @@ typedef __mmask8 vm;
 #define I_LOADU(p) _mm256_loadu_si256((const __m256i *)(const void *)(p))
 #define I_STORE(p, v) _mm256_storeu_si256((__m256i *)(void *)(p), v)
 
+#define WF 16u
+typedef __m512 vf;
+#define F_SET1(x) _mm512_set1_ps(x)
+#define F_ZERO() _mm512_setzero_ps()
+#define F_LOADU(p) _mm512_loadu_ps(p)
+#define F_SUB(a, b) _mm512_sub_ps(a, b)
+#define F_FMA(a, b, c) _mm512_fmadd_ps(a, b, c)
+#define F_ROUND(a) _mm512_roundscale_ps(a, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC)
+#define F_BITS(d2, r2, e2) \
+    ((unsigned)_mm512_mask_cmp_ps_mask(_mm512_cmp_ps_mask(d2, r2, _CMP_LT_OQ), d2, e2, _CMP_GT_OQ))
+
 /* list[len ..] = j + (positions of the set bits), compressed in a register (a compress store to
  * memory is slow on several cores); one 8-wide store. */
 static inline unsigned compress_append(uint32_t *list, unsigned len, uint32_t j, unsigned bits) {
@@ -41,6 +52,14 @@ static inline unsigned compress_append(uint32_t *list, unsigned len, uint32_t j,
     return len + (unsigned)__builtin_popcount(bits);
 }
 #define COMPRESS_APPEND compress_append
+
+static inline unsigned compress_append16(uint32_t *list, unsigned len, uint32_t j, unsigned bits) {
+    const __m512i lanes = _mm512_add_epi32(_mm512_set1_epi32((int32_t)j),
+                                           _mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0));
+    _mm512_storeu_si512((void *)(list + len), _mm512_maskz_compress_epi32((__mmask16)bits, lanes));
+    return len + (unsigned)__builtin_popcount(bits);
+}
+#define COMPRESS_APPEND_F compress_append16
 
 /* Lane sum in a fixed order: halves, then quarters, then pairs. */
 static inline double hsum(vd v) {

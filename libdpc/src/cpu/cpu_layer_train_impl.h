@@ -10,7 +10,7 @@
 #include "cpu/cpu_layer_train.h"
 
 #define DPC_TRAIN_MAX_RANGES 512u /* candidate index ranges per cell (2 per row of cells) */
-#define DPC_TRAIN_PAD 8u          /* doubles readable past the m-th entry of each packed column */
+#define DPC_TRAIN_PAD 16u         /* entries readable past the m-th of each packed column */
 
 typedef struct dpc_train_sub {
     unsigned k;                  /* |D_t| */
@@ -19,6 +19,7 @@ typedef struct dpc_train_sub {
     int moves;                   /* some dimension of D_t moves (else the subspace is skipped) */
     double h, r, e;              /* spacing, radius, cutoff (absolute) */
     double r2_keep, e2_keep;     /* d² >= r2_keep implies d >= r, d² <= e2_keep implies d <= e */
+    float r2_f, e2_f;            /* the same for d² from float32 coordinates (vector all-pairs filter) */
     double scale;                /* (b - 1) / r */
     const double *w;             /* b kernel values */
     int grid;                    /* 0: all pairs */
@@ -43,7 +44,7 @@ typedef struct dpc_train_plan {
     size_t chunk, n_chunks;     /* kernel-gradient chunks over sorted positions */
     size_t max_cells;
     unsigned kmax;              /* largest k of a moving subspace */
-    size_t stride;              /* doubles per packed column: m + DPC_TRAIN_PAD, rounded up to 8 */
+    size_t stride;              /* entries per packed column: m + DPC_TRAIN_PAD, rounded up to 16 */
     dpc_train_chunk_fn chunk_fn; /* the ISA's pair loop */
     dpc_train_set_fn set_fn;     /* the ISA's unordered-pair pass; NULL: chunks only */
 } dpc_train_plan;
@@ -51,6 +52,7 @@ typedef struct dpc_train_plan {
 typedef struct dpc_train_ws {
     double *P, *V;        /* kmax columns of `stride`: subspace coordinates / v, in sorted order */
     double *A;            /* kmax columns of `stride`: per-point sums of set_fn, in sorted order */
+    float *Pf;            /* kmax columns of `stride`: P rounded to float32 (vector paths) */
     double *acc;          /* m · n: per-point sums over subspaces (caller's order) */
     uint32_t *perm;       /* sorted position -> point */
     uint32_t *cell;       /* sorted position -> cell id */

@@ -1,16 +1,14 @@
 /* The vector pair loop of the training kernels, written once for cpu_layer_train_avx2.c and
  * cpu_layer_train_avx512.c. The including file defines W (doubles per vector), the types vd
- * (W doubles), vx (W int32) and vm (a lane mask), the primitives used below, and
+ * (W doubles), vx (W int32), vm (a lane mask), vf (WF floats), the primitives used below, and
  * TRAIN_CHUNK_FN / TRAIN_SET_FN (the exported names).
  *
- * Per point: (1) filter, W candidates at a time from the packed columns, on d² against the
- * r2_keep / e2_keep bounds, compacting the survivors' sorted positions into a list; (2) the pair
- * math on the list, W pairs at a time (gathered coordinates), into per-lane partial sums that
- * are reduced in a fixed order at the end of the point. The list order is the candidate order,
- * so every sum has a fixed order that depends on the data only, never on threads. d² in (2) is
- * computed by the same operations as in (1): the same bits, so the exact window test d ∈ (e, r)
- * drops only pairs the filter bounds allow. Kernel-gradient terms are added to part in list
- * order, lane by lane. */
+ * Per point: (1) filter the candidates on d² against bounds that keep every pair of the window
+ * (filter_range), compacting the survivors' sorted positions into a list; (2) the pair math on
+ * the list, W pairs at a time (gathered coordinates), with the exact window test e < d < r in
+ * double. The list order is the candidate order, so every sum has a fixed order that depends on
+ * the data only, never on threads. Kernel-gradient terms are added to part in list order, lane
+ * by lane. */
 #if !defined(TRAIN_CHUNK_FN) || !defined(TRAIN_SET_FN)
 #error "define the ISA primitives and TRAIN_CHUNK_FN before including cpu_layer_train_simd.h"
 #endif
@@ -22,11 +20,58 @@
 
 #define ALWAYS_INLINE static inline __attribute__((always_inline))
 
-#define LIST_CAP 256u                   /* survivors per flush */
-#define LIST_SIZE (LIST_CAP + 2u * W)   /* room for a full-vector compress store and the padding */
+#define LIST_CAP 256u                    /* survivors per flush */
+#define LIST_SIZE (LIST_CAP + 2u * WF + W) /* room for full-vector compress stores and the padding */
 
 /* Toroidal difference, t − rint(t) for t = x_j − x_i ∈ (−1, 1). */
 ALWAYS_INLINE vd wrap(vd t) { return V_SUB(t, V_ROUND(t)); }
+ALWAYS_INLINE vf wrapf(vf t) { return F_SUB(t, F_ROUND(t)); }
+
+/* Appends the candidates of [j, je) that may lie in the window to list[*len ..], until the list
+ * holds LIST_CAP or more; returns where it stopped. All pairs (long ranges): WF candidates a
+ * step on float32 copies of the coordinates against the widened float bounds r2_f / e2_f. Grid
+ * (short ranges): W a step in double against r2_keep / e2_keep. Either way a superset of the
+ * window; the pair math decides exactly. Columns are readable WF − 1 entries past m; lanes past
+ * je are masked. */
+ALWAYS_INLINE uint32_t filter_range(const dpc_train_pass *ps, size_t s, uint32_t j, uint32_t je, uint32_t *list,
+                                    unsigned *len_io, const unsigned K) {
+    const dpc_train_sub *sp = ps->sp;
+    const size_t st = ps->p->stride;
+    unsigned len = *len_io;
+    if (!sp->grid) {
+        const float *Pf = ps->ws->Pf;
+        const vf r2 = F_SET1(sp->r2_f), e2 = F_SET1(sp->e2_f);
+        vf xf[DPC_MAX_DIMS];
+        for (unsigned q = 0; q < K; q++) xf[q] = F_SET1(Pf[q * st + s]);
+        for (; j < je && len < LIST_CAP; j += WF) {
+            vf d2 = F_ZERO();
+            for (unsigned q = 0; q < K; q++) {
+                const vf t = wrapf(F_SUB(F_LOADU(Pf + q * st + j), xf[q]));
+                d2 = F_FMA(t, t, d2);
+            }
+            unsigned bits = F_BITS(d2, r2, e2);
+            if (je - j < WF) bits &= (1u << (je - j)) - 1u;
+            len = COMPRESS_APPEND_F(list, len, j, bits);
+        }
+    } else {
+        const double *P = ps->ws->P;
+        const vd r2 = V_SET1(sp->r2_keep), e2 = V_SET1(sp->e2_keep);
+        vd xi[DPC_MAX_DIMS];
+        for (unsigned q = 0; q < K; q++) xi[q] = V_SET1(P[q * st + s]);
+        for (; j < je && len < LIST_CAP; j += W) {
+            vd d2 = V_ZERO();
+            for (unsigned q = 0; q < K; q++) {
+                const vd t = wrap(V_SUB(V_LOADU(P + q * st + j), xi[q]));
+                d2 = V_FMA(t, t, d2);
+            }
+            unsigned bits = M_BITS(M_AND(V_LT(d2, r2), V_GT(d2, e2)));
+            if (je - j < W) bits &= (1u << (je - j)) - 1u;
+            len = COMPRESS_APPEND(list, len, j, bits);
+        }
+    }
+    *len_io = len;
+    return j < je ? j : je;
+}
 
 /* Pair math for list[0, len) of point s (see the file comment); acc[q] are the lane sums. */
 ALWAYS_INLINE void pair_sums(const dpc_train_pass *ps, size_t s, uint32_t *list, unsigned len, vd *acc,
@@ -100,9 +145,7 @@ ALWAYS_INLINE void chunk_body(const dpc_train_pass *ps, size_t lo, size_t hi, do
     const dpc_train_plan *p = ps->p;
     const dpc_train_sub *sp = ps->sp;
     dpc_train_ws *ws = ps->ws;
-    const size_t m = p->m, n = p->n, st = p->stride;
-    const double *P = ws->P;
-    const vd r2_keep = V_SET1(sp->r2_keep), e2_keep = V_SET1(sp->e2_keep);
+    const size_t m = p->m, n = p->n;
     uint32_t ranges[2 * DPC_TRAIN_MAX_RANGES];
     uint32_t list[LIST_SIZE];
     unsigned nr = 1;
@@ -115,24 +158,13 @@ ALWAYS_INLINE void chunk_body(const dpc_train_pass *ps, size_t lo, size_t hi, do
             cur = ws->cell[s];
             nr = dpc_grid_ranges(sp->k, sp->G, sp->R, ws->cell_start, cur, ranges);
         }
-        vd xi[DPC_MAX_DIMS], acc[DPC_MAX_DIMS];
-        for (unsigned q = 0; q < K; q++) {
-            xi[q] = V_SET1(P[q * st + s]);
-            acc[q] = V_ZERO();
-        }
+        vd acc[DPC_MAX_DIMS];
+        for (unsigned q = 0; q < K; q++) acc[q] = V_ZERO();
         unsigned len = 0;
         for (unsigned z = 0; z < nr; z++) {
             const uint32_t je = ranges[2 * z + 1];
-            for (uint32_t j = ranges[2 * z]; j < je; j += W) {
-                /* Columns are readable W - 1 doubles past m; the lanes past je are masked. */
-                vd d2 = V_ZERO();
-                for (unsigned q = 0; q < K; q++) {
-                    const vd t = wrap(V_SUB(V_LOADU(P + q * st + j), xi[q]));
-                    d2 = V_FMA(t, t, d2);
-                }
-                unsigned bits = M_BITS(M_AND(V_LT(d2, r2_keep), V_GT(d2, e2_keep)));
-                if (je - j < W) bits &= (1u << (je - j)) - 1u;
-                len = COMPRESS_APPEND(list, len, j, bits);
+            for (uint32_t j = ranges[2 * z]; j < je;) {
+                j = filter_range(ps, s, j, je, list, &len, K);
                 if (len >= LIST_CAP) {
                     pair_sums(ps, s, list, len, acc, part, K, BACKWARD);
                     len = 0;
@@ -233,9 +265,7 @@ ALWAYS_INLINE void set_body(const dpc_train_pass *ps, double *part, const unsign
     const dpc_train_sub *sp = ps->sp;
     dpc_train_ws *ws = ps->ws;
     const size_t m = p->m, n = p->n, st = p->stride;
-    const double *P = ws->P;
     double *A = ws->A;
-    const vd r2_keep = V_SET1(sp->r2_keep), e2_keep = V_SET1(sp->e2_keep);
     uint32_t ranges[2 * DPC_TRAIN_MAX_RANGES];
     uint32_t list[LIST_SIZE];
     unsigned nr = 1;
@@ -248,26 +278,15 @@ ALWAYS_INLINE void set_body(const dpc_train_pass *ps, double *part, const unsign
             cur = ws->cell[s];
             nr = dpc_grid_ranges(sp->k, sp->G, sp->R, ws->cell_start, cur, ranges);
         }
-        vd xi[DPC_MAX_DIMS];
         double a[DPC_MAX_DIMS];
-        for (unsigned q = 0; q < K; q++) {
-            xi[q] = V_SET1(P[q * st + s]);
-            a[q] = A[q * st + s]; /* the terms of partners below s, in ascending order */
-        }
+        for (unsigned q = 0; q < K; q++) a[q] = A[q * st + s]; /* partners below s, ascending */
         unsigned len = 0;
         for (unsigned z = 0; z < nr; z++) {
             const uint32_t je = ranges[2 * z + 1];
             uint32_t j = ranges[2 * z];
             if (j <= s) j = (uint32_t)s + 1;
-            for (; j < je; j += W) {
-                vd d2 = V_ZERO();
-                for (unsigned q = 0; q < K; q++) {
-                    const vd tq = wrap(V_SUB(V_LOADU(P + q * st + j), xi[q]));
-                    d2 = V_FMA(tq, tq, d2);
-                }
-                unsigned bits = M_BITS(M_AND(V_LT(d2, r2_keep), V_GT(d2, e2_keep)));
-                if (je - j < W) bits &= (1u << (je - j)) - 1u;
-                len = COMPRESS_APPEND(list, len, j, bits);
+            while (j < je) {
+                j = filter_range(ps, s, j, je, list, &len, K);
                 if (len >= LIST_CAP) {
                     sym_pairs(ps, s, list, len, a, part, K, BACKWARD);
                     len = 0;
