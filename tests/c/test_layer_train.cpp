@@ -341,6 +341,54 @@ TEST(LayerTrain, VectorPathsMatchScalar) {
     }
 }
 
+// The all-pairs filter of the vector paths works on float32 copies of the coordinates: pairs at
+// d = r (1 - 1e-12), at d = 1e-9 with eps = 0 (distinct in double, equal in float) and across the
+// seam from a coordinate that rounds to 1.0f must all still interact, as on the scalar path.
+TEST(LayerTrain, VectorFilterKeepsEdgePairs) {
+    const std::vector<dpc_isa> isas = dpct::vector_isas();
+    if (isas.empty()) GTEST_SKIP() << "no vector ISA on this CPU";
+    for (uint32_t k : {4u, 10u}) {
+        SCOPED_TRACE(k);
+        const double rho = k == 4 ? 2.0 : 0.8;
+        const Layer L(k, {(1ull << k) - 1}, {rho}, 16, 0.0);
+        const dpc_layer_desc d = L.desc();
+        const size_t m = 256, total = m * k;
+        const double r = std::min(rho * std::pow((double)m, -1.0 / k), 0.5);
+        std::vector<double> w = uniform(16, 31, 0.5, 1.0), x = uniform(total, 32, 0.0, 1.0), g = uniform(total, 33, -1, 1);
+        std::mt19937_64 gen(34);
+        std::normal_distribution<double> normal;
+        // Pairs (2i, 2i+1) for i < 20: partner at r (1 - 1e-12), at 1e-9, or across the seam.
+        for (size_t i = 0; i < 20; i++) {
+            double *a = &x[2 * i * k], *b = &x[(2 * i + 1) * k];
+            std::vector<double> dir(k);
+            double norm = 0.0;
+            for (double &v : dir) v = normal(gen), norm += v * v;
+            const double len = i % 3 == 1 ? 1e-9 : r * (1.0 - 1e-12);
+            if (i % 3 == 2) a[0] = 1.0 - 1e-9;  // rounds to 1.0f
+            for (size_t q = 0; q < k; q++) {
+                double v = a[q] + dir[q] / std::sqrt(norm) * len;
+                b[q] = v - std::floor(v);
+            }
+        }
+        std::vector<double> y0(total), gx0(total), gk0(16);
+        {
+            const IsaScope scope(DPC_ISA_SCALAR);
+            ASSERT_EQ(dpc_layer_forward(&d, w.data(), 1, m, x.data(), y0.data(), 1), DPC_OK) << dpc_last_error();
+            ASSERT_EQ(dpc_layer_backward(&d, w.data(), 1, m, x.data(), g.data(), gx0.data(), gk0.data(), 1), DPC_OK);
+        }
+        for (dpc_isa isa : isas) {
+            SCOPED_TRACE(dpct::isa_name(isa));
+            const IsaScope scope(isa);
+            std::vector<double> y(total), gx(total), gk(16);
+            ASSERT_EQ(dpc_layer_forward(&d, w.data(), 1, m, x.data(), y.data(), 1), DPC_OK);
+            ASSERT_EQ(dpc_layer_backward(&d, w.data(), 1, m, x.data(), g.data(), gx.data(), gk.data(), 1), DPC_OK);
+            EXPECT_LE(rel_err(y, y0, x, true), 1e-12) << "forward";
+            EXPECT_LE(rel_err(gx, gx0, g, false), 1e-12) << "grad_x";
+            EXPECT_LE(rel_err(gk, gk0, std::vector<double>(16, 0.0), false), 1e-12) << "grad_kernels";
+        }
+    }
+}
+
 // The vector paths are really taken (their lane sums round differently from the scalar
 // path somewhere in a large layer), and a bad DPC_ISA is refused as for the inference engine.
 TEST(LayerTrain, IsaSelection) {
