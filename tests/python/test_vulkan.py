@@ -92,6 +92,36 @@ def test_vulkan_matches_cpu(name):
             assert _torus_diff(a, b) <= TOL, (name, n, seed)
 
 
+def _written_model(tmp_path, name, dims, subspaces, radius, m, bins=24):
+    """A 3-layer model with a smooth repulsive kernel (zero at distance 0 and at the radius)."""
+    model_file = pytest.importorskip("dpc.model_file")
+    pytest.importorskip("onnx")
+    kernel = (-0.05 * np.sin(np.pi * np.linspace(0.0, 1.0, bins)))[None, :]
+    kernels = np.repeat(kernel, len(subspaces), axis=0)
+    layers = [model_file.Layer(subspaces, [radius] * len(subspaces), kernels) for _ in range(3)]
+    path = tmp_path / f"{name}.onnx"
+    model_file.write_model(model_file.ModelSpec(dims=dims, n_points=m, layers=layers, name=name), path)
+    return path
+
+
+@pytest.mark.parametrize("name, dims, subspaces, radius, m", [
+    ("grid-1d", 1, [0b1], 3.0, 2048),            # 1-D cell grid
+    ("grid-4d", 4, [0b1111, 0b0011], 1.2, 4096),  # 4-D cell grid (G = 6, R = 1) and a 2-D one
+    ("pairs-5d", 5, [0b11111, 0b00100], 1.5, 1024),  # all pairs, two vec4s per point; 1-D grid
+    ("pairs-wide", 2, [0b11], 1e6, 512),          # radius clamped to 0.5: all pairs in 2-D
+])
+def test_vulkan_matches_cpu_on_other_geometries(tmp_path, name, dims, subspaces, radius, m):
+    # Subspace shapes the committed test models lack: each grid dimension count 1 .. 4, and
+    # all-pairs passes with more than one vec4 per point or a radius covering the torus.
+    path = _written_model(tmp_path, name, dims, subspaces, radius, m)
+    vk = _load_vulkan(path)
+    cpu = dpc.load(path, backend="cpu")
+    for seed in (0, 9):
+        a, b = cpu.generate(seed), vk.generate(seed)
+        assert _torus_diff(a, dpc.uniform(seed, m, dims)) > 1e-4, "the model does not move points"
+        assert _torus_diff(a, b) <= TOL, (name, seed)
+
+
 def test_vulkan_filters_the_documented_inputs_and_batches_are_per_seed():
     vk = _load_vulkan(DATA / "model_3d_proj.onnx")
     x0 = dpc.uniform(11, vk.n_points, vk.dims)  # the exact input points of seed 11
