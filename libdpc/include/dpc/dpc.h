@@ -108,7 +108,9 @@ typedef enum dpc_isa {
  * Every model on the Vulkan backend owns its device queue, command buffer and work buffers (kept
  * at the size of its largest call until the model is freed), guarded by one mutex per model:
  * concurrent calls on one model are safe and wait for each other; different models run
- * concurrently. Vulkan failures are statuses with the VkResult named in dpc_last_error(). */
+ * concurrently. Vulkan failures are statuses with the VkResult named in dpc_last_error().
+ * dpc_model_info's isa and threads describe the CPU backend, which a Vulkan-backed model does not
+ * use for filtering. */
 typedef enum dpc_backend {
     DPC_BACKEND_AUTO = 0,
     DPC_BACKEND_CPU = 1,
