@@ -47,3 +47,11 @@ def test_white_noise_scores_one_and_the_error_follows_eq5():
     for sets in (white, jit):
         expect = IS.eq5_variance(sets, F) / (2 * 256)
         assert abs(IS.mc_error(sets, fam) / expect - 1) < 0.1
+
+
+def test_mc_error_standard_error():
+    fam = IS.random_phase_family("font", count=5, seed=0, K=8)
+    sets = np.random.default_rng(0).random((4, 64, 2))
+    err, se = IS.mc_error(sets, fam, with_se=True)
+    e2 = IS.mc_estimates(sets, fam) ** 2
+    assert err == pytest.approx(e2.mean()) and se == pytest.approx(e2.std(ddof=1) / np.sqrt(20))

@@ -107,6 +107,10 @@ def mc_estimates(points, family: RandomPhaseFamily) -> np.ndarray:
     return np.real(np.einsum("jab,sab->js", family.amplitudes, S))
 
 
-def mc_error(points, family: RandomPhaseFamily) -> float:
-    """Mean squared error of the estimates over integrands and sets (every ∫f_j is 0)."""
-    return float(np.mean(mc_estimates(points, family) ** 2))
+def mc_error(points, family: RandomPhaseFamily, *, with_se: bool = False):
+    """Mean squared error of the estimates over integrands and sets (every ∫f_j is 0); with
+    ``with_se``, also its standard error (std of the squared errors / √(count · sets))."""
+    e2 = mc_estimates(points, family) ** 2
+    if with_se:
+        return float(e2.mean()), float(e2.std(ddof=1) / np.sqrt(e2.size))
+    return float(e2.mean())
