@@ -10,7 +10,6 @@ typedef __m256d vm;
 
 #define V_SET1(x) _mm256_set1_pd(x)
 #define V_ZERO() _mm256_setzero_pd()
-#define V_LOADU(p) _mm256_loadu_pd(p)
 #define V_STORE(p, v) _mm256_storeu_pd(p, v)
 #define V_SUB(a, b) _mm256_sub_pd(a, b)
 #define V_MUL(a, b) _mm256_mul_pd(a, b)
@@ -53,7 +52,6 @@ static inline unsigned compress_append(uint32_t *list, unsigned len, uint32_t j,
     _mm_storeu_si128((__m128i *)(void *)(list + len), v);
     return len + (unsigned)__builtin_popcount(bits);
 }
-#define COMPRESS_APPEND compress_append
 
 static inline unsigned compress_append8(uint32_t *list, unsigned len, uint32_t j, unsigned bits) {
     len = compress_append(list, len, j, bits & 15u);

@@ -11,7 +11,6 @@ typedef __mmask8 vm;
 
 #define V_SET1(x) _mm512_set1_pd(x)
 #define V_ZERO() _mm512_setzero_pd()
-#define V_LOADU(p) _mm512_loadu_pd(p)
 #define V_STORE(p, v) _mm512_storeu_pd(p, v)
 #define V_SUB(a, b) _mm512_sub_pd(a, b)
 #define V_MUL(a, b) _mm512_mul_pd(a, b)
@@ -43,16 +42,7 @@ typedef __m512 vf;
     ((unsigned)_mm512_mask_cmp_ps_mask(_mm512_cmp_ps_mask(d2, r2, _CMP_LT_OQ), d2, e2, _CMP_GT_OQ))
 
 /* list[len ..] = j + (positions of the set bits), compressed in a register (a compress store to
- * memory is slow on several cores); one 8-wide store. */
-static inline unsigned compress_append(uint32_t *list, unsigned len, uint32_t j, unsigned bits) {
-    const __m512i lanes = _mm512_add_epi32(_mm512_set1_epi32((int32_t)j),
-                                           _mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0));
-    const __m512i packed = _mm512_maskz_compress_epi32((__mmask16)bits, lanes);
-    _mm256_storeu_si256((__m256i *)(void *)(list + len), _mm512_castsi512_si256(packed));
-    return len + (unsigned)__builtin_popcount(bits);
-}
-#define COMPRESS_APPEND compress_append
-
+ * memory is slow on several cores); one 16-wide store. */
 static inline unsigned compress_append16(uint32_t *list, unsigned len, uint32_t j, unsigned bits) {
     const __m512i lanes = _mm512_add_epi32(_mm512_set1_epi32((int32_t)j),
                                            _mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0));

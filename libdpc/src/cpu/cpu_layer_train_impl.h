@@ -19,7 +19,7 @@ typedef struct dpc_train_sub {
     int moves;                   /* some dimension of D_t moves (else the subspace is skipped) */
     double h, r, e;              /* spacing, radius, cutoff (absolute) */
     double r2_keep, e2_keep;     /* d² >= r2_keep implies d >= r, d² <= e2_keep implies d <= e */
-    float r2_f, e2_f;            /* the same for d² from float32 coordinates (vector all-pairs filter) */
+    float r2_f, e2_f;            /* the same for d² from float32 coordinates (vector filters) */
     double scale;                /* (b - 1) / r */
     const double *w;             /* b kernel values */
     int grid;                    /* 0: all pairs */

@@ -28,46 +28,28 @@ ALWAYS_INLINE vd wrap(vd t) { return V_SUB(t, V_ROUND(t)); }
 ALWAYS_INLINE vf wrapf(vf t) { return F_SUB(t, F_ROUND(t)); }
 
 /* Appends the candidates of [j, je) that may lie in the window to list[*len ..], until the list
- * holds LIST_CAP or more; returns where it stopped. All pairs (long ranges): WF candidates a
- * step on float32 copies of the coordinates against the widened float bounds r2_f / e2_f. Grid
- * (short ranges): W a step in double against r2_keep / e2_keep. Either way a superset of the
- * window; the pair math decides exactly. Columns are readable WF − 1 entries past m; lanes past
- * je are masked. */
+ * holds LIST_CAP or more; returns where it stopped. WF candidates a step, on float32 copies of
+ * the coordinates against the widened float bounds r2_f / e2_f: a superset of the window (twice
+ * the lanes of double); the pair math decides exactly. Columns are readable WF − 1 entries past
+ * m; lanes past je are masked. */
 ALWAYS_INLINE uint32_t filter_range(const dpc_train_pass *ps, size_t s, uint32_t j, uint32_t je, uint32_t *list,
                                     unsigned *len_io, const unsigned K) {
     const dpc_train_sub *sp = ps->sp;
     const size_t st = ps->p->stride;
+    const float *Pf = ps->ws->Pf;
+    const vf r2 = F_SET1(sp->r2_f), e2 = F_SET1(sp->e2_f);
+    vf xf[DPC_MAX_DIMS];
+    for (unsigned q = 0; q < K; q++) xf[q] = F_SET1(Pf[q * st + s]);
     unsigned len = *len_io;
-    if (!sp->grid) {
-        const float *Pf = ps->ws->Pf;
-        const vf r2 = F_SET1(sp->r2_f), e2 = F_SET1(sp->e2_f);
-        vf xf[DPC_MAX_DIMS];
-        for (unsigned q = 0; q < K; q++) xf[q] = F_SET1(Pf[q * st + s]);
-        for (; j < je && len < LIST_CAP; j += WF) {
-            vf d2 = F_ZERO();
-            for (unsigned q = 0; q < K; q++) {
-                const vf t = wrapf(F_SUB(F_LOADU(Pf + q * st + j), xf[q]));
-                d2 = F_FMA(t, t, d2);
-            }
-            unsigned bits = F_BITS(d2, r2, e2);
-            if (je - j < WF) bits &= (1u << (je - j)) - 1u;
-            len = COMPRESS_APPEND_F(list, len, j, bits);
+    for (; j < je && len < LIST_CAP; j += WF) {
+        vf d2 = F_ZERO();
+        for (unsigned q = 0; q < K; q++) {
+            const vf t = wrapf(F_SUB(F_LOADU(Pf + q * st + j), xf[q]));
+            d2 = F_FMA(t, t, d2);
         }
-    } else {
-        const double *P = ps->ws->P;
-        const vd r2 = V_SET1(sp->r2_keep), e2 = V_SET1(sp->e2_keep);
-        vd xi[DPC_MAX_DIMS];
-        for (unsigned q = 0; q < K; q++) xi[q] = V_SET1(P[q * st + s]);
-        for (; j < je && len < LIST_CAP; j += W) {
-            vd d2 = V_ZERO();
-            for (unsigned q = 0; q < K; q++) {
-                const vd t = wrap(V_SUB(V_LOADU(P + q * st + j), xi[q]));
-                d2 = V_FMA(t, t, d2);
-            }
-            unsigned bits = M_BITS(M_AND(V_LT(d2, r2), V_GT(d2, e2)));
-            if (je - j < W) bits &= (1u << (je - j)) - 1u;
-            len = COMPRESS_APPEND(list, len, j, bits);
-        }
+        unsigned bits = F_BITS(d2, r2, e2);
+        if (je - j < WF) bits &= (1u << (je - j)) - 1u;
+        len = COMPRESS_APPEND_F(list, len, j, bits);
     }
     *len_io = len;
     return j < je ? j : je;
