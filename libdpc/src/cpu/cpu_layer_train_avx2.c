@@ -3,6 +3,8 @@
 #include <immintrin.h>
 #include <stdint.h>
 
+#include "cpu/cpu_layer_train_impl.h"
+
 #define W 4u
 typedef __m256d vd;
 typedef __m128i vx;
@@ -11,6 +13,7 @@ typedef __m256d vm;
 #define V_SET1(x) _mm256_set1_pd(x)
 #define V_ZERO() _mm256_setzero_pd()
 #define V_STORE(p, v) _mm256_storeu_pd(p, v)
+#define V_ADD(a, b) _mm256_add_pd(a, b)
 #define V_SUB(a, b) _mm256_sub_pd(a, b)
 #define V_MUL(a, b) _mm256_mul_pd(a, b)
 #define V_DIV(a, b) _mm256_div_pd(a, b)
@@ -65,6 +68,19 @@ static inline double hsum(vd v) {
     return _mm_cvtsd_f64(_mm_add_sd(s, _mm_unpackhi_pd(s, s)));
 }
 #define V_HSUM hsum
+
+/* A[q st + idx] -= v[q] in the lanes of bits, q < K: lane by lane (AVX2 has no scatter). */
+static inline void scatter_sub(double *A, size_t st, vx idx, unsigned bits, const vd *v, unsigned K) {
+    double t[DPC_MAX_DIMS * 4];
+    int32_t j[4];
+    for (unsigned q = 0; q < K; q++) _mm256_storeu_pd(t + 4 * q, v[q]);
+    _mm_storeu_si128((__m128i *)(void *)j, idx);
+    for (; bits; bits &= bits - 1) {
+        const unsigned l = (unsigned)__builtin_ctz(bits);
+        for (unsigned q = 0; q < K; q++) A[q * st + (size_t)j[l]] -= t[4 * q + l];
+    }
+}
+#define SCATTER_SUB(A, st, idx, m, bits, v, K) scatter_sub(A, st, idx, bits, v, K)
 
 #define TRAIN_CHUNK_FN dpc_train_chunk_avx2
 #define TRAIN_SET_FN dpc_train_set_avx2

@@ -12,6 +12,7 @@ typedef __mmask8 vm;
 #define V_SET1(x) _mm512_set1_pd(x)
 #define V_ZERO() _mm512_setzero_pd()
 #define V_STORE(p, v) _mm512_storeu_pd(p, v)
+#define V_ADD(a, b) _mm512_add_pd(a, b)
 #define V_SUB(a, b) _mm512_sub_pd(a, b)
 #define V_MUL(a, b) _mm512_mul_pd(a, b)
 #define V_DIV(a, b) _mm512_div_pd(a, b)
@@ -58,6 +59,14 @@ static inline double hsum(vd v) {
     return _mm_cvtsd_f64(_mm_add_sd(s, _mm_unpackhi_pd(s, s)));
 }
 #define V_HSUM hsum
+
+/* A[q st + idx] -= v[q] in the lanes of m, q < K (distinct indices: no conflicts). */
+#define SCATTER_SUB(A, st, idx, m, bits, v, K)                                                    \
+    for (unsigned q_ = 0; q_ < (K); q_++) {                                                        \
+        double *col_ = (A) + q_ * (st);                                                            \
+        const __m512d old_ = _mm512_mask_i32gather_pd(_mm512_setzero_pd(), m, idx, col_, 8);     \
+        _mm512_mask_i32scatter_pd(col_, m, idx, _mm512_sub_pd(old_, (v)[q_]), 8);                 \
+    }
 
 #define TRAIN_CHUNK_FN dpc_train_chunk_avx512
 #define TRAIN_SET_FN dpc_train_set_avx512

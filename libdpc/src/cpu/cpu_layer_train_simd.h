@@ -166,11 +166,11 @@ ALWAYS_INLINE void chunk_body(const dpc_train_pass *ps, size_t lo, size_t hi, do
  * Every pair term is odd in δ (forward g(d) δ/d; backward J(δ)(v_j − v_i) with J even), and the
  * kernel-gradient terms of (i, j) and (j, i) share d: (1 − f)·n̂·(v_i − v_j) together. So each
  * unordered pair is found once, from its lower sorted position s (candidates j > s only), and
- * its term is added to s and subtracted from j. Every point's sum runs in ascending partner
- * position (partners below it arrive while they are processed, those above while it is), one
- * term at a time: a fixed order, but one that needs the whole set on one worker. */
+ * its term is added to s (lane sums, as in pair_sums) and subtracted from j (one term at a time,
+ * in ascending s). A point's sum is its terms from partners below it, in ascending order, plus
+ * the lane sums of those above: a fixed order, but one that needs the whole set on one worker. */
 
-ALWAYS_INLINE void sym_pairs(const dpc_train_pass *ps, size_t s, uint32_t *list, unsigned len, double *a,
+ALWAYS_INLINE void sym_pairs(const dpc_train_pass *ps, size_t s, uint32_t *list, unsigned len, vd *acc,
                              double *part, const unsigned K, const int BACKWARD) {
     const dpc_train_sub *sp = ps->sp;
     const size_t st = ps->p->stride;
@@ -184,7 +184,6 @@ ALWAYS_INLINE void sym_pairs(const dpc_train_pass *ps, size_t s, uint32_t *list,
         vi[q] = BACKWARD ? V_SET1(V[q * st + s]) : V_ZERO();
     }
     for (unsigned z = 0; z < W; z++) list[len + z] = (uint32_t)s; /* d = 0: never a pair */
-    double t[DPC_MAX_DIMS * W];
     for (unsigned z = 0; z < len; z += W) {
         const vx idx = I_LOADU(list + z);
         vd dl[DPC_MAX_DIMS];
@@ -206,11 +205,10 @@ ALWAYS_INLINE void sym_pairs(const dpc_train_pass *ps, size_t s, uint32_t *list,
         const vd dw = V_SUB(V_GATHER(w + 1, qb), w0);
         const vd g = V_FMA(f, dw, w0);
         const vd inv_d = V_DIV(one, d);
-        double lo_t[W], hi_t[W];
-        int32_t qb_t[W];
+        vd tv[DPC_MAX_DIMS];
         if (!BACKWARD) {
-            const vd c = V_MUL(g, inv_d);
-            for (unsigned q = 0; q < K; q++) V_STORE(t + q * W, V_MUL(c, dl[q]));
+            const vd c = V_SEL(in, V_MUL(g, inv_d), V_ZERO());
+            for (unsigned q = 0; q < K; q++) tv[q] = V_MUL(c, dl[q]);
         } else {
             vd dv[DPC_MAX_DIMS];
             vd ndv = V_ZERO();
@@ -219,26 +217,24 @@ ALWAYS_INLINE void sym_pairs(const dpc_train_pass *ps, size_t s, uint32_t *list,
                 dv[q] = V_SUB(V_GATHER(V + q * st, idx), vi[q]);
                 ndv = V_FMA(dl[q], dv[q], ndv);
             }
-            const vd gd = V_MUL(g, inv_d);
-            const vd radial = V_MUL(V_SUB(V_MUL(dw, scale), gd), ndv);
-            for (unsigned q = 0; q < K; q++) V_STORE(t + q * W, V_FMA(radial, dl[q], V_MUL(gd, dv[q])));
+            const vd gd = V_SEL(in, V_MUL(g, inv_d), V_ZERO());
+            const vd radial = V_SEL(in, V_MUL(V_SUB(V_MUL(dw, scale), gd), ndv), V_ZERO());
+            for (unsigned q = 0; q < K; q++) tv[q] = V_FMA(radial, dl[q], V_MUL(gd, dv[q]));
             /* n̂·(v_i − v_j) = −n̂·Δv */
+            double lo_t[W], hi_t[W];
+            int32_t qb_t[W];
             V_STORE(lo_t, V_MUL(V_SUB(f, one), ndv));
             V_STORE(hi_t, V_MUL(f, V_SUB(V_ZERO(), ndv)));
             I_STORE(qb_t, qb);
-        }
-        for (unsigned b = bits; b; b &= b - 1) {
-            const unsigned l = (unsigned)__builtin_ctz(b);
-            const size_t j = list[z + l];
-            for (unsigned q = 0; q < K; q++) {
-                a[q] += t[q * W + l];
-                A[q * st + j] -= t[q * W + l];
-            }
-            if (BACKWARD) {
+            for (unsigned b = bits; b; b &= b - 1) {
+                const unsigned l = (unsigned)__builtin_ctz(b);
                 part[qb_t[l]] += lo_t[l];
                 part[qb_t[l] + 1] += hi_t[l];
             }
         }
+        /* Dead lanes hold 0 in tv and are masked out of the scatter. */
+        for (unsigned q = 0; q < K; q++) acc[q] = V_ADD(acc[q], tv[q]);
+        SCATTER_SUB(A, st, idx, in, bits, tv, K);
     }
 }
 
@@ -260,8 +256,8 @@ ALWAYS_INLINE void set_body(const dpc_train_pass *ps, double *part, const unsign
             cur = ws->cell[s];
             nr = dpc_grid_ranges(sp->k, sp->G, sp->R, ws->cell_start, cur, ranges);
         }
-        double a[DPC_MAX_DIMS];
-        for (unsigned q = 0; q < K; q++) a[q] = A[q * st + s]; /* partners below s, ascending */
+        vd acc[DPC_MAX_DIMS];
+        for (unsigned q = 0; q < K; q++) acc[q] = V_ZERO();
         unsigned len = 0;
         for (unsigned z = 0; z < nr; z++) {
             const uint32_t je = ranges[2 * z + 1];
@@ -270,13 +266,14 @@ ALWAYS_INLINE void set_body(const dpc_train_pass *ps, double *part, const unsign
             while (j < je) {
                 j = filter_range(ps, s, j, je, list, &len, K);
                 if (len >= LIST_CAP) {
-                    sym_pairs(ps, s, list, len, a, part, K, BACKWARD);
+                    sym_pairs(ps, s, list, len, acc, part, K, BACKWARD);
                     len = 0;
                 }
             }
         }
-        if (len) sym_pairs(ps, s, list, len, a, part, K, BACKWARD);
-        for (unsigned q = 0; q < K; q++) A[q * st + s] = a[q];
+        if (len) sym_pairs(ps, s, list, len, acc, part, K, BACKWARD);
+        /* The terms of partners below s, in ascending order, then the lane sums of those above. */
+        for (unsigned q = 0; q < K; q++) A[q * st + s] += V_HSUM(acc[q]);
     }
     for (size_t s = 0; s < m; s++) {
         double *out = ws->acc + (size_t)ws->perm[s] * n;
