@@ -90,8 +90,10 @@ def time_layer(name: str, isa: str, threads: int, reps: int) -> tuple[float, flo
     return statistics.median(walls), statistics.median(cpus), BATCH * M * (M - 1), in_range_pairs(x, rho)
 
 
-def time_steps(config: str, m: int, impl: str, threads: int, steps: int, isa: str = "") -> tuple[float, float]:
-    """(median wall, median process CPU) seconds per training step."""
+def time_steps(config: str, m: int, impl: str, threads: int, steps: int, isa: str = "",
+               torch_threads: int = 0) -> tuple[float, float]:
+    """(median wall, median process CPU) seconds per training step. The trainer gives torch and
+    the C kernels `threads` each; torch_threads > 0 then overrides torch's."""
     cfg = load_config(ROOT / "training" / "configs" / f"{config}.toml")
     cfg.pattern.points = m
     cfg.train.impl = impl
@@ -101,6 +103,8 @@ def time_steps(config: str, m: int, impl: str, threads: int, steps: int, isa: st
     try:
         with tempfile.TemporaryDirectory() as run_dir:
             trainer = Trainer(cfg, run_dir=run_dir, progress=False)
+            if torch_threads:
+                torch.set_num_threads(torch_threads)
             trainer.train_step()  # warm-up
             walls, cpus = [], []
             for _ in range(steps):
@@ -137,6 +141,7 @@ def main() -> None:
              "kernel time of one training step's 40 layers.", "",
              "| layer | search | in range / point | ISA | threads | ms (fwd+bwd) | M candidate pairs/s | M in-range pairs/s | x40 s |",
              "|---|---|---:|---|---:|---:|---:|---:|---:|"]
+    layer_t: dict = {}
     for name, (n, _, rho) in LAYERS.items():
         for isa in isas:
             for threads in (1, 2):
@@ -144,6 +149,7 @@ def main() -> None:
                     continue
                 wall, cpu, cand, inr = time_layer(name, isa, threads, args.reps)
                 t = cpu if threads == 1 else wall
+                layer_t[name, isa, threads] = t
                 search = "grid" if n <= 3 else "all pairs"
                 cpu_note = "" if threads == 1 else f" ({cpu * 1e3:.1f})"
                 lines.append(f"| {name} | {search} | {inr / (BATCH * M):.0f} | {isa} | {threads} | "
@@ -151,31 +157,58 @@ def main() -> None:
                              f"{LAYER_COUNT * t:.2f} |")
                 print(lines[-1], flush=True)
     load.append(os.getloadavg()[0])
+    if VECTOR_ISAS:
+        best = VECTOR_ISAS[-1]
+        lines += ["", f"Speed-up of `{best}` over `scalar`, 1 thread: " + ", ".join(
+            f"{name} {layer_t[name, 'scalar', 1] / layer_t[name, best, 1]:.1f}x" for name in LAYERS) + "."]
 
     lines += ["", "### Training steps", "",
               "Median seconds per training step (forward through the cascade, loss, backward, Adam) of the "
               "bnot-2d (40 layers, 32 bins, rho = 4, radial-spectrum loss), bnot-4d (rho = 2) and bnot-10d "
               f"(rho = 1) configurations, batch 4, after one warm-up step; wall time, process CPU time "
               "in parentheses. The `scalar` rows (DPC_ISA=scalar) are the kernels before the vector paths.", "",
+              "`threads` is `[train] threads` (torch's intra-op threads and the C kernels' threads); "
+              "`2 / torch 1` keeps torch on one thread.", "",
               "| config | m | op | ISA | threads | s/step | steps/s |", "|---|---:|---|---|---:|---:|---:|"]
-    cases = [("bnot-2d", 1024, "torch", 1, ""), ("bnot-2d", 1024, "c", 1, "scalar"),
-             ("bnot-2d", 1024, "c", 1, ""), ("bnot-2d", 1024, "c", 2, ""),
-             ("bnot-2d", 4096, "torch", 1, ""), ("bnot-2d", 4096, "c", 1, ""), ("bnot-2d", 4096, "c", 2, ""),
-             ("bnot-4d", 1024, "c", 1, "scalar"), ("bnot-4d", 1024, "c", 1, ""), ("bnot-4d", 1024, "c", 2, ""),
-             ("bnot-10d", 1024, "c", 1, "scalar"), ("bnot-10d", 1024, "c", 1, ""), ("bnot-10d", 1024, "c", 2, "")]
+    cases = [("bnot-2d", 1024, "torch", 1, "", 0), ("bnot-2d", 1024, "c", 1, "scalar", 0),
+             ("bnot-2d", 1024, "c", 1, "", 0), ("bnot-2d", 1024, "c", 2, "", 0), ("bnot-2d", 1024, "c", 2, "", 1),
+             ("bnot-2d", 4096, "torch", 1, "", 0), ("bnot-2d", 4096, "c", 1, "", 0),
+             ("bnot-2d", 4096, "c", 2, "", 0),
+             ("bnot-4d", 1024, "c", 1, "scalar", 0), ("bnot-4d", 1024, "c", 1, "", 0),
+             ("bnot-4d", 1024, "c", 2, "", 0), ("bnot-4d", 1024, "c", 2, "", 1),
+             ("bnot-10d", 1024, "c", 1, "scalar", 0), ("bnot-10d", 1024, "c", 1, "", 0),
+             ("bnot-10d", 1024, "c", 2, "", 0), ("bnot-10d", 1024, "c", 2, "", 1)]
     best2d = 0.0
-    for config, m, impl, threads, isa in cases:
+    step_t: dict = {}
+    for config, m, impl, threads, isa, torch_threads in cases:
         if args.quick and isa == "scalar":
             continue
         slow = impl == "torch" or isa == "scalar"
         steps = max(2, args.steps // 2) if slow else args.steps
-        wall, cpu = time_steps(config, m, impl, threads, steps, isa)
+        wall, cpu = time_steps(config, m, impl, threads, steps, isa, torch_threads)
+        step_t[config, m, impl, threads, isa, torch_threads] = wall
         if config == "bnot-2d" and m == 1024 and impl == "c" and not isa:
             best2d = max(best2d, 1 / wall)
         shown = isa or (("auto (" + (VECTOR_ISAS[-1] if VECTOR_ISAS else "scalar") + ")") if impl == "c" else "")
-        lines.append(f"| {config} | {m:,} | {impl} | {shown} | {threads} | {wall:.3f} ({cpu:.3f}) | {1 / wall:.2f} |")
+        shown_threads = f"{threads} / torch {torch_threads}" if torch_threads else f"{threads}"
+        lines.append(f"| {config} | {m:,} | {impl} | {shown} | {shown_threads} | {wall:.3f} ({cpu:.3f}) | "
+                     f"{1 / wall:.2f} |")
         print(lines[-1], flush=True)
     load.append(os.getloadavg()[0])
+    notes = []
+    if not args.quick:
+        notes.append("Steps/s of `auto` over `scalar`, 1 thread: " + ", ".join(
+            f"{c} {step_t[c, 1024, 'c', 1, 'scalar', 0] / step_t[c, 1024, 'c', 1, '', 0]:.1f}x"
+            for c in ("bnot-2d", "bnot-4d", "bnot-10d")) + ".")
+    slower = [c for c in ("bnot-2d", "bnot-4d", "bnot-10d")
+              if step_t[c, 1024, "c", 2, "", 0] > step_t[c, 1024, "c", 1, "", 0]]
+    if slower:
+        notes.append(f"Two threads were slower than one here ({', '.join(slower)}): with other work on "
+                     "the machine the second thread finds no free core, the C kernels' 2-thread time is "
+                     "about their 1-thread time (layer table), and torch's intra-op threads, which "
+                     "`[train] threads` sets too, lose most (compare the `2 / torch 1` rows). On a busy "
+                     "machine keep torch on one thread.")
+    lines += [""] + [" ".join(notes)] if notes else []
     lines += ["", f"Load average (1 min) at the start, between the tables and at the end: "
               f"{', '.join(f'{v:.2f}' for v in load)} on {os.cpu_count()} CPUs. Goal (issue 3): >= 4 steps/s "
               f"for bnot-2d at m = 1,024 on this 2-core machine: best measured {best2d:.2f} steps/s (wall), "

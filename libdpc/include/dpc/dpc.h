@@ -223,6 +223,9 @@ DPC_API dpc_status dpc_uniform(uint64_t seed, size_t n_points, size_t dims, floa
  * reference of the format to rounding, not the float32 cascade of dpc_generate bit for bit.
  * Work is O(m * neighbours) per set (toroidal cell grid, or all pairs where a grid does not
  * pay), memory O(m * n + cells); never O(m^2). Outputs are bit-identical for every thread count.
+ * The kernels run on the ISA path the inference engine would pick for DPC_ISA_AUTO (environment
+ * variable DPC_ISA, else the best the CPU has; a bad value fails the call the same way); paths
+ * differ by rounding only.
  *
  * Backward, per set, with G = dL/dy (m x n). The wrap y - floor(y) is treated as the identity.
  * For subspace t with dimension set D_t and an ordered pair (i, j) with e_t < d < r_t:

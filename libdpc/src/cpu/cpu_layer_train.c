@@ -16,7 +16,10 @@
  * The pair loop (filter candidates on d², then the pair math on the survivors) is per ISA:
  * cpu_layer_train_scalar.c, _avx2.c, _avx512.c, chosen like the inference kernels (DPC_ISA, else
  * cpuid). Vector paths sum in lanes, so they differ from the scalar path by rounding; each path
- * on its own is deterministic and thread-count independent. */
+ * on its own is deterministic and thread-count independent. Sets below SET_PARALLEL_BELOW points
+ * always run whole on one worker, and there the vector paths take each unordered pair once and
+ * scatter its (odd) term to the upper point (set_fn, cpu_layer_train_simd.h): still a fixed
+ * order, since no other worker touches the set. */
 #include "cpu/cpu_layer_train_impl.h"
 
 #include <math.h>
