@@ -48,8 +48,12 @@ step "C tests with the Vulkan backend (lavapipe), ASan + UBSan"
 cmake -S . -B build/test-vulkan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DDPC_BUILD_TESTS=ON -DDPC_SANITIZE=address \
       -DDPC_VULKAN=ON >/dev/null
 cmake --build build/test-vulkan -j "$JOBS"
-# The CPU tests again, in a build that has the backend (AUTO probes Vulkan, finds no GPU, runs on
-# the CPU), with leak detection on; then the Vulkan tests with it off (the driver leaks a little).
+# The CPU tests again, in a build that has the backend, with leak detection on: AUTO opens the
+# Vulkan loader, finds no driver (VK_DRIVER_FILES names none) and runs on the CPU. lavapipe is kept
+# out of this stage because the driver itself leaks (128 bytes per instance on AMD Zen 5, from
+# code it has unloaded, so no suppression can name it); then the Vulkan tests, on lavapipe, with
+# leak detection off.
+VK_DRIVER_FILES=/nonexistent/dpc-no-driver.json VK_ICD_FILENAMES=/nonexistent/dpc-no-driver.json \
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 run_ctest build/test-vulkan -LE vulkan
 ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 run_ctest build/test-vulkan -L vulkan
 
