@@ -121,13 +121,78 @@ static inline uint32_t concatenate(const dpc_sub_job *job, unsigned k, const uin
     const __m512i qmax = _mm512_set1_epi32(job->qmax);                                                          \
     (void)bins;
 
+/* Two query points against the same candidate vector: the chain from a candidate load to its
+ * accumulation is long (round, rsqrt, Newton step, table lookup) and a point has only a few
+ * vectors of candidates, so one point alone leaves the core waiting on latency. Each point's
+ * operations are exactly those of CANDIDATE_LOOP, in the same order, so the sums have the same
+ * bits whether a point runs in a pair or alone (a vector with no lane in the window adds +0). */
+#define PAIR_TERM(S, SMALL_TABLE)                                                                   \
+    __m512 inv##S = RSQRT(d2##S);                                                                   \
+    inv##S = _mm512_mul_ps(inv##S, _mm512_fmadd_ps(_mm512_mul_ps(neg_half, d2##S), _mm512_mul_ps(inv##S, inv##S), three_halves)); \
+    const __m512 d##S = _mm512_mul_ps(d2##S, inv##S);                                               \
+    const lane_mask in##S = WINDOW(d##S, load);                                                     \
+    const __m512 u##S = _mm512_min_ps(_mm512_mul_ps(d##S, scale), umax);                            \
+    const __m512i b##S = _mm512_min_epi32(_mm512_cvttps_epi32(u##S), qmax);                         \
+    const __m512 f##S = _mm512_sub_ps(u##S, _mm512_cvtepi32_ps(b##S));                              \
+    __m512 w##S, dw##S;                                                                             \
+    if (SMALL_TABLE) {                                                                              \
+        w##S = _mm512_permutex2var_ps(w_lo, b##S, w_hi);                                            \
+        dw##S = _mm512_permutex2var_ps(dw_lo, b##S, dw_hi);                                         \
+    } else {                                                                                        \
+        w##S = _mm512_mask_i32gather_ps(_mm512_setzero_ps(), in##S, b##S, job->w, 4);               \
+        dw##S = _mm512_mask_i32gather_ps(_mm512_setzero_ps(), in##S, b##S, job->dw, 4);             \
+    }                                                                                               \
+    const __m512 coef##S = MASKED_COEF(in##S, _mm512_fmadd_ps(f##S, dw##S, w##S), inv##S);
+#define CANDIDATE_LOOP_PAIR(FOR_DIMS, SMALL_TABLE)                                                  \
+    for (unsigned r = 0; r < nrg; r++) {                                                            \
+        const uint32_t end = rg[2 * r + 1];                                                         \
+        for (uint32_t j = rg[2 * r]; j < end; j += LANES) {                                         \
+            const uint32_t left = end - j;                                                          \
+            const lane_mask load = LOAD_MASK(left);                                                 \
+            __m512 d2A = _mm512_setzero_ps(), d2B = d2A;                                            \
+            FOR_DIMS(DIFF_PAIR)                                                                     \
+            PAIR_TERM(A, SMALL_TABLE)                                                               \
+            PAIR_TERM(B, SMALL_TABLE)                                                               \
+            FOR_DIMS(ACCUMULATE_PAIR)                                                               \
+        }                                                                                           \
+    }
+#define DIFF_PAIR(q)                                                                                \
+    const __m512 cand##q = _mm512_loadu_ps(c##q + j);                                               \
+    __m512 tA##q = _mm512_sub_ps(cand##q, xA##q), tB##q = _mm512_sub_ps(cand##q, xB##q);            \
+    tA##q = _mm512_sub_ps(tA##q, ROUND(tA##q));                                                     \
+    tB##q = _mm512_sub_ps(tB##q, ROUND(tB##q));                                                     \
+    d2A = _mm512_fmadd_ps(tA##q, tA##q, d2A);                                                       \
+    d2B = _mm512_fmadd_ps(tB##q, tB##q, d2B);
+#define ACCUMULATE_PAIR(q)                                                                          \
+    aA##q = _mm512_fmadd_ps(coefA, tA##q, aA##q);                                                   \
+    aB##q = _mm512_fmadd_ps(coefB, tB##q, aB##q);
+#define DECLARE_PAIR(q) __m512 xA##q, xB##q, aA##q, aB##q;
+#define START_PAIR(q)                                                                               \
+    xA##q = _mm512_set1_ps(xi[q]);                                                                  \
+    xB##q = _mm512_set1_ps(xi[kdim + q]);                                                            \
+    aA##q = _mm512_setzero_ps();                                                                    \
+    aB##q = _mm512_setzero_ps();
+#define FINISH_PAIR(q)                                                                              \
+    acc[q] = REDUCE(aA##q);                                                                         \
+    acc[kdim + q] = REDUCE(aB##q);
+
 #define SMALL_KERNEL(NAME, DIMS, K)                                                                 \
     static void NAME(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges, \
                      unsigned n_ranges, float *accs, float *scratch) {                              \
         SETUP                                                                                       \
         GATHER(K)                                                                                   \
         DIMS(DECLARE)                                                                               \
-        for (unsigned p = 0; p < count; p++) {                                                      \
+        DIMS(DECLARE_PAIR)                                                                          \
+        const unsigned kdim = (K); /* the second point's offset in xs and accs */                  \
+        unsigned p = 0;                                                                             \
+        for (; p + 2 <= count; p += 2) {                                                            \
+            const float *xi = xs + p * (K);                                                         \
+            float *acc = accs + p * (K);                                                            \
+            DIMS(START_PAIR)                                                                        \
+            if (small_table) { CANDIDATE_LOOP_PAIR(DIMS, 1) } else { CANDIDATE_LOOP_PAIR(DIMS, 0) } \
+            DIMS(FINISH_PAIR)                                                                       \
+        }                                                                                           \
+        for (; p < count; p++) {                                                                    \
             const float *xi = xs + p * (K);                                                         \
             float *acc = accs + p * (K);                                                            \
             DIMS(START)                                                                             \
