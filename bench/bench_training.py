@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import platform
 import statistics
 import sys
 import tempfile
@@ -36,6 +37,7 @@ sys.path.insert(0, str(ROOT / "tests" / "python"))
 
 import torch  # noqa: E402
 
+from bench_generate import cpu_name  # noqa: E402  (one CPU description for every benchmark page)
 from cpu_isa import VECTOR_ISAS  # noqa: E402
 from dpc import _core  # noqa: E402
 from dpc_train.config import load_config  # noqa: E402
@@ -132,6 +134,8 @@ def main() -> None:
 
     lines = ["## Training", "",
              "Measured by `python bench/bench_training.py`.", "",
+             f"Machine: {cpu_name()}, {os.cpu_count()} logical CPUs, {platform.system()} {platform.machine()}; "
+             f"torch {torch.__version__}.", "",
              "### Layer kernels", "",
              f"One PointFilter layer, forward + backward (`dpc._core.layer_forward` / `layer_backward`), "
              f"batch {BATCH}, m = {M:,}, 32 bins, uniform points, median of {args.reps} calls. Candidate pairs: "
@@ -203,11 +207,13 @@ def main() -> None:
     slower = [c for c in ("bnot-2d", "bnot-4d", "bnot-10d")
               if step_t[c, 1024, "c", 2, "", 0] > step_t[c, 1024, "c", 1, "", 0]]
     if slower:
-        notes.append(f"Two threads were slower than one here ({', '.join(slower)}): with other work on "
-                     "the machine the second thread finds no free core, the C kernels' 2-thread time is "
-                     "about their 1-thread time (layer table), and torch's intra-op threads, which "
-                     "`[train] threads` sets too, lose most (compare the `2 / torch 1` rows). On a busy "
-                     "machine keep torch on one thread.")
+        busy = max(load) > 1.0 + 0.25 * (os.cpu_count() or 1)  # beyond this benchmark's own thread
+        notes.append(f"Two threads were slower than one here ({', '.join(slower)}): "
+                     + ("with other work on the machine the second thread finds no free core, and "
+                        if busy else "")
+                     + "torch's intra-op threads, which `[train] threads` sets too, cost more than they "
+                     "save on this step's small tensors (compare the `2 / torch 1` rows, which keep "
+                     "torch on one thread).")
     lines += [""] + [" ".join(notes)] if notes else []
     lines += ["", f"Load average (1 min) at the start, between the tables and at the end: "
               f"{', '.join(f'{v:.2f}' for v in load)} on {os.cpu_count()} CPUs. Goal (issue 3): >= 4 steps/s "
