@@ -99,6 +99,15 @@ def rel_l1(r, t: Target, nu_range: tuple[float, float]) -> float:
     return float(np.sum(np.abs(p - t.power[sel])) / np.sum(t.power[sel]))
 
 
+def elow_text(r, nu: float) -> str:
+    """E_low(nu) of a radial spectrum as table text, or a dash where no integer frequency lies
+    below nu (10-D at m = 1,024: the lowest, |q| = 1, is nu = m^(-1/10) = 0.5)."""
+    try:
+        return f"{r.low_frequency_energy(nu):.4f}"
+    except dpc.DpcError:
+        return "—"
+
+
 # ---- cards ----------------------------------------------------------------------------------
 
 @dataclass
@@ -291,15 +300,18 @@ def card_nd(name: str, card: Card, model) -> list[str]:
         r = analysis.radial_spectrum(s, nu_max=4.0, directions=128)
         peak, pnu = r.peak()
         md = analysis.min_distance(s)
-        rows.append(f"| {label} | {len(s)} | {r.low_frequency_energy(0.5):.4f} | "
-                    f"{r.low_frequency_energy(0.75):.4f} | {peak:.2f} (ν = {pnu:.2f}) | "
+        rows.append(f"| {label} | {len(s)} | {elow_text(r, 0.5)} | "
+                    f"{elow_text(r, 0.75)} | {peak:.2f} (ν = {pnu:.2f}) | "
                     f"{md.mean_ratio:.3f} / {md.min_ratio:.3f} | {rel_l1(r, t, (0.25, 3.0)):.3f} |")
         curves.append((label.strip("*"), r, "-" if label.startswith("**") else ":"))
     fig = FIGURES / f"{name}-radial.png"
     radial_plot(fig, curves, t, f"{name}: radial power spectrum (Monte Carlo, 128 frequencies per ring)")
     print("\n".join(rows))
     return ["", f"Target: {t.label}. Radial spectra by Monte Carlo over 128 integer frequencies per "
-            "ring (`dpc.analysis.radial_spectrum_mc`); rel. L1 over 0.25 ≤ ν ≤ 3.", "", *rows, "",
+            "ring (`dpc.analysis.radial_spectrum_mc`); rel. L1 over 0.25 ≤ ν ≤ 3."
+            + (f" —: no integer frequency lies below that ν at m = {m:,} in {n}-D (the lowest, "
+               f"|q| = 1, is ν = {m ** (-1.0 / n):.2f})." if m ** (-1.0 / n) >= 0.5 else ""),
+            "", *rows, "",
             f"![radial spectrum of {name}](figures/models/{fig.name})", ""]
 
 
