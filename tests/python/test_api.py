@@ -217,8 +217,15 @@ def test_gil_is_released_while_c_runs():
     """A Python thread keeps counting while the main thread is inside one long generate call.
     With the GIL held for the whole call the counter could not move; released, it moves a lot."""
     m = dpc.load(M2D, threads=1)
-    n = 1 << 17
     m.generate(0, 4096)  # warm up
+    # A call long enough to tell (>= 0.2 s) on however fast a machine: double the count until then.
+    n = 1 << 16
+    while n < (1 << 23):
+        t0 = time.perf_counter()
+        m.generate(0, n)
+        if time.perf_counter() - t0 >= 0.2:
+            break
+        n *= 2
     counter = [0]
     stop = threading.Event()
     started = threading.Event()
