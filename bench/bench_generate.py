@@ -8,7 +8,9 @@ Builds libdpc and bench/bench_generate.c in build/bench (Release), then measures
    has (scalar, AVX2, AVX-512);
 2. the scaling exponent: least-squares slope of log(time) against log(m);
 3. all-pairs throughput: a 2-D model whose radius covers the torus (every pair interacts),
-   m = 4,096, 4 layers: m^2 * layers / time pair interactions per second.
+   m = 4,096, 4 layers: m^2 * layers / time pair interactions per second;
+4. the trained 2-D blue-noise models bnot-2d (rho = 4) and bnot-2d-wide (rho = 8) at m = 1,024
+   and 65,536 on the fastest ISA.
 Medians over repeated runs; ratios are taken within this one run.
 """
 
@@ -114,8 +116,15 @@ def main() -> None:
         r = pairs[isa]
         rates[isa] = 4096**2 * r["layers"] / r["median_s"]
         lines.append(f"| {isa} | {r['median_s'] * 1e3:.2f} ms | {rates[isa] / 1e9:.3f} G |")
-    lines += ["", f"Load average while measuring: {os.getloadavg()[0]:.2f} (1 min) on {os.cpu_count()} CPUs."]
     best = isas[-1]
+    # The trained 2-D blue-noise models: the receptive field (rho) sets the neighbour count.
+    trained = [("bnot-2d", 4.0), ("bnot-2d-wide", 8.0)]
+    lines += ["", f"## Trained 2-D blue-noise models ({best}, 40 layers)", "",
+              "| model | rho (mean spacings) | m = 1,024 | m = 65,536 |", "|---|---:|---:|---:|"]
+    for name, rho in trained:
+        r = run(exe, ROOT / "models" / f"{name}.onnx", best, [1024, 65536])
+        lines.append(f"| `{name}` | {rho:g} | {r[0]['median_s'] * 1e3:.2f} ms | {r[1]['median_s'] * 1e3:.1f} ms |")
+    lines += ["", f"Load average while measuring: {os.getloadavg()[0]:.2f} (1 min) on {os.cpu_count()} CPUs."]
     t1k = rows[best][0]["median_s"]
     checks = [(f"1,024 points <= 2 ms ({best})", f"{t1k * 1e3:.2f} ms", t1k <= 2e-3)]
     if 1048576 in counts:

@@ -121,6 +121,7 @@ class Card:
 
 CARDS = {
     "bnot-2d": Card("plane", {"xy": "bnot"}, scales=True),
+    "bnot-2d-wide": Card("plane", {"xy": "bnot"}, scales=True),
     "repulsion-2d": Card("plane", {"xy": "bnot"}),
     "jitter-2d": Card("plane", {"xy": "jitter"}),
     "step-2d": Card("plane", {"xy": "step"}),
