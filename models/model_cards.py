@@ -358,6 +358,7 @@ def card_integrand(name: str, card: Card, model) -> list[str]:
     sets = {f"**{name}**": model.generate_batch(SETS, seed=0),
             "authors' BNOT sets": classic_sets("bnot", m, 2),
             "bnot-2d (dpc)": dpc.load("bnot-2d").generate_batch(SETS, seed=0),
+            "bnot-2d-wide (dpc)": dpc.load("bnot-2d-wide").generate_batch(SETS, seed=0),
             "jitter": classic_sets("jitter", m, 2), "white noise": classic_sets("white", m, 2)}
     white = IS.mc_error(sets["white noise"], fam)
     for label, s in sets.items():
