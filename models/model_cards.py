@@ -104,7 +104,7 @@ def elow_text(r, nu: float) -> str:
     below nu (10-D at m = 1,024: the lowest, |q| = 1, is nu = m^(-1/10) = 0.5)."""
     try:
         return f"{r.low_frequency_energy(nu):.4f}"
-    except dpc.DpcError:
+    except dpc.InvalidArgumentError:
         return "—"
 
 

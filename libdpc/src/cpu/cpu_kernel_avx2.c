@@ -33,7 +33,6 @@ static inline __m256 table32(const __m256 t[4], __m256i b) {
     const __m256 hi = _mm256_blendv_ps(_mm256_permutevar8x32_ps(t[2], b), _mm256_permutevar8x32_ps(t[3], b), bit3);
     return _mm256_blendv_ps(lo, hi, bit4);
 }
-#define TABLE32(t, b) table32(t, b)
 
 /* Load a table of `bins` <= 32 floats into four registers, zeros past its end (never read). */
 static inline void load_table32(const float *src, int bins, __m256 t[4]) {
@@ -89,8 +88,8 @@ static inline uint32_t concatenate(const dpc_sub_job *job, unsigned k, const uin
             const __m256 f = _mm256_sub_ps(u, _mm256_cvtepi32_ps(b));                                        \
             __m256 w, dw;                                                                           \
             if (SMALL_TABLE) {                                                                      \
-                w = TABLE32(w_t, b);                                                                \
-                dw = TABLE32(dw_t, b);                                                              \
+                w = table32(w_t, b);                                                                \
+                dw = table32(dw_t, b);                                                              \
             } else {                                                                                \
                 w = _mm256_i32gather_ps(job->w, b, 4);                                              \
                 dw = _mm256_i32gather_ps(job->dw, b, 4);                                            \

@@ -42,31 +42,38 @@ static inline uint32_t concatenate(const dpc_sub_job *job, unsigned k, const uin
  * accumulators stay in registers; DIMS_N loops over arrays for larger subspaces.
  * Per candidate: toroidal difference, distance via rsqrt + one Newton step (relative error
  * ~1e-7; d2 = 0 lanes fail the window test), window eps < d < r, linear kernel lookup. */
-#define CANDIDATE_LOOP(FOR_DIMS, SMALL_TABLE)                                                         \
+/* One term's chain for the query whose values carry suffix S (empty for a lone query, A or B
+ * in a pair): distance, window mask in##S, then coef##S = g(d) / d in the window, 0 outside. */
+#define TERM_WINDOW(S)                                                                              \
+    __m512 inv##S = RSQRT(d2##S);                                                                   \
+    inv##S = _mm512_mul_ps(inv##S, _mm512_fmadd_ps(_mm512_mul_ps(neg_half, d2##S), _mm512_mul_ps(inv##S, inv##S), three_halves)); \
+    const __m512 d##S = _mm512_mul_ps(d2##S, inv##S);                                               \
+    const lane_mask in##S = WINDOW(d##S, load);
+#define TERM_COEF(S, SMALL_TABLE)                                                                   \
+    const __m512 u##S = _mm512_min_ps(_mm512_mul_ps(d##S, scale), umax);                            \
+    const __m512i b##S = _mm512_min_epi32(_mm512_cvttps_epi32(u##S), qmax);                         \
+    const __m512 f##S = _mm512_sub_ps(u##S, _mm512_cvtepi32_ps(b##S));                              \
+    __m512 w##S, dw##S;                                                                             \
+    if (SMALL_TABLE) {                                                                              \
+        w##S = _mm512_permutex2var_ps(w_lo, b##S, w_hi);                                            \
+        dw##S = _mm512_permutex2var_ps(dw_lo, b##S, dw_hi);                                         \
+    } else {                                                                                        \
+        w##S = _mm512_mask_i32gather_ps(_mm512_setzero_ps(), in##S, b##S, job->w, 4);               \
+        dw##S = _mm512_mask_i32gather_ps(_mm512_setzero_ps(), in##S, b##S, job->dw, 4);             \
+    }                                                                                               \
+    const __m512 coef##S = MASKED_COEF(in##S, _mm512_fmadd_ps(f##S, dw##S, w##S), inv##S);
+
+#define CANDIDATE_LOOP(FOR_DIMS, SMALL_TABLE)                                                       \
     for (unsigned r = 0; r < nrg; r++) {                                                            \
-        const uint32_t end = rg[2 * r + 1];                                                     \
-        for (uint32_t j = rg[2 * r]; j < end; j += LANES) {                                     \
+        const uint32_t end = rg[2 * r + 1];                                                         \
+        for (uint32_t j = rg[2 * r]; j < end; j += LANES) {                                         \
             const uint32_t left = end - j;                                                          \
             const lane_mask load = LOAD_MASK(left);                                                 \
-            __m512 d2 = _mm512_setzero_ps();                                                              \
+            __m512 d2 = _mm512_setzero_ps();                                                        \
             FOR_DIMS(DIFF)                                                                          \
-            __m512 inv = RSQRT(d2);                                                                    \
-            inv = _mm512_mul_ps(inv, _mm512_fmadd_ps(_mm512_mul_ps(neg_half, d2), _mm512_mul_ps(inv, inv), three_halves)); \
-            const __m512 d = _mm512_mul_ps(d2, inv);                                                      \
-            const lane_mask in = WINDOW(d, load);                                                   \
+            TERM_WINDOW()                                                                           \
             if (!ANY(in)) continue;                                                                 \
-            const __m512 u = _mm512_min_ps(_mm512_mul_ps(d, scale), umax);                                   \
-            const __m512i b = _mm512_min_epi32(_mm512_cvttps_epi32(u), qmax);                                              \
-            const __m512 f = _mm512_sub_ps(u, _mm512_cvtepi32_ps(b));                                        \
-            __m512 w, dw;                                                                           \
-            if (SMALL_TABLE) {                                                                      \
-                w = _mm512_permutex2var_ps(w_lo, b, w_hi);                                          \
-                dw = _mm512_permutex2var_ps(dw_lo, b, dw_hi);                                       \
-            } else {                                                                                \
-                w = _mm512_mask_i32gather_ps(_mm512_setzero_ps(), in, b, job->w, 4);                \
-                dw = _mm512_mask_i32gather_ps(_mm512_setzero_ps(), in, b, job->dw, 4);              \
-            }                                                                                       \
-            const __m512 coef = MASKED_COEF(in, _mm512_fmadd_ps(f, dw, w), inv);                          \
+            TERM_COEF(, SMALL_TABLE)                                                                \
             FOR_DIMS(ACCUMULATE)                                                                    \
         }                                                                                           \
     }
@@ -126,23 +133,6 @@ static inline uint32_t concatenate(const dpc_sub_job *job, unsigned k, const uin
  * vectors of candidates, so one point alone leaves the core waiting on latency. Each point's
  * operations are exactly those of CANDIDATE_LOOP, in the same order, so the sums have the same
  * bits whether a point runs in a pair or alone (a vector with no lane in the window adds +0). */
-#define PAIR_TERM(S, SMALL_TABLE)                                                                   \
-    __m512 inv##S = RSQRT(d2##S);                                                                   \
-    inv##S = _mm512_mul_ps(inv##S, _mm512_fmadd_ps(_mm512_mul_ps(neg_half, d2##S), _mm512_mul_ps(inv##S, inv##S), three_halves)); \
-    const __m512 d##S = _mm512_mul_ps(d2##S, inv##S);                                               \
-    const lane_mask in##S = WINDOW(d##S, load);                                                     \
-    const __m512 u##S = _mm512_min_ps(_mm512_mul_ps(d##S, scale), umax);                            \
-    const __m512i b##S = _mm512_min_epi32(_mm512_cvttps_epi32(u##S), qmax);                         \
-    const __m512 f##S = _mm512_sub_ps(u##S, _mm512_cvtepi32_ps(b##S));                              \
-    __m512 w##S, dw##S;                                                                             \
-    if (SMALL_TABLE) {                                                                              \
-        w##S = _mm512_permutex2var_ps(w_lo, b##S, w_hi);                                            \
-        dw##S = _mm512_permutex2var_ps(dw_lo, b##S, dw_hi);                                         \
-    } else {                                                                                        \
-        w##S = _mm512_mask_i32gather_ps(_mm512_setzero_ps(), in##S, b##S, job->w, 4);               \
-        dw##S = _mm512_mask_i32gather_ps(_mm512_setzero_ps(), in##S, b##S, job->dw, 4);             \
-    }                                                                                               \
-    const __m512 coef##S = MASKED_COEF(in##S, _mm512_fmadd_ps(f##S, dw##S, w##S), inv##S);
 #define CANDIDATE_LOOP_PAIR(FOR_DIMS, SMALL_TABLE)                                                  \
     for (unsigned r = 0; r < nrg; r++) {                                                            \
         const uint32_t end = rg[2 * r + 1];                                                         \
@@ -151,8 +141,10 @@ static inline uint32_t concatenate(const dpc_sub_job *job, unsigned k, const uin
             const lane_mask load = LOAD_MASK(left);                                                 \
             __m512 d2A = _mm512_setzero_ps(), d2B = d2A;                                            \
             FOR_DIMS(DIFF_PAIR)                                                                     \
-            PAIR_TERM(A, SMALL_TABLE)                                                               \
-            PAIR_TERM(B, SMALL_TABLE)                                                               \
+            TERM_WINDOW(A)                                                                          \
+            TERM_WINDOW(B)                                                                          \
+            TERM_COEF(A, SMALL_TABLE)                                                               \
+            TERM_COEF(B, SMALL_TABLE)                                                               \
             FOR_DIMS(ACCUMULATE_PAIR)                                                               \
         }                                                                                           \
     }
