@@ -4,8 +4,12 @@
  * on Vulkan). The CPU backend runs on one thread with the best ISA path (as bench_generate.c).
  * Each count runs once to warm up (Vulkan: buffer allocation, first dispatch), then repeats
  * until 1.5 s or 25 runs, at least 3. Wall time and the process's CPU time (a software Vulkan
- * driver computes on CPU threads of this process) are reported. */
+ * driver computes on CPU threads of this process) are reported. On Vulkan, the warm-up's output
+ * (seed 0) is also compared with the CPU backend's for the same seed (toroidal difference,
+ * max_abs_diff_vs_cpu), so a
+ * timing on a new device is never reported for wrong points. */
 #define _POSIX_C_SOURCE 200809L
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -44,6 +48,16 @@ int main(int argc, char **argv) {
         fprintf(stderr, "load failed: %s\n", sets ? dpc_last_error() : "SETS must be positive");
         return 1;
     }
+    dpc_model *reference = NULL; // Vulkan: the CPU backend on every core, for the parity check
+    if (opt.backend == DPC_BACKEND_VULKAN) {
+        dpc_load_options cpu_opt = opt;
+        cpu_opt.backend = DPC_BACKEND_CPU;
+        cpu_opt.threads = 0;
+        if (dpc_model_load_file(argv[1], &cpu_opt, &reference) != DPC_OK) {
+            fprintf(stderr, "load failed: %s\n", dpc_last_error());
+            return 1;
+        }
+    }
     dpc_model_info info;
     dpc_model_get_info(model, &info);
     const char *isa[] = {"auto", "scalar", "avx2", "avx512"};
@@ -55,6 +69,22 @@ int main(int argc, char **argv) {
         if (!out || dpc_generate_batch(model, 0, sets, m, out) != DPC_OK) {
             fprintf(stderr, "generate failed: %s\n", out ? dpc_last_error() : "out of memory");
             return 1;
+        }
+        double max_diff = -1.0; // no comparison (CPU backend)
+        if (opt.backend == DPC_BACKEND_VULKAN) {
+            const size_t count = dpc_output_size(model, sets, m);
+            float *ref = (float *)malloc(count * sizeof(float));
+            if (!ref || dpc_generate_batch(reference, 0, sets, m, ref) != DPC_OK) {
+                fprintf(stderr, "CPU reference failed: %s\n", ref ? dpc_last_error() : "out of memory");
+                return 1;
+            }
+            max_diff = 0.0;
+            for (size_t e = 0; e < count; e++) {
+                double d = fabs((double)out[e] - (double)ref[e]);
+                d = d > 0.5 ? 1.0 - d : d; // on the torus: 0.99999 and 0.00001 are neighbours
+                if (!(d <= max_diff)) max_diff = d; // NaN propagates
+            }
+            free(ref);
         }
         double start = clock_s(CLOCK_MONOTONIC);
         while (runs < 25 && (runs < 3 || clock_s(CLOCK_MONOTONIC) - start < 1.5)) {
@@ -72,12 +102,13 @@ int main(int argc, char **argv) {
         qsort(cpu, (size_t)runs, sizeof(double), cmp);
         printf("{\"model\": \"%s\", \"backend\": \"%s\", \"device\": \"%s\", \"isa\": \"%s\", \"sets\": %zu, "
                "\"m\": %zu, \"dims\": %u, \"layers\": %u, \"runs\": %d, \"median_s\": %.9f, \"min_s\": %.9f, "
-               "\"process_cpu_median_s\": %.9f}\n",
+               "\"process_cpu_median_s\": %.9f, \"max_abs_diff_vs_cpu\": %.3g}\n",
                argv[1], argv[2], dpc_model_device(model), isa[info.isa], sets, m, info.dims, info.layers, runs,
-               times[runs / 2], times[0], cpu[runs / 2]);
+               times[runs / 2], times[0], cpu[runs / 2], max_diff);
         fflush(stdout);
         free(out);
     }
     dpc_model_free(model);
+    dpc_model_free(reference);
     return 0;
 }

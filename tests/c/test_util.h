@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <memory>
@@ -29,7 +30,12 @@ inline const std::vector<std::string> &model_names() {
     return names;
 }
 
-inline std::string data_path(const std::string &rel) { return std::string(DPC_TEST_DATA_DIR) + "/" + rel; }
+// DPC_TEST_DATA_DIR in the environment overrides the folder compiled in, so a test binary built
+// here also runs from another checkout (bench/gpu_run.sh carries it to a GPU machine).
+inline std::string data_path(const std::string &rel) {
+    const char *env = std::getenv("DPC_TEST_DATA_DIR");
+    return std::string(env && *env ? env : DPC_TEST_DATA_DIR) + "/" + rel;
+}
 inline std::string model_path(const std::string &name) { return data_path(name + ".onnx"); }
 
 inline std::vector<uint8_t> read_file(const std::string &path) {

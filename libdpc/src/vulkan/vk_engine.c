@@ -4,8 +4,9 @@
  * subspace, neighbours come from a cell grid built on the device (cells.comp: cell of each
  * point and counts; scan_*.comp: cell starts; scatter.comp + cellsort.comp: points by cell, in
  * point-index order within a cell; grid_sum.comp: the filter sum over the cells around each
- * point), or from tiled all pairs in shared memory (pairs.comp) where the grid does not pay;
- * apply.comp ends the layer. Every point's sum is computed by one invocation in a fixed order,
+ * point), or from tiled all pairs in shared memory (pairs.comp, split over partner ranges
+ * and summed by pairs_sum.comp when a set has too few points to fill a GPU) where the grid does
+ * not pay; apply.comp ends the layer. Every point's sum is computed by one invocation in a fixed order,
  * so the bits depend on the device and driver but not on timing. The input points are made on
  * the host by api.c (the same SplitMix64 code as the CPU backend) and uploaded. */
 #include <math.h>
@@ -21,14 +22,16 @@
 
 /* Pipelines. */
 enum { P_CELLS, P_SCAN_REDUCE, P_SCAN_PARTIALS, P_SCAN_DOWN, P_SCATTER, P_CELLSORT, P_GRID_SUM, P_APPLY,
-       P_PAIRS, /* + ceil(k / 4) - 1: one all-pairs variant per vec4 count, 1 .. 16 */
+       P_PAIRS_SUM, P_PAIRS, /* + ceil(k / 4) - 1: one all-pairs variant per vec4 count, 1 .. 16 */
        P_COUNT = P_PAIRS + DPC_MAX_DIMS / 4 };
 /* Storage buffer bindings (shaders/common.glsl). */
-enum { B_X, B_DELTA, B_CELL_OF, B_COUNTS, B_STARTS, B_SORTED, B_COORDS, B_TABLES, B_PARTIALS, B_COUNT };
+enum { B_X, B_DELTA, B_CELL_OF, B_COUNTS, B_STARTS, B_SORTED, B_COORDS, B_TABLES, B_PARTIALS, B_SPLIT, B_COUNT };
 
 #define SCAN_BLOCK 1024u            /* cells per scan block (common.glsl SCAN_BLOCK) */
 #define MAX_GROUPS 65535u           /* workgroups per dispatch dimension that every device allows */
 #define WORK_BUDGET (256ull << 20)  /* device bytes a batch aims to stay within (more for one big set) */
+#define PAIR_UNITS 2048u            /* all-pairs workgroups per set that the partner split aims for */
+#define PAIR_CHUNK_MIN 256u         /* fewest partners per split range */
 
 /* The push constants: mirrors `Params` in shaders/common.glsl, 4-byte fields in order. */
 typedef struct vk_params {
@@ -36,9 +39,9 @@ typedef struct vk_params {
     int32_t qmax;
     uint32_t c_off;
     float h, radius, cutoff, scale, umax;
-    uint32_t mask_lo, mask_hi, dims;
+    uint32_t mask_lo, mask_hi, dims, splits;
 } vk_params;
-_Static_assert(sizeof(vk_params) == 80, "push constants must match shaders/common.glsl");
+_Static_assert(sizeof(vk_params) == 84, "push constants must match shaders/common.glsl");
 
 typedef struct vk_buffer {
     VkBuffer buf;
@@ -166,11 +169,11 @@ static const char *unusable(const dpc_vk_fns *fn, VkPhysicalDevice dev, const Vk
     const VkPhysicalDeviceLimits *l = &p->limits;
     if (compute_family(fn, dev) == UINT32_MAX) return "no compute queue";
     if (l->maxPerStageDescriptorStorageBuffers < B_COUNT || l->maxBoundDescriptorSets < 1)
-        return "fewer than 9 storage buffers per shader stage";
+        return "fewer than 10 storage buffers per shader stage";
     if (l->maxComputeWorkGroupInvocations < 256 || l->maxComputeWorkGroupSize[0] < 256)
         return "workgroups of fewer than 256 invocations";
     if (l->maxComputeSharedMemorySize < 9 * 1024) return "less than 9 KiB of shared memory";
-    if (l->maxPushConstantsSize < sizeof(vk_params)) return "fewer than 80 bytes of push constants";
+    if (l->maxPushConstantsSize < sizeof(vk_params)) return "fewer than 84 bytes of push constants";
     return NULL;
 }
 
@@ -360,6 +363,7 @@ static dpc_status create_pipelines(dpc_vk_engine *e, const dpc_cascade *c) {
         {P_CELLSORT, dpc_spv_cellsort, sizeof dpc_spv_cellsort},
         {P_GRID_SUM, dpc_spv_grid_sum, sizeof dpc_spv_grid_sum},
         {P_APPLY, dpc_spv_apply, sizeof dpc_spv_apply},
+        {P_PAIRS_SUM, dpc_spv_pairs_sum, sizeof dpc_spv_pairs_sum},
     };
     for (size_t i = 0; i < sizeof list / sizeof list[0]; i++) {
         dpc_status st = create_pipeline(e, list[i].code, list[i].bytes, 0, &e->pipe[list[i].id]);
@@ -508,6 +512,17 @@ const char *dpc_vk_engine_device(const dpc_vk_engine *e) { return e ? e->name : 
 
 /* ---- work buffers -------------------------------------------------------------------------- */
 
+/* Partner ranges per point of an all-pairs pass: a few thousand points make only m / 64
+ * workgroups, too few to fill a large GPU, so each point's sum is split over up to PAIR_UNITS /
+ * (m / 64) ranges of at least PAIR_CHUNK_MIN partners. A function of m alone, so every set of a
+ * batch gets the bits of a single call. */
+static uint32_t pair_splits(size_t m) {
+    const size_t blocks = div_up(m, 64);
+    uint32_t s = 1;
+    while (blocks * s * 2 <= PAIR_UNITS && m / ((size_t)s * 2) >= PAIR_CHUNK_MIN) s *= 2;
+    return s;
+}
+
 typedef struct sizes {
     size_t cstride, nblocks_max;
     VkDeviceSize per_set[B_COUNT]; /* bytes per set of each work buffer (B_TABLES: 0) */
@@ -523,6 +538,10 @@ static void work_sizes(size_t m, size_t n, sizes *s) {
     s->per_set[B_COUNTS] = s->per_set[B_STARTS] = (VkDeviceSize)s->cstride * sizeof(uint32_t);
     s->per_set[B_COORDS] = (VkDeviceSize)m * 4 * sizeof(float);
     s->per_set[B_PARTIALS] = (VkDeviceSize)s->nblocks_max * sizeof(uint32_t);
+    /* split sums (k <= n floats per point and range); one word where there is no split, since
+     * every binding needs a buffer */
+    const uint32_t splits = pair_splits(m);
+    s->per_set[B_SPLIT] = splits > 1 ? (VkDeviceSize)splits * m * n * sizeof(float) : sizeof(float);
     s->staging_per_set = s->per_set[B_X];
 }
 
@@ -656,7 +675,9 @@ static void record_layer(dpc_vk_engine *e, const dpc_cascade *c, uint32_t l, siz
             dispatch(e, P_CELLSORT, &p, groups(p.cells, 128, e->max_groups_x), sets);
             dispatch(e, P_GRID_SUM, &p, gx_points, sets);
         } else {
-            dispatch(e, P_PAIRS + (int)(k + 3) / 4 - 1, &p, groups(m, 64, e->max_groups_x), sets);
+            p.splits = pair_splits(m);
+            dispatch(e, P_PAIRS + (int)(k + 3) / 4 - 1, &p, groups(div_up(m, 64) * p.splits, 1, e->max_groups_x), sets);
+            if (p.splits > 1) dispatch(e, P_PAIRS_SUM, &p, groups(m * k, 128, e->max_groups_x), sets);
         }
         moved = 1;
     }

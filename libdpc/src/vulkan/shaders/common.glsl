@@ -23,6 +23,7 @@ layout(push_constant) uniform Params {
     uint mask_lo;  // subspace dimensions 0..31 (all-pairs pass)
     uint mask_hi;  // dimensions 32..63
     uint dims;     // grid passes (k <= 4): dimension of subspace axis q in bits 8q .. 8q+7
+    uint splits;   // all-pairs pass: partner ranges per point (1: no split, pairs_sum.comp not run)
 } pc;
 
 layout(std430, set = 0, binding = 0) buffer PointsBuf { float x[]; };        // sets * m * n
@@ -34,6 +35,7 @@ layout(std430, set = 0, binding = 5) buffer SortedBuf { uint sorted_idx[]; }; //
 layout(std430, set = 0, binding = 6) buffer CoordsBuf { vec4 coords[]; };    // sets * m
 layout(std430, set = 0, binding = 7) readonly buffer TablesBuf { float tables[]; };
 layout(std430, set = 0, binding = 8) buffer PartialsBuf { uint partials[]; }; // sets * nblocks
+layout(std430, set = 0, binding = 9) buffer SplitBuf { float split_sum[]; };  // sets * splits * m * k
 
 #define SCAN_THREADS 256u
 #define SCAN_PER_THREAD 4u
@@ -41,3 +43,6 @@ layout(std430, set = 0, binding = 8) buffer PartialsBuf { uint partials[]; }; //
 
 // Dimension of subspace axis q (grid passes).
 uint grid_dim(uint q) { return (pc.dims >> (8u * q)) & 255u; }
+
+// Whether dimension d is in the subspace (all-pairs passes).
+bool in_subspace(uint d) { return ((d < 32u ? (pc.mask_lo >> d) : (pc.mask_hi >> (d - 32u))) & 1u) != 0u; }

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Prepares, on this machine, what bench/gpu_run.sh needs on a GPU machine lent through the device
+# tool (which has no Vulkan headers, GoogleTest or package registry):
+#   .gpu/  a Release build with the Vulkan backend: libdpc.so.0, dpc_bench_vulkan, dpc_test_vulkan;
+#   .gl/   the Vulkan loader (libvulkan1) as a Debian package, unpacked there by gpu_run.sh.
+# Both folders are git-ignored. Then, with the device tool:
+#   run(command="bash bench/gpu_run.sh", carry=[".gpu", ".gl"], timeout_s=600)
+# Needs what tests/run_all.sh installs (GoogleTest, libvulkan-dev).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build=build/gpu-kit
+cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DDPC_VULKAN=ON -DDPC_BUILD_TESTS=ON \
+      -DDPC_BUILD_BENCH=ON -DDPC_BUILD_PYTHON=OFF >/dev/null
+cmake --build "$build" --target dpc_bench_vulkan dpc_test_vulkan >/dev/null
+rm -rf .gpu && mkdir .gpu
+cp -L "$build/libdpc/libdpc.so.0" "$build/bench/dpc_bench_vulkan" "$build/tests/c/dpc_test_vulkan" .gpu/
+if ! ls .gl/libvulkan1_*.deb >/dev/null 2>&1; then
+  # The device tool's recipe: amd64 package lists of their own, so this machine's apt state is untouched.
+  mkdir -p .gl /tmp/amd64/partial
+  o='-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64'
+  apt-get $o update >/dev/null
+  (cd .gl && apt-get $o download libvulkan1 >/dev/null)
+fi
+du -sh .gpu .gl
