@@ -140,7 +140,8 @@ def main() -> None:
             "Goals of issue 6 on an H100-class GPU: 1,048,576 2-D points through 40 layers in <= 50 ms, "
             "and 8,192 10-D points in <= 20 ms. **Not measured**: no GPU was available where these "
             "numbers were taken, and a software driver's times say nothing about them. On a machine "
-            "lent a GPU, `bash bench/gpu_run.sh` runs this benchmark and the Vulkan tests there.", ""]
+            "lent a GPU, `bash bench/gpu_kit.sh` prepares the binaries here and `bash bench/gpu_run.sh` "
+            "runs this benchmark and the Vulkan tests there.", ""]
     else:
         verdicts = [f"{label}: {ms(v['median_s'])} against <= {ms(goal)}, "
                     + ("**met**" if v["median_s"] <= goal else "**missed**")
