@@ -14,7 +14,8 @@ icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 if [ -f "$icd" ] && ! grep -qls nvidia /usr/share/vulkan/icd.d/* /etc/vulkan/icd.d/* 2>/dev/null; then
   export VK_DRIVER_FILES=$icd  # the driver's manifest is outside the loader's search path
 fi
-nvidia-smi -L 2>&1 | tee "$out/gpu.txt"
+{ nvidia-smi -L; echo "Vulkan driver manifests:"; ls /usr/share/vulkan/icd.d /etc/vulkan/icd.d \
+    /usr/local/nvidia/share/vulkan/icd.d; echo "VK_DRIVER_FILES=${VK_DRIVER_FILES:-}"; } 2>&1 | tee "$out/gpu.txt"
 export LD_LIBRARY_PATH=$PWD/.gpu${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
 export DPC_TEST_DATA_DIR=$PWD/tests/data PYTHONUNBUFFERED=1
 DPC_ISA= .gpu/dpc_test_vulkan --gtest_output=xml:"$out/test_vulkan.xml" 2>&1 | tee "$out/test_vulkan.log"
