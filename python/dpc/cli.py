@@ -33,9 +33,9 @@ def _progress(iterable, desc: str, total: int | None = None):
                 file=sys.stderr)
 
 
-def _load_model(name: str, threads: int = 0):
+def _load_model(name: str, threads: int = 0, isa: str = "auto", backend: str = "auto"):
     import dpc
-    return dpc.load(name, threads=threads)
+    return dpc.load(name, threads=threads, isa=isa, backend=backend)
 
 
 def _is_model(spec: str) -> bool:
@@ -48,25 +48,27 @@ def _is_model(spec: str) -> bool:
 
 
 def _generate(spec: str, n_points: int | None, dims: int | None, count: int, seed: int,
-              threads: int = 0) -> tuple[np.ndarray, str]:
+              threads: int = 0, isa: str = "auto", backend: str = "auto"
+              ) -> tuple[np.ndarray, str, str]:
     """Sets from a dpc model (bundled name or .onnx path) or a baseline name, with a progress
-    bar over chunks of sets (set c always comes from seed + c)."""
+    bar over chunks of sets (set c always comes from seed + c); returns (sets, name, what ran a
+    model: backend and ISA path or Vulkan device, "" for a baseline)."""
     if spec in baselines.BASELINES:
         base = baselines.get(spec)
         if n_points is None and not isinstance(base, baselines.ReferenceBaseline):
             raise click.UsageError(f"baseline {spec} needs -n/--points")
         if isinstance(base, baselines.ReferenceBaseline):
-            return base.generate_batch(count, n_points, dims, seed), spec
+            return base.generate_batch(count, n_points, dims, seed), spec, ""
         out = []
         for c in _progress(range(count), f"{spec}"):
             out.append(base.generate_batch(1, n_points, 2 if dims is None else dims, seed + c)[0])
-        return np.stack(out), spec
+        return np.stack(out), spec, ""
     if not _is_model(spec):
         if Path(spec).suffix.lower() in _POINT_EXTS:
             raise click.ClickException(f"no such file: {spec}")
         raise click.ClickException(
             f"{spec!r} is neither a file, a baseline nor a model (see 'dpc list')")
-    model = _load_model(spec, threads)
+    model = _load_model(spec, threads, isa, backend)
     if dims is not None and dims != model.dims:
         raise InvalidArgumentError(f"model {model.name} makes {model.dims}-D points, not {dims}-D")
     chunk = max(1, count // 20)
@@ -74,7 +76,8 @@ def _generate(spec: str, n_points: int | None, dims: int | None, count: int, see
     for start in _progress(range(0, count, chunk), f"{model.name}"):
         parts.append(model.generate_batch(min(chunk, count - start), seed=seed + start,
                                           n_points=n_points))
-    return np.concatenate(parts).astype(np.float64), model.name
+    ran_on = f"cpu, {model.isa}" if model.backend == "cpu" else f"vulkan, {model.device}"
+    return np.concatenate(parts).astype(np.float64), model.name, ran_on
 
 
 def _read_inputs(specs, n_points, dims, count, seed, bin_dtype) -> list[tuple[str, np.ndarray]]:
@@ -85,7 +88,7 @@ def _read_inputs(specs, n_points, dims, count, seed, bin_dtype) -> list[tuple[st
             out.append((Path(spec).stem, pointio.read_points(spec, dims=dims, bin_dtype=bin_dtype,
                                                              progress_bar=True)))
         else:
-            sets, name = _generate(spec, n_points, dims, count, seed)
+            sets, name, _ = _generate(spec, n_points, dims, count, seed)
             out.append((name, sets))
     return out
 
@@ -224,11 +227,19 @@ def list_cmd():
               show_default=True, help="Float type of UTK .bin output.")
 @click.option("-t", "--threads", type=click.IntRange(min=0), default=0, show_default=True,
               help="Worker threads for models (0 = one per CPU).")
-def generate_cmd(model, n_points, dims, seed, count, output, fmt, bin_dtype, threads):
+@click.option("--isa", type=click.Choice(["auto", "scalar", "avx2", "avx512"]), default="auto",
+              show_default=True,
+              help="CPU code path for models. Each path gives other points of the same quality "
+                   "for a seed: pin one where every machine must give the same points.")
+@click.option("--backend", type=click.Choice(["auto", "cpu", "vulkan"]), default="auto",
+              show_default=True,
+              help="What runs a model: auto (a Vulkan GPU if there is one, else the CPU), cpu, "
+                   "or vulkan (an error where no Vulkan device is usable).")
+def generate_cmd(model, n_points, dims, seed, count, output, fmt, bin_dtype, threads, isa, backend):
     """Generate point sets from a model or a baseline."""
     if output is not None:
         pointio.resolve_format(output, fmt)  # fail on a bad name before the work
-    sets, _ = _generate(model, n_points, dims, count, seed, threads)
+    sets, name, ran_on = _generate(model, n_points, dims, count, seed, threads, isa, backend)
     if output is None:
         if fmt not in (None, "txt", "utk", "text"):
             raise click.UsageError("stdout output is text; give -o FILE for other formats")
@@ -239,7 +250,7 @@ def generate_cmd(model, n_points, dims, seed, count, output, fmt, bin_dtype, thr
         return
     pointio.write_points(output, sets, fmt, bin_dtype=bin_dtype, progress_bar=True)
     click.echo(f"wrote {sets.shape[0]} set(s) of {sets.shape[1]} {sets.shape[2]}-D points "
-               f"to {output}", err=True)
+               f"from {name}{f' ({ran_on})' if ran_on else ''} to {output}", err=True)
 
 
 @cli.command("analyze")

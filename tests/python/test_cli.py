@@ -68,6 +68,35 @@ def test_generate_from_a_model(tmp_path, capsys):
     assert got.shape == (2, n, model.dims)
 
 
+def test_generate_with_a_pinned_isa_says_what_ran_it(tmp_path, capsys):
+    f = tmp_path / "s.npy"
+    rc, _, err = run(capsys, "generate", "-m", "bnot-2d", "--isa", "scalar", "-c", 2, "-s", 4, "-o", f)
+    assert rc == 0, err
+    expect = dpc.load("bnot-2d", isa="scalar").generate_batch(2, seed=4).astype(np.float64)
+    np.testing.assert_array_equal(read_points(f), expect)
+    assert "from bnot-2d (cpu, scalar) to" in err, err
+    rc, _, err = run(capsys, "generate", "-m", "bnot-2d", "--isa", "sse9", "-o", f)
+    assert rc == 2 and "sse9" in err
+
+
+def test_generate_on_the_vulkan_backend_or_a_one_line_error(tmp_path, capsys):
+    f = tmp_path / "v.npy"
+    try:
+        model = dpc.load("bnot-2d", backend="vulkan")
+    except dpc.UnsupportedError as e:  # no usable device (or a build without Vulkan)
+        rc, _, err = run(capsys, "generate", "-m", "bnot-2d", "--backend", "vulkan", "-o", f)
+        assert rc == 1 and not f.exists()
+        _one_line_error(err)
+        assert "Vulkan" in err and str(e)[-40:] in err
+        return
+    rc, _, err = run(capsys, "generate", "-m", "bnot-2d", "--backend", "vulkan", "-c", 2, "-o", f)
+    assert rc == 0, err
+    np.testing.assert_array_equal(read_points(f), model.generate_batch(2, seed=0).astype(np.float64))
+    assert f"from bnot-2d (vulkan, {model.device}) to" in err, err
+    rc, _, err = run(capsys, "generate", "-m", "bnot-2d", "--backend", "cpu", "-o", f)
+    assert rc == 0 and "(cpu, " in err, err
+
+
 def test_generate_to_stdout_reads_back(tmp_path, capsys):
     rc, out, _ = run(capsys, "generate", "-m", "jitter", "-n", 16, "-c", 2, "-s", 1)
     assert rc == 0
