@@ -36,12 +36,13 @@ void call(F &&f) {
 
 class Model {
   public:
-    Model(const std::string &path, int isa, unsigned threads, int backend) {
+    Model(const std::string &path, int isa, unsigned threads, int backend, int input) {
         dpc_load_options options;
         dpc_load_options_init(&options);
         options.isa = static_cast<dpc_isa>(isa);
         options.threads = threads;
         options.backend = static_cast<dpc_backend>(backend);
+        options.input = static_cast<dpc_input>(input);
         call([&] { return dpc_model_load_file(path.c_str(), &options, &model_); });
         call([&] { return dpc_model_get_info(model_, &info_); });
         call([&] { return dpc_model_get_backend(model_, &backend_); });
@@ -114,6 +115,13 @@ py::array_t<float> uniform(uint64_t seed, size_t m, size_t n) {
     py::array_t<float> out({m, n});
     float *p = out.mutable_data();
     call([&] { return dpc_uniform(seed, m, n, p); });
+    return out;
+}
+
+py::array_t<float> stratified(uint64_t seed, size_t m, size_t n) {
+    py::array_t<float> out({m, n});
+    float *p = out.mutable_data();
+    call([&] { return dpc_stratified(seed, m, n, p); });
     return out;
 }
 
@@ -218,13 +226,14 @@ PYBIND11_MODULE(_core, mod) {
     mod.attr("__version__") = dpc_version_string();
     mod.attr("FORMAT_VERSION") = DPC_FORMAT_VERSION;
     py::class_<Model>(mod, "Model")
-        .def(py::init<const std::string &, int, unsigned, int>(), py::arg("path"), py::arg("isa"), py::arg("threads"),
-             py::arg("backend"))
+        .def(py::init<const std::string &, int, unsigned, int, int>(), py::arg("path"), py::arg("isa"),
+             py::arg("threads"), py::arg("backend"), py::arg("input"))
         .def("info", &Model::info)
         .def("metadata", &Model::metadata)
         .def("generate", &Model::generate, py::arg("seed"), py::arg("n_points"))
         .def("generate_batch", &Model::generate_batch, py::arg("seed"), py::arg("count"), py::arg("n_points"))
         .def("filter", &Model::filter, py::arg("points"));
     mod.def("uniform", &uniform, py::arg("seed"), py::arg("m"), py::arg("n"));
+    mod.def("stratified", &stratified, py::arg("seed"), py::arg("m"), py::arg("n"));
     register_layer_training(mod);
 }

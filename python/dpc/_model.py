@@ -15,6 +15,7 @@ _ISA = {"auto": 0, "scalar": 1, "avx2": 2, "avx512": 3}
 _ISA_NAME = {v: k for k, v in _ISA.items()}
 _BACKEND = {"auto": 0, "cpu": 1, "vulkan": 2}
 _BACKEND_NAME = {v: k for k, v in _BACKEND.items()}
+_INPUT = {"uniform": 0, "stratified": 1}
 
 
 def _bundled_dirs() -> list[Path]:
@@ -56,18 +57,29 @@ def uniform(seed: int, m: int, n: int) -> np.ndarray:
     return _core.uniform(int(seed) % (1 << 64), int(m), int(n))
 
 
+def stratified(seed: int, m: int, n: int) -> np.ndarray:
+    """The stratified input points for ``seed`` (``input="stratified"``): the same uniform numbers
+    placed one point per cell of a g^n grid, g^n <= m, in random order; (m, n) float32, bit-exact
+    with C's ``dpc_stratified`` (docs/model-format.md, "Input points")."""
+    return _core.stratified(int(seed) % (1 << 64), int(m), int(n))
+
+
 class Model:
     """A loaded dpc model. Create with :func:`load`."""
 
-    def __init__(self, path, *, isa: str = "auto", threads: int = 0, backend: str = "auto"):
+    def __init__(self, path, *, isa: str = "auto", threads: int = 0, backend: str = "auto",
+                 input: str = "uniform"):  # noqa: A002  (the C option's name)
         if isa not in _ISA:
             raise InvalidArgumentError(f"isa must be one of {sorted(_ISA)}, got {isa!r}")
         if backend not in _BACKEND:
             raise InvalidArgumentError(f"backend must be one of {sorted(_BACKEND)}, got {backend!r}")
+        if input not in _INPUT:
+            raise InvalidArgumentError(f"input must be one of {sorted(_INPUT)}, got {input!r}")
         if int(threads) < 0:
             raise InvalidArgumentError("threads must be >= 0 (0 = one per CPU)")
         self.path = Path(path)
-        self._h = _core.Model(os.fspath(self.path), _ISA[isa], int(threads), _BACKEND[backend])
+        self._h = _core.Model(os.fspath(self.path), _ISA[isa], int(threads), _BACKEND[backend], _INPUT[input])
+        self.input: str = input  # which input points generate() filters
         info = self._h.info()
         self.dims: int = info["dims"]
         self.n_points: int = info["n_points"]
@@ -113,7 +125,8 @@ class Model:
         return pts
 
 
-def load(path_or_name, *, isa: str = "auto", threads: int = 0, backend: str = "auto") -> Model:
+def load(path_or_name, *, isa: str = "auto", threads: int = 0, backend: str = "auto",
+         input: str = "uniform") -> Model:  # noqa: A002
     """Load a model file, or a bundled model by name (see :func:`available_models`).
 
     ``isa``: "auto" (best the CPU supports), "scalar", "avx2" or "avx512". ``threads``: worker threads per
@@ -121,5 +134,9 @@ def load(path_or_name, *, isa: str = "auto", threads: int = 0, backend: str = "a
     ``backend``: "auto" (a GPU through Vulkan where libdpc has the Vulkan backend and the machine a
     hardware GPU, else the CPU), "cpu", or "vulkan" (any Vulkan device, software drivers included;
     :class:`UnsupportedError` saying why when there is none or the package was built without
-    Vulkan). ``model.backend`` tells which one runs, ``model.device`` on what."""
-    return Model(model_path(path_or_name), isa=isa, threads=threads, backend=backend)
+    Vulkan). ``model.backend`` tells which one runs, ``model.device`` on what.
+    ``input``: "uniform" (default: what the models were trained on) or "stratified" (one point per
+    grid cell, see :func:`stratified`): for blue-noise models it keeps the lowest frequencies
+    quiet at large point counts, where a local cascade cannot fix uniform input's large-scale
+    density fluctuations; patterns that want low-frequency power (pink, green) lose it."""
+    return Model(model_path(path_or_name), isa=isa, threads=threads, backend=backend, input=input)

@@ -119,6 +119,19 @@ typedef enum dpc_backend {
     DPC_BACKEND_VULKAN = 2
 } dpc_backend;
 
+/* The input points a model filters (docs/model-format.md §5).
+ * - UNIFORM: independent uniform points, the points the bundled models were trained on.
+ * - STRATIFIED: the same uniform numbers placed one point per cell of a g^n grid (g^n <= m,
+ *   the cells left over spread at random), in random order. A local filter cascade cannot
+ *   remove large-scale density fluctuations, so from uniform input a blue-noise model's power
+ *   at the lowest frequencies grows with the point count (bnot-2d, 65,536 points: 1.36, white
+ *   noise 1.0); from stratified input it stays near 0. Meant for blue-noise models; patterns
+ *   that want low-frequency power (pink, green) lose it. Not for gridded models. */
+typedef enum dpc_input {
+    DPC_INPUT_UNIFORM = 0,
+    DPC_INPUT_STRATIFIED = 1
+} dpc_input;
+
 /* Options fixed at load time. Initialise with dpc_load_options_init(). */
 typedef struct dpc_load_options {
     uint32_t struct_size; /* sizeof(dpc_load_options), set by dpc_load_options_init */
@@ -129,6 +142,9 @@ typedef struct dpc_load_options {
     /* Default DPC_BACKEND_AUTO. The field was added after the first release: a struct_size of
      * the struct without it (offsetof(dpc_load_options, backend)) is still accepted, as AUTO. */
     dpc_backend backend;
+    /* Default DPC_INPUT_UNIFORM. Added after `backend`: a struct_size of
+     * offsetof(dpc_load_options, input) is still accepted, as UNIFORM. */
+    dpc_input input;
 } dpc_load_options;
 
 /* Fill *options with the defaults. */
@@ -216,6 +232,10 @@ DPC_API dpc_status dpc_filter(const dpc_model *model, size_t n_points, float *po
 /* Fill out[0 .. n_points * dims) with the uniform input points of seed: value c (row-major index)
  * is (splitmix64 output number c of the stream seeded by seed) >> 40, times 2^-24. */
 DPC_API dpc_status dpc_uniform(uint64_t seed, size_t n_points, size_t dims, float *out);
+
+/* Fill out[0 .. n_points * dims) with the stratified input points of seed (DPC_INPUT_STRATIFIED;
+ * docs/model-format.md §5). Needs no memory beyond out. */
+DPC_API dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, float *out);
 
 /* ---------------------------------------------------------------------------------------------
  * Training support: one filter layer in float64

@@ -24,6 +24,7 @@ struct dpc_model {
     dpc_cascade cascade;
     dpc_cpu_engine engine; /* CPU backend; also what info.isa / info.threads report */
     dpc_backend backend;   /* resolved: CPU or VULKAN */
+    dpc_input input;       /* which input points generate filters */
 #if defined(DPC_HAVE_VULKAN)
     dpc_vk_engine *vk; /* the Vulkan backend, when backend == DPC_BACKEND_VULKAN */
 #endif
@@ -59,6 +60,7 @@ void dpc_load_options_init(dpc_load_options *options) {
     options->isa = DPC_ISA_AUTO;
     options->threads = 1;
     options->backend = DPC_BACKEND_AUTO;
+    options->input = DPC_INPUT_UNIFORM;
 }
 
 /* Resolve the backend of a freshly parsed model: AUTO takes a Vulkan GPU if there is one and
@@ -95,12 +97,15 @@ dpc_status dpc_model_load_memory(const void *data, size_t size, const dpc_load_o
     dpc_load_options opts;
     dpc_load_options_init(&opts);
     if (options) {
-        /* Older callers pass the struct without `backend`: read what they have, default the rest. */
+        /* Older callers pass the struct without `backend` or `input`: read what they have,
+         * default the rest. */
         const size_t before_backend = offsetof(dpc_load_options, backend);
+        const size_t before_input = offsetof(dpc_load_options, input);
         if (options->struct_size == sizeof opts) {
             opts = *options;
-        } else if (options->struct_size == before_backend) {
-            memcpy(&opts, options, before_backend);
+        } else if (options->struct_size == before_backend || options->struct_size == before_input) {
+            memcpy(&opts, options, options->struct_size);
+            opts.struct_size = (uint32_t)sizeof opts;
         } else {
             return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
                             "options.struct_size is %u, expected %u: initialise with dpc_load_options_init",
@@ -110,10 +115,21 @@ dpc_status dpc_model_load_memory(const void *data, size_t size, const dpc_load_o
     if (opts.backend != DPC_BACKEND_AUTO && opts.backend != DPC_BACKEND_CPU && opts.backend != DPC_BACKEND_VULKAN)
         return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "options.backend is %d: use DPC_BACKEND_AUTO, _CPU or _VULKAN",
                         (int)opts.backend);
+    if (opts.input != DPC_INPUT_UNIFORM && opts.input != DPC_INPUT_STRATIFIED)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "options.input is %d: use DPC_INPUT_UNIFORM or _STRATIFIED",
+                        (int)opts.input);
     dpc_model *model = (dpc_model *)calloc(1, sizeof *model);
     if (!model) return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory");
+    model->input = opts.input;
     dpc_status st = dpc_cpu_engine_init(&model->engine, opts.isa, opts.threads);
     if (st == DPC_OK) st = dpc_cascade_parse((const uint8_t *)data, size, &model->cascade);
+    if (st == DPC_OK && opts.input == DPC_INPUT_STRATIFIED && model->cascade.grid_dims) {
+        dpc_cascade_release(&model->cascade);
+        st = dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
+                      "stratified input is for models without grid axes; this model fixes %u of its %u dimensions "
+                      "to a grid",
+                      model->cascade.grid_dims, model->cascade.dims);
+    }
     if (st != DPC_OK) {
         free(model);
         return st;
@@ -248,13 +264,111 @@ static void fill_uniform(uint64_t seed, size_t count, float *out) {
     for (size_t c = 0; c < count; c++) out[c] = dpc_uniform_at(state0, c);
 }
 
-dpc_status dpc_uniform(uint64_t seed, size_t n_points, size_t dims, float *out) {
-    dpc_clear_error();
+static void fill_grid(const dpc_cascade *c, size_t m, float *x);
+
+/* The stratified input of docs/model-format.md §5 for m points in n dimensions. The cell lists
+ * live in out itself (cell of point i in word i; for n >= 2 the cell permutation in words
+ * m .. m + C), so the CPU and Vulkan paths need no allocation. m <= DPC_MAX_POINTS < 2^32. */
+static uint32_t below(uint64_t state1, uint64_t *counter, uint32_t bound) {
+    /* an integer in [0, bound): the high 32 bits of the next stream value, scaled */
+    uint64_t z = dpc_mix64(state1 + (++*counter) * 0x9E3779B97F4A7C15ull);
+    return (uint32_t)(((z >> 32) * (uint64_t)bound) >> 32);
+}
+
+static uint32_t word_at(const float *out, size_t i) {
+    uint32_t w;
+    memcpy(&w, out + i, sizeof w);
+    return w;
+}
+
+static void set_word(float *out, size_t i, uint32_t w) { memcpy(out + i, &w, sizeof w); }
+
+/* Whether g^n <= m, without overflow. */
+static int power_fits(uint64_t g, size_t n, size_t m) {
+    uint64_t p = 1;
+    for (size_t a = 0; a < n; a++) {
+        p *= g;
+        if (p > m) return 0;
+    }
+    return 1;
+}
+
+static void fill_stratified(uint64_t seed, size_t m, size_t n, float *out) {
+    uint32_t g = (uint32_t)floor(pow((double)m, 1.0 / (double)n)); /* then exactly: the largest g^n <= m */
+    if (g < 1) g = 1;
+    while (g > 1 && !power_fits(g, n, m)) g--;
+    while (power_fits((uint64_t)g + 1, n, m)) g++;
+    uint64_t cells = 1;
+    for (size_t a = 0; a < n; a++) cells *= g;
+    const size_t base = m / (size_t)cells, extra = m % (size_t)cells;
+    const uint64_t state1 = dpc_mix64(seed ^ 0x5354524154494649ull); /* a stream of its own */
+    uint64_t counter = 0;
+    /* every cell `base` times, then `extra` distinct cells (a partial Fisher-Yates shuffle of all
+     * cells; extra > 0 implies n >= 2, since g = m in 1-D, so words m .. m + cells are free) */
+    for (size_t i = 0; i < base * (size_t)cells; i++) set_word(out, i, (uint32_t)(i % cells));
+    if (extra) {
+        for (size_t c = 0; c < cells; c++) set_word(out, m + c, (uint32_t)c);
+        for (size_t t = 0; t < extra; t++) {
+            const size_t j = t + below(state1, &counter, (uint32_t)(cells - t));
+            const uint32_t wj = word_at(out, m + j);
+            set_word(out, m + j, word_at(out, m + t));
+            set_word(out, base * (size_t)cells + t, wj);
+            set_word(out, m + t, wj);
+        }
+    }
+    for (size_t i = m - 1; i > 0; i--) { /* random order: any prefix of the set covers the domain */
+        const size_t j = below(state1, &counter, (uint32_t)(i + 1));
+        const uint32_t wi = word_at(out, i);
+        set_word(out, i, word_at(out, j));
+        set_word(out, j, wi);
+    }
+    /* point i = its cell plus the uniform numbers of point i; from the last point down, so
+     * point i's coordinates (words i n .. i n + n - 1 >= i) overwrite only cells already read */
+    const uint64_t state0 = dpc_mix64(seed);
+    const float below_one = 0x1.fffffep-1f;
+    for (size_t i = m; i-- > 0;) {
+        uint32_t cell = word_at(out, i);
+        for (size_t a = 0; a < n; a++) {
+            const uint32_t digit = cell % g;
+            cell /= g;
+            const float u = dpc_uniform_at(state0, i * n + a);
+            const float x = (float)(((double)digit + (double)u) / (double)g);
+            out[i * n + a] = x < 1.0f ? x : below_one;
+        }
+    }
+}
+
+static dpc_status check_input_size(const float *out, size_t n_points, size_t dims) {
     if (!out) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "out is NULL");
     if (n_points == 0 || dims == 0) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "n_points and dims must be positive");
     if (n_points > SIZE_MAX / dims) return dpc_fail(DPC_ERROR_LIMIT, "n_points * dims overflows");
+    return DPC_OK;
+}
+
+dpc_status dpc_uniform(uint64_t seed, size_t n_points, size_t dims, float *out) {
+    dpc_clear_error();
+    dpc_status st = check_input_size(out, n_points, dims);
+    if (st != DPC_OK) return st;
     fill_uniform(seed, n_points * dims, out);
     return DPC_OK;
+}
+
+dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, float *out) {
+    dpc_clear_error();
+    dpc_status st = check_input_size(out, n_points, dims);
+    if (st != DPC_OK) return st;
+    if (n_points > DPC_MAX_POINTS)
+        return dpc_fail(DPC_ERROR_LIMIT, "%zu points requested, at most %u per set", n_points, DPC_MAX_POINTS);
+    fill_stratified(seed, n_points, dims, out);
+    return DPC_OK;
+}
+
+/* The input points of one set: the model's input kind, then the grid's cell centres. */
+static void fill_input(const dpc_model *model, uint64_t seed, size_t m, float *x) {
+    const dpc_cascade *c = &model->cascade;
+    if (model->input == DPC_INPUT_STRATIFIED) fill_stratified(seed, m, c->dims, x);
+    else fill_uniform(seed, m * c->dims, x);
+    fill_grid(c, m, x);
 }
 
 /* Resolve and check the point count of a request. */
@@ -284,10 +398,8 @@ static void fill_grid(const dpc_cascade *c, size_t m, float *x) {
 
 static dpc_status generate_one(const dpc_model *model, const dpc_cpu_engine *engine, uint64_t seed,
                                size_t m, float *out) {
-    const dpc_cascade *c = &model->cascade;
-    fill_uniform(seed, m * c->dims, out);
-    fill_grid(c, m, out);
-    return dpc_cpu_filter(c, engine, m, out);
+    fill_input(model, seed, m, out);
+    return dpc_cpu_filter(&model->cascade, engine, m, out);
 }
 
 #if defined(DPC_HAVE_VULKAN)
@@ -306,8 +418,7 @@ static void vk_fill(void *ctx, size_t set, float *x) {
         memcpy(x, in->given, in->m * c->dims * sizeof(float));
         return;
     }
-    fill_uniform(in->seed + set, in->m * c->dims, x);
-    fill_grid(c, in->m, x);
+    fill_input(in->model, in->seed + set, in->m, x);
 }
 
 static dpc_status vk_generate(const dpc_model *model, uint64_t seed, size_t count, size_t m, float *out) {
