@@ -33,9 +33,10 @@ def _progress(iterable, desc: str, total: int | None = None):
                 file=sys.stderr)
 
 
-def _load_model(name: str, threads: int = 0, isa: str = "auto", backend: str = "auto"):
+def _load_model(name: str, threads: int = 0, isa: str = "auto", backend: str = "auto",
+                input: str = "uniform"):  # noqa: A002
     import dpc
-    return dpc.load(name, threads=threads, isa=isa, backend=backend)
+    return dpc.load(name, threads=threads, isa=isa, backend=backend, input=input)
 
 
 def _is_model(spec: str) -> bool:
@@ -48,8 +49,8 @@ def _is_model(spec: str) -> bool:
 
 
 def _generate(spec: str, n_points: int | None, dims: int | None, count: int, seed: int,
-              threads: int = 0, isa: str = "auto", backend: str = "auto"
-              ) -> tuple[np.ndarray, str, str]:
+              threads: int = 0, isa: str = "auto", backend: str = "auto",
+              input: str = "uniform") -> tuple[np.ndarray, str, str]:  # noqa: A002
     """Sets from a dpc model (bundled name or .onnx path) or a baseline name, with a progress
     bar over chunks of sets (set c always comes from seed + c); returns (sets, name, what ran a
     model: backend and ISA path or Vulkan device, "" for a baseline)."""
@@ -68,7 +69,7 @@ def _generate(spec: str, n_points: int | None, dims: int | None, count: int, see
             raise click.ClickException(f"no such file: {spec}")
         raise click.ClickException(
             f"{spec!r} is neither a file, a baseline nor a model (see 'dpc list')")
-    model = _load_model(spec, threads, isa, backend)
+    model = _load_model(spec, threads, isa, backend, input)
     if dims is not None and dims != model.dims:
         raise InvalidArgumentError(f"model {model.name} makes {model.dims}-D points, not {dims}-D")
     chunk = max(1, count // 20)
@@ -235,11 +236,18 @@ def list_cmd():
               show_default=True,
               help="What runs a model: auto (a Vulkan GPU if there is one, else the CPU), cpu, "
                    "or vulkan (an error where no Vulkan device is usable).")
-def generate_cmd(model, n_points, dims, seed, count, output, fmt, bin_dtype, threads, isa, backend):
+@click.option("--input", "input_kind", type=click.Choice(["uniform", "stratified"]), default="uniform",
+              show_default=True,
+              help="Input points of a model: uniform (what it was trained on) or stratified (one "
+                   "per grid cell; blue-noise models stay blue at the largest scales for large -n).")
+def generate_cmd(model, n_points, dims, seed, count, output, fmt, bin_dtype, threads, isa, backend,
+                 input_kind):
     """Generate point sets from a model or a baseline."""
     if output is not None:
         pointio.resolve_format(output, fmt)  # fail on a bad name before the work
-    sets, name, ran_on = _generate(model, n_points, dims, count, seed, threads, isa, backend)
+    if input_kind != "uniform" and model in baselines.BASELINES:
+        raise click.UsageError("--input applies to models, not to baselines")
+    sets, name, ran_on = _generate(model, n_points, dims, count, seed, threads, isa, backend, input_kind)
     if output is None:
         if fmt not in (None, "txt", "utk", "text"):
             raise click.UsageError("stdout output is text; give -o FILE for other formats")

@@ -54,6 +54,8 @@ TEST(Options, InitSetsDocumentedDefaults) {
     EXPECT_EQ(o.struct_size, (uint32_t)sizeof(dpc_load_options));
     EXPECT_EQ(o.isa, DPC_ISA_AUTO);
     EXPECT_EQ(o.threads, 1u);
+    EXPECT_EQ(o.backend, DPC_BACKEND_AUTO);
+    EXPECT_EQ(o.input, DPC_INPUT_UNIFORM);
 }
 
 TEST(Lifecycle, FreeNullIsNoOp) { dpc_model_free(nullptr); }

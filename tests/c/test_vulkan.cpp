@@ -25,10 +25,12 @@ namespace {
 
 constexpr double kParityTol = 1e-4;  // issue 6: Vulkan vs CPU, float32 on both sides
 
-dpc_status load_with(const std::string &path, dpc_backend backend, dpc_model **out) {
+dpc_status load_with(const std::string &path, dpc_backend backend, dpc_model **out,
+                     dpc_input input = DPC_INPUT_UNIFORM) {
     dpc_load_options o;
     dpc_load_options_init(&o);
     o.backend = backend;
+    o.input = input;
     return dpc_model_load_file(path.c_str(), &o, out);
 }
 
@@ -469,4 +471,23 @@ TEST(Vulkan, ModelsOnDifferentBackendsLiveSideBySide) {
     EXPECT_LE(max_torus_diff(y, z), kParityTol);
     b.reset();  // freeing one model leaves the others working
     EXPECT_EQ(generate(a.get(), 1), x);
+}
+
+TEST(Vulkan, StratifiedInputIsTheCpuBackendsToo) {
+    // The input points are made on the host by the same code for both backends.
+    LOAD_VULKAN_OR_SKIP(probe, model_path("model_2d"));
+    dpc_model *v = nullptr, *c = nullptr;
+    ASSERT_EQ(load_with(model_path("model_2d"), DPC_BACKEND_VULKAN, &v, DPC_INPUT_STRATIFIED), DPC_OK)
+        << dpc_last_error();
+    ModelPtr vk(v);
+    ASSERT_EQ(load_with(model_path("model_2d"), DPC_BACKEND_CPU, &c, DPC_INPUT_STRATIFIED), DPC_OK)
+        << dpc_last_error();
+    ModelPtr cpu(c);
+    for (size_t n : {1024u, 1500u}) {
+        std::vector<float> x(n * 2);
+        ASSERT_EQ(dpc_stratified(8, n, 2, x.data()), DPC_OK);
+        ASSERT_EQ(dpc_filter(vk.get(), n, x.data()), DPC_OK) << dpc_last_error();
+        EXPECT_EQ(generate(vk.get(), 8, n), x) << "Vulkan generate filters the stratified points, n " << n;
+        EXPECT_LE(max_torus_diff(generate(cpu.get(), 8, n), x), kParityTol) << n;
+    }
 }

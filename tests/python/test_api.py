@@ -253,3 +253,29 @@ def test_gil_is_released_while_c_runs():
     rate = (c1 - c0) / elapsed
     assert c1 - c0 > 50000 and rate > 5e4, (
         f"counter advanced {c1 - c0} times during a {elapsed:.3f} s generate call")
+
+
+def test_stratified_input_points_and_the_load_option():
+    """docs/model-format.md §5: one point per cell of the largest g^n <= m grid (the leftover
+    points in distinct cells), at the uniform numbers' offsets, in random order; a model loaded
+    with input="stratified" filters exactly these points."""
+    for m, n in [(1024, 2), (1000, 2), (3000, 3), (5, 64)]:
+        x = dpc.stratified(4, m, n)
+        assert x.shape == (m, n) and x.dtype == np.float32 and np.all((x >= 0) & (x < 1))
+        g = 1
+        while (g + 1) ** n <= m:
+            g += 1
+        cells = (np.minimum((x * g).astype(np.int64), g - 1) * g ** np.arange(n)).sum(axis=1)
+        counts = np.bincount(cells, minlength=g ** n)
+        assert set(np.unique(counts)) <= {m // g ** n, m // g ** n + 1}, (m, n)
+        np.testing.assert_allclose(x * g - np.floor(x * g), dpc.uniform(4, m, n), atol=2e-5)
+    np.testing.assert_array_equal(dpc.stratified(4, 5, 64), dpc.uniform(4, 5, 64))  # no grid fits
+    model = dpc.load("bnot-2d", input="stratified")
+    assert model.input == "stratified"
+    np.testing.assert_array_equal(model.generate(9), model.filter(dpc.stratified(9, model.n_points, 2)))
+    batch = model.generate_batch(2, seed=9, n_points=700)
+    np.testing.assert_array_equal(batch[1], model.generate(10, 700))
+    with pytest.raises(dpc.InvalidArgumentError, match="input"):
+        dpc.load("bnot-2d", input="sobol")
+    with pytest.raises(dpc.InvalidArgumentError, match="grid"):
+        dpc.load("dither-32", input="stratified")

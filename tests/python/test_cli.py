@@ -200,3 +200,16 @@ def test_module_and_console_script_entry_points(tmp_path):
         pytest.skip("the dpc console script is not on PATH (package not pip-installed)")
     r = subprocess.run([exe, "--help"], capture_output=True, text=True)
     assert r.returncode == 0 and "generate" in r.stdout and "analyze" in r.stdout
+
+
+def test_generate_from_stratified_input(tmp_path, capsys):
+    f = tmp_path / "s.npy"
+    rc, _, err = run(capsys, "generate", "-m", "bnot-2d", "--input", "stratified", "-s", 2, "-o", f)
+    assert rc == 0, err
+    expect = dpc.load("bnot-2d", input="stratified").generate(2).astype(np.float64)
+    np.testing.assert_array_equal(read_points(f)[0], expect)
+    rc, _, err = run(capsys, "generate", "-m", "dither-32", "--input", "stratified", "-o", f)
+    assert rc == 1 and "grid" in err
+    _one_line_error(err)
+    rc, _, err = run(capsys, "generate", "-m", "jitter", "-n", 16, "--input", "stratified")
+    assert rc == 2 and "baselines" in err
