@@ -195,10 +195,15 @@ def fig10() -> None:
 
 # ---- Fig. 11 -------------------------------------------------------------------------------
 
+STRATIFIED = " (stratified input)"  # a model name with this suffix: input="stratified"
+
+
 def _sampler(name: str, dims: int):
-    """(count, m, seed) -> sets, for a bundled model (scale-aware radius) or a baseline."""
-    if name in dpc.available_models():
-        model = dpc.load(name)
+    """(count, m, seed) -> sets, for a bundled model (scale-aware radius; NAME + STRATIFIED for
+    stratified input) or a baseline."""
+    base = name.removesuffix(STRATIFIED)
+    if base in dpc.available_models():
+        model = dpc.load(base, input="stratified" if name != base else "uniform")
         return lambda count, m, seed: model.generate_batch(count, seed=seed, n_points=m)
     return lambda count, m, seed: baselines.generate(name, m, dims, count=count, seed=seed)
 
@@ -234,7 +239,8 @@ def fig11() -> None:
 # ---- Fig. 12 -------------------------------------------------------------------------------
 
 def fig12() -> None:
-    cases = [(2, ["white", "jitter", "sobol", "halton", "rank1", "bnot-2d", "bnot-2d-wide", "step-2d"], [64, 256, 1024, 4096]),
+    cases = [(2, ["white", "jitter", "sobol", "halton", "rank1", "bnot-2d", "bnot-2d" + STRATIFIED, "bnot-2d-wide",
+                  "step-2d"], [64, 256, 1024, 4096]),
              (3, ["white", "jitter", "sobol", "halton", "rank1", "bnot-3d", "projective-3d"], [64, 512, 4096])]
     fams = ("gaussian", "heaviside")
     fig, axs = plt.subplots(2, 2, figsize=(10, 7.2))
@@ -249,7 +255,8 @@ def fig12() -> None:
                      "|---|" + "---:|" * len(counts)]
             for nm in samplers:
                 vals = st.rel_var[fam][nm]
-                ax.loglog(st.points[nm], vals, "o-" if nm in dpc.available_models() else ".--", label=nm)
+                ax.loglog(st.points[nm], vals, "o-" if nm.removesuffix(STRATIFIED) in dpc.available_models() else ".--",
+                          label=nm)
                 rows.append(f"| {nm} | " + " | ".join(f"{v:.2e}" for v in vals) + " |")
             ax.set(title=f"{n}-D {fam}: relative variance", xlabel="points m")
             ax.legend(fontsize=6)
@@ -260,7 +267,8 @@ def fig12() -> None:
                             "estimate over 64 realisations / its squared mean, mean over 10 "
                             "integrands; `dpc.analysis.integration_study`) for Gaussian and "
                             "Heaviside (half-space) integrands, 2-D and 3-D. 3-D counts are cubes "
-                            "(64, 512, 4,096) for jitter.", "", *rows, "", f"![Fig. 12]({path})", ""])
+                            "(64, 512, 4,096) for jitter. \"bnot-2d (stratified input)\" is bnot-2d "
+                            "loaded with `input=\"stratified\"` (docs/model-format.md §5).", "", *rows, "", f"![Fig. 12]({path})", ""])
 
 
 # ---- Fig. 17 -------------------------------------------------------------------------------
