@@ -81,16 +81,25 @@ def _generate(spec: str, n_points: int | None, dims: int | None, count: int, see
     return np.concatenate(parts).astype(np.float64), model.name, ran_on
 
 
-def _read_inputs(specs, n_points, dims, count, seed, bin_dtype) -> list[tuple[str, np.ndarray]]:
-    """Each input: a point file, or a model/baseline name to generate from."""
+_stratified_option = click.option(
+    "--stratified", is_flag=True,
+    help="Models filter stratified input points (one per grid cell, docs/model-format.md §5) "
+         "instead of uniform ones: blue-noise models stay blue at the largest scales for large -n.")
+
+
+def _read_inputs(specs, n_points, dims, count, seed, bin_dtype,
+                 stratified: bool = False) -> list[tuple[str, np.ndarray]]:
+    """Each input: a point file, or a model/baseline name to generate from (models from
+    stratified input points when asked; the label then says so)."""
     out = []
     for spec in specs:
         if Path(spec).is_file():
             out.append((Path(spec).stem, pointio.read_points(spec, dims=dims, bin_dtype=bin_dtype,
                                                              progress_bar=True)))
         else:
-            sets, name, _ = _generate(spec, n_points, dims, count, seed)
-            out.append((name, sets))
+            kind = "stratified" if stratified and spec not in baselines.BASELINES else "uniform"
+            sets, name, _ = _generate(spec, n_points, dims, count, seed, input=kind)
+            out.append((name + (" (stratified)" if kind == "stratified" else ""), sets))
     return out
 
 
@@ -236,18 +245,16 @@ def list_cmd():
               show_default=True,
               help="What runs a model: auto (a Vulkan GPU if there is one, else the CPU), cpu, "
                    "or vulkan (an error where no Vulkan device is usable).")
-@click.option("--input", "input_kind", type=click.Choice(["uniform", "stratified"]), default="uniform",
-              show_default=True,
-              help="Input points of a model: uniform (what it was trained on) or stratified (one "
-                   "per grid cell; blue-noise models stay blue at the largest scales for large -n).")
+@_stratified_option
 def generate_cmd(model, n_points, dims, seed, count, output, fmt, bin_dtype, threads, isa, backend,
-                 input_kind):
+                 stratified):
     """Generate point sets from a model or a baseline."""
     if output is not None:
         pointio.resolve_format(output, fmt)  # fail on a bad name before the work
-    if input_kind != "uniform" and model in baselines.BASELINES:
-        raise click.UsageError("--input applies to models, not to baselines")
-    sets, name, ran_on = _generate(model, n_points, dims, count, seed, threads, isa, backend, input_kind)
+    if stratified and model in baselines.BASELINES:
+        raise click.UsageError("--stratified applies to models, not to baselines")
+    sets, name, ran_on = _generate(model, n_points, dims, count, seed, threads, isa, backend,
+                                   "stratified" if stratified else "uniform")
     if output is None:
         if fmt not in (None, "txt", "utk", "text"):
             raise click.UsageError("stdout output is text; give -o FILE for other formats")
@@ -271,14 +278,15 @@ def generate_cmd(model, n_points, dims, seed, count, output, fmt, bin_dtype, thr
 @click.option("--label", default=None, help="Name used in titles (default: first input).")
 @click.option("--no-plots", is_flag=True, help="Only write metrics.json.")
 @_analysis_options
+@_stratified_option
 def analyze_cmd(inputs, more, output, label, no_plots, nu_max, max_size, subspace, disc,
-                disc_budget, n_points, dims, count, seed, bin_dtype):
+                disc_budget, n_points, dims, count, seed, bin_dtype, stratified):
     """Measure point sets: spectra, anisotropy, PCF, minimum distance, discrepancy."""
     specs = list(inputs) + list(more)
     if not specs:
         raise click.UsageError("give at least one input with -i")
     out = _output_dir(output)
-    loaded = _read_inputs(specs, n_points, dims, count, seed, bin_dtype)
+    loaded = _read_inputs(specs, n_points, dims, count, seed, bin_dtype, stratified)
     shapes = {a.shape[1:] for _, a in loaded}
     if len(shapes) > 1:
         raise click.ClickException(
@@ -345,14 +353,15 @@ def _analysis_plots(res, sets, out: Path, nu_max: float) -> list[str]:
 @click.option("--integration/--no-integration", default=True, show_default=True,
               help="Relative variance of MC integration over each input's sets.")
 @_analysis_options
+@_stratified_option
 def compare_cmd(inputs, more, output, integration, nu_max, max_size, subspace, disc,
-                disc_budget, n_points, dims, count, seed, bin_dtype):
+                disc_budget, n_points, dims, count, seed, bin_dtype, stratified):
     """Compare several inputs (files, models, baselines) in one table and plots."""
     specs = list(inputs) + list(more)
     if len(specs) < 1:
         raise click.UsageError("give inputs with -i")
     out = _output_dir(output)
-    loaded = _read_inputs(specs, n_points, dims, count, seed, bin_dtype)
+    loaded = _read_inputs(specs, n_points, dims, count, seed, bin_dtype, stratified)
     labels, seen = [], {}
     for name, _ in loaded:  # unique labels
         seen[name] = seen.get(name, 0) + 1

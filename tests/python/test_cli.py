@@ -204,12 +204,21 @@ def test_module_and_console_script_entry_points(tmp_path):
 
 def test_generate_from_stratified_input(tmp_path, capsys):
     f = tmp_path / "s.npy"
-    rc, _, err = run(capsys, "generate", "-m", "bnot-2d", "--input", "stratified", "-s", 2, "-o", f)
+    rc, _, err = run(capsys, "generate", "-m", "bnot-2d", "--stratified", "-s", 2, "-o", f)
     assert rc == 0, err
     expect = dpc.load("bnot-2d", input="stratified").generate(2).astype(np.float64)
     np.testing.assert_array_equal(read_points(f)[0], expect)
-    rc, _, err = run(capsys, "generate", "-m", "dither-32", "--input", "stratified", "-o", f)
+    rc, _, err = run(capsys, "generate", "-m", "dither-32", "--stratified", "-o", f)
     assert rc == 1 and "grid" in err
     _one_line_error(err)
-    rc, _, err = run(capsys, "generate", "-m", "jitter", "-n", 16, "--input", "stratified")
+    rc, _, err = run(capsys, "generate", "-m", "jitter", "-n", 16, "--stratified")
     assert rc == 2 and "baselines" in err
+
+
+def test_compare_with_stratified_model_inputs(tmp_path, capsys):
+    out = tmp_path / "cmp"
+    rc, _, err = run(capsys, "compare", "-i", "bnot-2d", "-i", "jitter", "-n", 1024, "-c", 2,
+                     "--stratified", "--no-integration", "--discrepancy", "none", "-o", out)
+    assert rc == 0, err
+    rows = {r["label"]: r for r in json.loads((out / "compare.json").read_text())["rows"]}
+    assert set(rows) == {"bnot-2d (stratified)", "jitter"}, rows.keys()
