@@ -3,7 +3,8 @@
 #   bash tests/run_all.sh            # everything (about 10 minutes on 2 cores)
 #   DPC_FUZZ_SECONDS=10 bash tests/run_all.sh   # shorter fuzzing
 # Suites: C tests (GoogleTest via ctest) under ASan+UBSan, the same with the Vulkan backend on
-# lavapipe (Mesa's CPU Vulkan driver), the thread tests under TSan, a Release build's ctest (every
+# lavapipe (Mesa's CPU Vulkan driver), its Vulkan tests under the Khronos validation layer
+# (synchronization validation), the thread tests under TSan, a Release build's ctest (every
 # ISA path the CPU has), the reader fuzzer (libFuzzer), and pytest against the pip-installed
 # package (built with the Vulkan backend). Any failure, or a suite that runs no test, fails the script.
 set -euo pipefail
@@ -15,8 +16,9 @@ FUZZ_SECONDS=${DPC_FUZZ_SECONDS:-60}
 step() { printf '\n==== %s\n' "$*"; }
 
 step "system packages"
-# mesa-vulkan-drivers (lavapipe), libvulkan-dev (headers, loader), glslc: the Vulkan backend's tests.
-APT_PKGS="libgtest-dev clang libclang-rt-14-dev cmake ninja-build mesa-vulkan-drivers libvulkan-dev glslc"
+# mesa-vulkan-drivers (lavapipe), libvulkan-dev (headers, loader), glslc, vulkan-validationlayers:
+# the Vulkan backend's tests.
+APT_PKGS="libgtest-dev clang libclang-rt-14-dev cmake ninja-build mesa-vulkan-drivers libvulkan-dev glslc vulkan-validationlayers"
 missing=$(for p in $APT_PKGS; do dpkg -s "$p" >/dev/null 2>&1 || echo "$p"; done)
 if [ -n "$missing" ]; then
   SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
@@ -56,6 +58,17 @@ cmake --build build/test-vulkan -j "$JOBS"
 VK_DRIVER_FILES=/nonexistent/dpc-no-driver.json VK_ICD_FILENAMES=/nonexistent/dpc-no-driver.json \
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 run_ctest build/test-vulkan -LE vulkan
 ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 run_ctest build/test-vulkan -L vulkan
+
+step "Vulkan tests under the Khronos validation layer (synchronization validation)"
+# Every Vulkan call of the tests checked against the spec, and every shader's reads and writes
+# against the barriers between them (a missing barrier is a SYNC-HAZARD error). lavapipe runs
+# what a GPU driver might not forgive; any ERROR fails the stage.
+VK_INSTANCE_LAYERS=VK_LAYER_KHRONOS_validation VK_LAYER_SETTINGS_PATH="$ROOT/tests/c/vk_layer_settings.txt" \
+DPC_ISA= ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 build/test-vulkan/tests/c/dpc_test_vulkan 2>&1 \
+  | tee build/vk-validation.log | grep -oE '^\[  (PASSED|FAILED) .*|^[A-Za-z0-9_-]+\((ERROR|WARN) / [A-Z]+\)' | sort | uniq -c
+grep -q '^\[  PASSED  \] [1-9]' build/vk-validation.log || { echo "Vulkan tests under validation failed"; exit 1; }
+! grep -q '(ERROR /' build/vk-validation.log || { echo "the validation layer reported errors (build/vk-validation.log)"; exit 1; }
+grep -q 'BestPractices' build/vk-validation.log || { echo "the validation layer did not run"; exit 1; }
 
 step "C thread tests, TSan"
 cmake -S . -B build/test-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DDPC_BUILD_TESTS=ON -DDPC_SANITIZE=thread >/dev/null
