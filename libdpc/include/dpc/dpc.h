@@ -13,10 +13,11 @@
  * - Handles are opaque. dpc_model_free(NULL) is a no-op. Output buffers belong to the caller.
  * - A loaded model is immutable: any number of threads may call any function on the same model
  *   at the same time. Results are a pure function of (model file, input kind, seed, point
- *   count) and are bit-identical across runs and thread counts for one build and one ISA path (on the Vulkan
- *   backend: for one build, device and driver). Other ISA paths and the Vulkan backend round
- *   differently; a deep trained cascade amplifies that, so they return point sets of the same
- *   quality, not the same points: pin the ISA where every machine must give the same points.
+ *   count) and are bit-identical across runs and thread counts for one build and one ISA path
+ *   (on the Vulkan backend: for one build, device and driver). Other ISA paths and the Vulkan
+ *   backend round differently; a deep trained cascade amplifies that, so they return point sets
+ *   of the same quality, not the same points: pin the ISA where every machine must give the same
+ *   points.
  * - The header is C99 and C++ clean.
  */
 #ifndef DPC_DPC_H
