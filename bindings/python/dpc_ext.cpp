@@ -46,6 +46,7 @@ class Model {
         call([&] { return dpc_model_load_file(path.c_str(), &options, &model_); });
         call([&] { return dpc_model_get_info(model_, &info_); });
         call([&] { return dpc_model_get_backend(model_, &backend_); });
+        call([&] { return dpc_model_get_input(model_, &input_); });
     }
     ~Model() { dpc_model_free(model_); }
     Model(const Model &) = delete;
@@ -66,6 +67,7 @@ class Model {
         d["isa"] = static_cast<int>(info_.isa);
         d["threads"] = info_.threads;
         d["backend"] = static_cast<int>(backend_);
+        d["input"] = static_cast<int>(input_);
         d["device"] = std::string(dpc_model_device(model_));
         return d;
     }
@@ -109,6 +111,7 @@ class Model {
     dpc_model *model_ = nullptr;
     dpc_model_info info_{};
     dpc_backend backend_ = DPC_BACKEND_CPU;
+    dpc_input input_ = DPC_INPUT_UNIFORM;
 };
 
 py::array_t<float> uniform(uint64_t seed, size_t m, size_t n) {

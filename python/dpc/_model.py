@@ -15,7 +15,8 @@ _ISA = {"auto": 0, "scalar": 1, "avx2": 2, "avx512": 3}
 _ISA_NAME = {v: k for k, v in _ISA.items()}
 _BACKEND = {"auto": 0, "cpu": 1, "vulkan": 2}
 _BACKEND_NAME = {v: k for k, v in _BACKEND.items()}
-_INPUT = {"uniform": 0, "stratified": 1}
+_INPUT = {"auto": 0, "uniform": 1, "stratified": 2}
+_INPUT_NAME = {v: k for k, v in _INPUT.items()}
 
 
 def _bundled_dirs() -> list[Path]:
@@ -68,7 +69,7 @@ class Model:
     """A loaded dpc model. Create with :func:`load`."""
 
     def __init__(self, path, *, isa: str = "auto", threads: int = 0, backend: str = "auto",
-                 input: str = "uniform"):  # noqa: A002  (the C option's name)
+                 input: str = "auto"):  # noqa: A002  (the C option's name)
         if isa not in _ISA:
             raise InvalidArgumentError(f"isa must be one of {sorted(_ISA)}, got {isa!r}")
         if backend not in _BACKEND:
@@ -79,7 +80,6 @@ class Model:
             raise InvalidArgumentError("threads must be >= 0 (0 = one per CPU)")
         self.path = Path(path)
         self._h = _core.Model(os.fspath(self.path), _ISA[isa], int(threads), _BACKEND[backend], _INPUT[input])
-        self.input: str = input  # which input points generate() filters
         info = self._h.info()
         self.dims: int = info["dims"]
         self.n_points: int = info["n_points"]
@@ -90,6 +90,7 @@ class Model:
         self.threads: int = info["threads"]
         self.backend: str = _BACKEND_NAME[info["backend"]]  # "cpu" or "vulkan": what runs the cascade
         self.device: str = info["device"]  # "cpu", or the Vulkan device's name
+        self.input: str = _INPUT_NAME[info["input"]]  # "uniform" or "stratified": what generate() filters
         self.metadata: dict[str, str] = dict(self._h.metadata())
         self.name: str = self.metadata.get("dpc.name", self.path.stem)
 
@@ -126,7 +127,7 @@ class Model:
 
 
 def load(path_or_name, *, isa: str = "auto", threads: int = 0, backend: str = "auto",
-         input: str = "uniform") -> Model:  # noqa: A002
+         input: str = "auto") -> Model:  # noqa: A002
     """Load a model file, or a bundled model by name (see :func:`available_models`).
 
     ``isa``: "auto" (best the CPU supports), "scalar", "avx2" or "avx512". ``threads``: worker threads per
@@ -135,8 +136,10 @@ def load(path_or_name, *, isa: str = "auto", threads: int = 0, backend: str = "a
     hardware GPU, else the CPU), "cpu", or "vulkan" (any Vulkan device, software drivers included;
     :class:`UnsupportedError` saying why when there is none or the package was built without
     Vulkan). ``model.backend`` tells which one runs, ``model.device`` on what.
-    ``input``: "uniform" (default: what the models were trained on) or "stratified" (one point per
-    grid cell, see :func:`stratified`): for blue-noise models it keeps the lowest frequencies
-    quiet at large point counts, where a local cascade cannot fix uniform input's large-scale
-    density fluctuations; patterns that want low-frequency power (pink, green) lose it."""
+    ``input``: "auto" (default: what the model was trained on, its metadata ``dpc.input``;
+    uniform for the bundled models), "uniform", or "stratified" (one point per grid cell, see
+    :func:`stratified`): for blue-noise models it keeps the lowest frequencies quiet at large
+    point counts, where a local cascade cannot fix uniform input's large-scale density
+    fluctuations; patterns that want low-frequency power (pink, green) lose it. ``model.input``
+    tells which one runs."""
     return Model(model_path(path_or_name), isa=isa, threads=threads, backend=backend, input=input)

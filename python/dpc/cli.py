@@ -34,7 +34,7 @@ def _progress(iterable, desc: str, total: int | None = None):
 
 
 def _load_model(name: str, threads: int = 0, isa: str = "auto", backend: str = "auto",
-                input: str = "uniform"):  # noqa: A002
+                input: str = "auto"):  # noqa: A002
     import dpc
     return dpc.load(name, threads=threads, isa=isa, backend=backend, input=input)
 
@@ -50,10 +50,10 @@ def _is_model(spec: str) -> bool:
 
 def _generate(spec: str, n_points: int | None, dims: int | None, count: int, seed: int,
               threads: int = 0, isa: str = "auto", backend: str = "auto",
-              input: str = "uniform") -> tuple[np.ndarray, str, str]:  # noqa: A002
+              input: str = "auto") -> tuple[np.ndarray, str, str]:  # noqa: A002
     """Sets from a dpc model (bundled name or .onnx path) or a baseline name, with a progress
-    bar over chunks of sets (set c always comes from seed + c); returns (sets, name, what ran a
-    model: backend and ISA path or Vulkan device, "" for a baseline)."""
+    bar over chunks of sets (set c always comes from seed + c); returns (sets, name, how a model
+    ran: backend and ISA path or Vulkan device, and its input kind; "" for a baseline)."""
     if spec in baselines.BASELINES:
         base = baselines.get(spec)
         if n_points is None and not isinstance(base, baselines.ReferenceBaseline):
@@ -78,28 +78,34 @@ def _generate(spec: str, n_points: int | None, dims: int | None, count: int, see
         parts.append(model.generate_batch(min(chunk, count - start), seed=seed + start,
                                           n_points=n_points))
     ran_on = f"cpu, {model.isa}" if model.backend == "cpu" else f"vulkan, {model.device}"
+    ran_on += f"; {model.input} input"
     return np.concatenate(parts).astype(np.float64), model.name, ran_on
 
 
 _stratified_option = click.option(
-    "--stratified", is_flag=True,
-    help="Models filter stratified input points (one per grid cell, docs/model-format.md §5) "
-         "instead of uniform ones: blue-noise models stay blue at the largest scales for large -n.")
+    "--stratified/--uniform", default=None,
+    help="Input points of models: stratified (one per grid cell, docs/model-format.md §5; "
+         "blue-noise models stay blue at the largest scales for large -n) or uniform. Default: "
+         "what each model was trained on (its metadata dpc.input; uniform for the bundled ones).")
+
+
+def _input_kind(stratified: bool | None) -> str:
+    return "auto" if stratified is None else ("stratified" if stratified else "uniform")
 
 
 def _read_inputs(specs, n_points, dims, count, seed, bin_dtype,
-                 stratified: bool = False) -> list[tuple[str, np.ndarray]]:
-    """Each input: a point file, or a model/baseline name to generate from (models from
-    stratified input points when asked; the label then says so)."""
+                 stratified: bool | None = None) -> list[tuple[str, np.ndarray]]:
+    """Each input: a point file, or a model/baseline name to generate from (a model from
+    stratified input points is labelled "NAME (stratified)")."""
     out = []
     for spec in specs:
         if Path(spec).is_file():
             out.append((Path(spec).stem, pointio.read_points(spec, dims=dims, bin_dtype=bin_dtype,
                                                              progress_bar=True)))
         else:
-            kind = "stratified" if stratified and spec not in baselines.BASELINES else "uniform"
-            sets, name, _ = _generate(spec, n_points, dims, count, seed, input=kind)
-            out.append((name + (" (stratified)" if kind == "stratified" else ""), sets))
+            kind = "auto" if spec in baselines.BASELINES else _input_kind(stratified)
+            sets, name, ran_on = _generate(spec, n_points, dims, count, seed, input=kind)
+            out.append((name + (" (stratified)" if ran_on.endswith("stratified input") else ""), sets))
     return out
 
 
@@ -251,10 +257,10 @@ def generate_cmd(model, n_points, dims, seed, count, output, fmt, bin_dtype, thr
     """Generate point sets from a model or a baseline."""
     if output is not None:
         pointio.resolve_format(output, fmt)  # fail on a bad name before the work
-    if stratified and model in baselines.BASELINES:
-        raise click.UsageError("--stratified applies to models, not to baselines")
+    if stratified is not None and model in baselines.BASELINES:
+        raise click.UsageError("--stratified/--uniform apply to models, not to baselines")
     sets, name, ran_on = _generate(model, n_points, dims, count, seed, threads, isa, backend,
-                                   "stratified" if stratified else "uniform")
+                                   _input_kind(stratified))
     if output is None:
         if fmt not in (None, "txt", "utk", "text"):
             raise click.UsageError("stdout output is text; give -o FILE for other formats")

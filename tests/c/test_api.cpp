@@ -55,7 +55,7 @@ TEST(Options, InitSetsDocumentedDefaults) {
     EXPECT_EQ(o.isa, DPC_ISA_AUTO);
     EXPECT_EQ(o.threads, 1u);
     EXPECT_EQ(o.backend, DPC_BACKEND_AUTO);
-    EXPECT_EQ(o.input, DPC_INPUT_UNIFORM);
+    EXPECT_EQ(o.input, DPC_INPUT_AUTO);
 }
 
 TEST(Lifecycle, FreeNullIsNoOp) { dpc_model_free(nullptr); }

@@ -178,7 +178,28 @@ TEST(StratifiedInput, UnknownInputIsRejected) {
     EXPECT_NE(std::string(dpc_last_error()).find("input"), std::string::npos) << dpc_last_error();
 }
 
-TEST(StratifiedInput, StructWithoutInputFieldLoadsAsUniform) {
+dpc_input input_of(const dpc_model *m) {
+    dpc_input k = DPC_INPUT_AUTO;
+    EXPECT_EQ(dpc_model_get_input(m, &k), DPC_OK) << dpc_last_error();
+    return k;
+}
+
+TEST(StratifiedInput, AutoTakesTheModelsMetadataAndIsReported) {
+    // The test models carry no "dpc.input": AUTO is uniform, and the query never says AUTO.
+    ModelPtr a = load_input(model_path("model_2d"), DPC_INPUT_AUTO);
+    ModelPtr u = load_input(model_path("model_2d"), DPC_INPUT_UNIFORM);
+    ModelPtr s = load_input(model_path("model_2d"), DPC_INPUT_STRATIFIED);
+    ASSERT_TRUE(a && u && s);
+    EXPECT_EQ(input_of(a.get()), DPC_INPUT_UNIFORM);
+    EXPECT_EQ(input_of(u.get()), DPC_INPUT_UNIFORM);
+    EXPECT_EQ(input_of(s.get()), DPC_INPUT_STRATIFIED);
+    EXPECT_EQ(generate(a.get(), 4), generate(u.get(), 4));
+    dpc_input k;
+    EXPECT_EQ(dpc_model_get_input(nullptr, &k), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(dpc_model_get_input(a.get(), nullptr), DPC_ERROR_INVALID_ARGUMENT);
+}
+
+TEST(StratifiedInput, StructWithoutInputFieldLoadsAsAuto) {
     // A caller compiled before `input` existed passes the smaller size; the bytes where `input`
     // now lives are not read (here they hold garbage).
     dpc_load_options o;
@@ -189,6 +210,7 @@ TEST(StratifiedInput, StructWithoutInputFieldLoadsAsUniform) {
     dpc_model *raw = nullptr;
     ASSERT_EQ(dpc_model_load_file(model_path("model_2d").c_str(), &o, &raw), DPC_OK) << dpc_last_error();
     ModelPtr m(raw);
+    EXPECT_EQ(input_of(m.get()), DPC_INPUT_UNIFORM);
     ModelPtr uni = load_input(model_path("model_2d"), DPC_INPUT_UNIFORM);
     EXPECT_EQ(generate(m.get(), 3), generate(uni.get(), 3));
 }

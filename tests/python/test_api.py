@@ -270,6 +270,7 @@ def test_stratified_input_points_and_the_load_option():
         assert set(np.unique(counts)) <= {m // g ** n, m // g ** n + 1}, (m, n)
         np.testing.assert_allclose(x * g - np.floor(x * g), dpc.uniform(4, m, n), atol=2e-5)
     np.testing.assert_array_equal(dpc.stratified(4, 5, 64), dpc.uniform(4, 5, 64))  # no grid fits
+    assert dpc.load("bnot-2d").input == "uniform"  # auto: the bundled models were trained on uniform points
     model = dpc.load("bnot-2d", input="stratified")
     assert model.input == "stratified"
     np.testing.assert_array_equal(model.generate(9), model.filter(dpc.stratified(9, model.n_points, 2)))
@@ -279,3 +280,28 @@ def test_stratified_input_points_and_the_load_option():
         dpc.load("bnot-2d", input="sobol")
     with pytest.raises(dpc.InvalidArgumentError, match="grid"):
         dpc.load("dither-32", input="stratified")
+
+
+def test_input_auto_follows_the_files_dpc_input(tmp_path):
+    """input="auto" (default) is what the model was trained on: metadata dpc.input, uniform
+    without it; a bad value or stratified with grid axes is a format error."""
+    mf = pytest.importorskip("dpc.model_file")
+    layers = [mf.Layer([0b11], [3.0], -0.02 * np.ones((1, 8), dtype=np.float32))]
+    paths = {}
+    for tag, meta, grid in [("none", {}, False), ("strat", {"dpc.input": "stratified"}, False),
+                            ("bad", {"dpc.input": "sobol"}, False),
+                            ("grid", {"dpc.input": "stratified"}, True)]:
+        ls = [mf.Layer([0b10], [3.0], -0.02 * np.ones((1, 8), dtype=np.float32), fixed=0b01)] if grid else layers
+        spec = mf.ModelSpec(dims=2, n_points=64, layers=ls, name=tag, metadata=meta,
+                            **(dict(grid_axes=[0], grid_shape=[64]) if grid else {}))
+        paths[tag] = tmp_path / f"{tag}.onnx"
+        mf.write_model(spec, paths[tag])
+    assert dpc.load(paths["none"]).input == "uniform"
+    strat = dpc.load(paths["strat"])
+    assert strat.input == "stratified"
+    np.testing.assert_array_equal(strat.generate(3), strat.filter(dpc.stratified(3, 64, 2)))
+    assert dpc.load(paths["strat"], input="uniform").input == "uniform"
+    with pytest.raises(dpc.ModelFormatError, match="dpc.input"):
+        dpc.load(paths["bad"])
+    with pytest.raises(dpc.ModelFormatError, match="grid"):
+        dpc.load(paths["grid"])

@@ -74,7 +74,7 @@ def test_generate_with_a_pinned_isa_says_what_ran_it(tmp_path, capsys):
     assert rc == 0, err
     expect = dpc.load("bnot-2d", isa="scalar").generate_batch(2, seed=4).astype(np.float64)
     np.testing.assert_array_equal(read_points(f), expect)
-    assert "from bnot-2d (cpu, scalar) to" in err, err
+    assert "from bnot-2d (cpu, scalar; uniform input) to" in err, err
     rc, _, err = run(capsys, "generate", "-m", "bnot-2d", "--isa", "sse9", "-o", f)
     assert rc == 2 and "sse9" in err
 
@@ -92,7 +92,7 @@ def test_generate_on_the_vulkan_backend_or_a_one_line_error(tmp_path, capsys):
     rc, _, err = run(capsys, "generate", "-m", "bnot-2d", "--backend", "vulkan", "-c", 2, "-o", f)
     assert rc == 0, err
     np.testing.assert_array_equal(read_points(f), model.generate_batch(2, seed=0).astype(np.float64))
-    assert f"from bnot-2d (vulkan, {model.device}) to" in err, err
+    assert f"from bnot-2d (vulkan, {model.device}; uniform input) to" in err, err
     rc, _, err = run(capsys, "generate", "-m", "bnot-2d", "--backend", "cpu", "-o", f)
     assert rc == 0 and "(cpu, " in err, err
 
@@ -213,6 +213,8 @@ def test_generate_from_stratified_input(tmp_path, capsys):
     _one_line_error(err)
     rc, _, err = run(capsys, "generate", "-m", "jitter", "-n", 16, "--stratified")
     assert rc == 2 and "baselines" in err
+    rc, _, err = run(capsys, "generate", "-m", "bnot-2d", "--uniform", "-o", f)
+    assert rc == 0 and "uniform input" in err, err
 
 
 def test_compare_with_stratified_model_inputs(tmp_path, capsys):

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
 import torch
 
 from .filter import FilterConfigError, NeighbourCache, check_layer, filter_layer, mask_dims
@@ -53,6 +54,7 @@ class CascadeSpec:
     init: str = "zero"              # "zero" (identity cascade) or "repulsion"
     init_sigma: float = 0.85        # repulsion: Gaussian width, in mean spacings
     init_amplitude: float = 0.05    # repulsion: kernel value at d = 0 (units of spacing)
+    input: str = "uniform"          # training inputs: "uniform" or "stratified" (format §5)
 
     def __post_init__(self):
         if not 1 <= self.dims <= 64:
@@ -79,6 +81,10 @@ class CascadeSpec:
                                         f"equal n_points = {self.n_points}")
         if self.init not in ("zero", "repulsion"):
             raise FilterConfigError(f"init must be 'zero' or 'repulsion', got {self.init!r}")
+        if self.input not in ("uniform", "stratified"):
+            raise FilterConfigError(f"input must be 'uniform' or 'stratified', got {self.input!r}")
+        if self.input == "stratified" and self.grid_axes:
+            raise FilterConfigError("stratified input is for patterns without grid axes")
         check_layer(self.dims, torch.zeros(len(self.masks), self.bins), self.masks,
                     self.radius, self.eps, self.fixed)
 
@@ -141,9 +147,17 @@ class Cascade(torch.nn.Module):
 
     def input_points(self, batch: int, generator: torch.Generator, m: int | None = None,
                      dtype=torch.float32, device="cpu") -> torch.Tensor:
-        """Uniform random [batch, m, n] points, gridded dims set to cell centres (format §5)."""
+        """[batch, m, n] input points: uniform random, gridded dims set to cell centres, or for
+        input = "stratified" libdpc's stratified points (format §5) of seeds drawn from the
+        generator, so a model trained on them sees what dpc.load(..., input="stratified") feeds it."""
         sp = self.spec
         m = sp.n_points if m is None else m
+        if sp.input == "stratified":
+            import dpc  # libdpc's generator, not a copy of it
+
+            seeds = torch.randint(0, 1 << 62, (batch,), generator=generator).tolist()
+            x = torch.from_numpy(np.stack([dpc.stratified(s, m, sp.dims) for s in seeds])).double()
+            return x.to(dtype=dtype, device=device)
         x = torch.rand(batch, m, sp.dims, generator=generator, dtype=torch.float64)
         if sp.grid_axes:
             if m != sp.n_points:

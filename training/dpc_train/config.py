@@ -2,7 +2,7 @@
 
     [pattern]  name, dims, points, grid_axes, grid_shape, description
     [model]    layers, unique_kernels, bins, subspaces, radius, eps, init, init_sigma,
-               init_amplitude
+               init_amplitude, input ("uniform" or "stratified": the training inputs)
     [loss]     name + params (registered) | source (Python code) | file (Python file)
     [train]    steps, batch, lr, lr_final, seed, device, threads, impl, checkpoint_every,
                log_every, eval_sets, run_dir
@@ -44,6 +44,7 @@ class ModelConfig:
     init: str = "zero"
     init_sigma: float = 0.85
     init_amplitude: float = 0.05
+    input: str = "uniform"
 
 
 @dataclass
@@ -76,7 +77,8 @@ class Config:
                            unique_kernels=m.unique_kernels, bins=m.bins,
                            subspaces=list(m.subspaces), radius=[float(r) for r in m.radius],
                            eps=m.eps, grid_axes=list(p.grid_axes), grid_shape=list(p.grid_shape),
-                           init=m.init, init_sigma=m.init_sigma, init_amplitude=m.init_amplitude)
+                           init=m.init, init_sigma=m.init_sigma, init_amplitude=m.init_amplitude,
+                           input=m.input)
 
     def to_dict(self) -> dict:
         return {"pattern": dataclasses.asdict(self.pattern),

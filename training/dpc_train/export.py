@@ -47,6 +47,7 @@ def model_spec_from_checkpoint(st: dict, quality: dict | None = None, name: str 
         "dpc.train.wall_time_s": f"{float(st['wall_time']):.1f}",
         "dpc.train.torch": st.get("torch_version", ""),
         "dpc.quality": json.dumps(quality, sort_keys=True),
+        "dpc.input": sp.input,  # the input points it was trained on: load it with that input
     }
     return mf.ModelSpec(dims=sp.dims, n_points=sp.n_points, layers=layers,
                         grid_axes=list(sp.grid_axes), grid_shape=list(sp.grid_shape),

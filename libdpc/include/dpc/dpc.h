@@ -121,6 +121,9 @@ typedef enum dpc_backend {
 } dpc_backend;
 
 /* The input points a model filters (docs/model-format.md §5).
+ * - AUTO (default): the kind the model was trained on, from its metadata "dpc.input" ("uniform"
+ *   or "stratified"), uniform when the file has no such key (files from before the key, and the
+ *   bundled models: all trained on uniform points).
  * - UNIFORM: independent uniform points, the points the bundled models were trained on.
  * - STRATIFIED: the same uniform numbers placed one point per cell of a g^n grid (g^n <= m,
  *   the cells left over spread at random), in random order. A local filter cascade cannot
@@ -129,8 +132,9 @@ typedef enum dpc_backend {
  *   noise 1.0); from stratified input it stays near 0. Meant for blue-noise models; patterns
  *   that want low-frequency power (pink, green) lose it. Not for gridded models. */
 typedef enum dpc_input {
-    DPC_INPUT_UNIFORM = 0,
-    DPC_INPUT_STRATIFIED = 1
+    DPC_INPUT_AUTO = 0,
+    DPC_INPUT_UNIFORM = 1,
+    DPC_INPUT_STRATIFIED = 2
 } dpc_input;
 
 /* Options fixed at load time. Initialise with dpc_load_options_init(). */
@@ -143,8 +147,8 @@ typedef struct dpc_load_options {
     /* Default DPC_BACKEND_AUTO. The field was added after the first release: a struct_size of
      * the struct without it (offsetof(dpc_load_options, backend)) is still accepted, as AUTO. */
     dpc_backend backend;
-    /* Default DPC_INPUT_UNIFORM. Added after `backend`: a struct_size of
-     * offsetof(dpc_load_options, input) is still accepted, as UNIFORM. */
+    /* Default DPC_INPUT_AUTO. Added after `backend`: a struct_size of
+     * offsetof(dpc_load_options, input) is still accepted, as AUTO. */
     dpc_input input;
 } dpc_load_options;
 
@@ -184,6 +188,8 @@ DPC_API dpc_status dpc_model_get_info(const dpc_model *model, dpc_model_info *ou
 
 /* The backend this handle runs on: DPC_BACKEND_CPU or DPC_BACKEND_VULKAN, never AUTO. */
 DPC_API dpc_status dpc_model_get_backend(const dpc_model *model, dpc_backend *out_backend);
+/* The input points this handle filters: DPC_INPUT_UNIFORM or DPC_INPUT_STRATIFIED, never AUTO. */
+DPC_API dpc_status dpc_model_get_input(const dpc_model *model, dpc_input *out_input);
 /* What runs the cascade, for people: "cpu", or the Vulkan device's name (e.g. "NVIDIA H100 PCIe",
  * "llvmpipe (LLVM 15.0.6, 256 bits)"). "" for NULL. Valid while the model lives. */
 DPC_API const char *dpc_model_device(const dpc_model *model);

@@ -24,7 +24,7 @@ struct dpc_model {
     dpc_cascade cascade;
     dpc_cpu_engine engine; /* CPU backend; also what info.isa / info.threads report */
     dpc_backend backend;   /* resolved: CPU or VULKAN */
-    dpc_input input;       /* which input points generate filters */
+    dpc_input input;       /* resolved: UNIFORM or STRATIFIED, the points generate filters */
 #if defined(DPC_HAVE_VULKAN)
     dpc_vk_engine *vk; /* the Vulkan backend, when backend == DPC_BACKEND_VULKAN */
 #endif
@@ -60,7 +60,29 @@ void dpc_load_options_init(dpc_load_options *options) {
     options->isa = DPC_ISA_AUTO;
     options->threads = 1;
     options->backend = DPC_BACKEND_AUTO;
-    options->input = DPC_INPUT_UNIFORM;
+    options->input = DPC_INPUT_AUTO;
+}
+
+/* Resolve the input kind of a freshly parsed model: AUTO takes the file's "dpc.input". */
+static dpc_status choose_input(dpc_model *model, dpc_input requested) {
+    const dpc_cascade *c = &model->cascade;
+    dpc_input input = requested;
+    if (requested == DPC_INPUT_AUTO) {
+        const char *v = dpc_cascade_meta(c, "dpc.input");
+        if (!v || strcmp(v, "uniform") == 0) input = DPC_INPUT_UNIFORM;
+        else if (strcmp(v, "stratified") == 0) input = DPC_INPUT_STRATIFIED;
+        else
+            return dpc_fail(DPC_ERROR_FORMAT, "metadata dpc.input is \"%.64s\": \"uniform\" or \"stratified\"", v);
+        if (input == DPC_INPUT_STRATIFIED && c->grid_dims)
+            return dpc_fail(DPC_ERROR_FORMAT, "metadata dpc.input is \"stratified\", but the model has grid axes");
+    } else if (input == DPC_INPUT_STRATIFIED && c->grid_dims) {
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
+                        "stratified input is for models without grid axes; this model fixes %u of its %u dimensions "
+                        "to a grid",
+                        c->grid_dims, c->dims);
+    }
+    model->input = input;
+    return DPC_OK;
 }
 
 /* Resolve the backend of a freshly parsed model: AUTO takes a Vulkan GPU if there is one and
@@ -115,21 +137,14 @@ dpc_status dpc_model_load_memory(const void *data, size_t size, const dpc_load_o
     if (opts.backend != DPC_BACKEND_AUTO && opts.backend != DPC_BACKEND_CPU && opts.backend != DPC_BACKEND_VULKAN)
         return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "options.backend is %d: use DPC_BACKEND_AUTO, _CPU or _VULKAN",
                         (int)opts.backend);
-    if (opts.input != DPC_INPUT_UNIFORM && opts.input != DPC_INPUT_STRATIFIED)
-        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "options.input is %d: use DPC_INPUT_UNIFORM or _STRATIFIED",
+    if (opts.input != DPC_INPUT_AUTO && opts.input != DPC_INPUT_UNIFORM && opts.input != DPC_INPUT_STRATIFIED)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "options.input is %d: use DPC_INPUT_AUTO, _UNIFORM or _STRATIFIED",
                         (int)opts.input);
     dpc_model *model = (dpc_model *)calloc(1, sizeof *model);
     if (!model) return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory");
-    model->input = opts.input;
     dpc_status st = dpc_cpu_engine_init(&model->engine, opts.isa, opts.threads);
     if (st == DPC_OK) st = dpc_cascade_parse((const uint8_t *)data, size, &model->cascade);
-    if (st == DPC_OK && opts.input == DPC_INPUT_STRATIFIED && model->cascade.grid_dims) {
-        dpc_cascade_release(&model->cascade);
-        st = dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
-                      "stratified input is for models without grid axes; this model fixes %u of its %u dimensions "
-                      "to a grid",
-                      model->cascade.grid_dims, model->cascade.dims);
-    }
+    if (st == DPC_OK && (st = choose_input(model, opts.input)) != DPC_OK) dpc_cascade_release(&model->cascade);
     if (st != DPC_OK) {
         free(model);
         return st;
@@ -230,6 +245,13 @@ const char *dpc_model_device(const dpc_model *model) {
     if (model->backend == DPC_BACKEND_VULKAN) return dpc_vk_engine_device(model->vk);
 #endif
     return "cpu";
+}
+
+dpc_status dpc_model_get_input(const dpc_model *model, dpc_input *out_input) {
+    dpc_clear_error();
+    if (!model || !out_input) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "model or out_input is NULL");
+    *out_input = model->input;
+    return DPC_OK;
 }
 
 const char *dpc_model_name(const dpc_model *model) {

@@ -79,6 +79,8 @@ def test_cascade_chains_filter_layers_and_grid_inputs():
     (dict(grid_axes=[0], grid_shape=[5]), "n_points"),
     (dict(init="ones"), "init"),
     (dict(subspaces=["xy", "yx"], radius=[1.0, 1.0]), "distinct"),
+    (dict(input="sobol"), "input"),
+    (dict(input="stratified", grid_axes=[0], grid_shape=[64]), "grid axes"),
 ])
 def test_bad_specs(kw, msg):
     base = dict(dims=2, n_points=64)
@@ -134,3 +136,16 @@ def test_neighbour_cache_gives_the_fresh_search_result():
     assert got == ref
     cache.candidates((x + 2 * move) % 1.0)  # moved 0.98 h > skin/2: rebuilt
     assert cache.builds == 2
+
+
+def test_stratified_training_inputs_are_libdpcs():
+    """[model] input = "stratified": the batch is dpc.stratified of seeds drawn from the step's
+    generator, so training sees exactly what dpc.load(..., input="stratified") will feed."""
+    dpc = pytest.importorskip("dpc")
+    sp = CascadeSpec(dims=2, n_points=64, layers=2, unique_kernels=1, bins=4, input="stratified")
+    x = Cascade(sp).input_points(3, torch.Generator().manual_seed(5), dtype=torch.float64)
+    seeds = torch.randint(0, 1 << 62, (3,), generator=torch.Generator().manual_seed(5)).tolist()
+    for b, s in enumerate(seeds):
+        assert torch.equal(x[b], torch.from_numpy(dpc.stratified(s, 64, 2)).double())
+    cells = (x[0] * 8).floor().long()
+    assert len({(int(i), int(j)) for i, j in cells}) == 64  # one point in each of the 8 x 8 cells

@@ -77,6 +77,7 @@ def test_cli_export_and_metadata(trained_tiny, tmp_path):
     assert "eval_loss" in json.loads(meta["dpc.quality"])
     assert json.loads(meta["dpc.config"])["model"]["layers"] == 4
     assert meta["dpc.loss"].startswith("registered:radspec")
+    assert meta["dpc.input"] == "uniform"  # the input points it was trained on
     st = TR.load_checkpoint(trained_tiny)
     for i, layer in enumerate(spec.layers):
         assert np.array_equal(layer.kernels, st["tables"][i].numpy())

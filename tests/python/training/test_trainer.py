@@ -42,6 +42,24 @@ def test_deterministic_per_seed(tmp_path):
     assert st["step"] == 6 and "eval_loss" in st["quality"]
 
 
+def test_stratified_inputs_train_deterministically_and_export_their_kind(tmp_path):
+    from dpc_train import export as EX
+
+    thetas = []
+    for i in range(2):
+        cfg = tiny(steps=3, checkpoint_every=3)
+        cfg.model.input = "stratified"
+        tr = TR.Trainer(cfg, tmp_path / f"s{i}", progress=False)
+        tr.run()
+        thetas.append(tr.model.theta.detach().clone())
+    assert torch.equal(thetas[0], thetas[1])
+    uni = TR.Trainer(tiny(steps=3, checkpoint_every=3), tmp_path / "u", progress=False)
+    uni.run()
+    assert not torch.equal(thetas[0], uni.model.theta.detach()), "the inputs changed nothing"
+    spec = EX.model_spec_from_checkpoint(TR.load_checkpoint(tmp_path / "s0" / TR.CHECKPOINT))
+    assert spec.metadata["dpc.input"] == "stratified"
+
+
 def test_kill_and_resume_matches_uninterrupted(tmp_path):
     steps = 40
     ref = TR.Trainer(tiny(steps=steps, checkpoint_every=5), tmp_path / "ref", progress=False)
