@@ -122,6 +122,7 @@ class Card:
 CARDS = {
     "bnot-2d": Card("plane", {"xy": "bnot"}, scales=True),
     "bnot-2d-wide": Card("plane", {"xy": "bnot"}, scales=True),
+    "bnot-2d-stratified": Card("plane", {"xy": "bnot"}, scales=True),
     "repulsion-2d": Card("plane", {"xy": "bnot"}),
     "jitter-2d": Card("plane", {"xy": "jitter"}),
     "step-2d": Card("plane", {"xy": "step"}),
@@ -204,7 +205,9 @@ def model_header(name: str, model) -> list[str]:
     out = [f"## {name}", "", meta.get("dpc.description", ""), "",
            f"- file: `models/{path.name}` ({path.stat().st_size:,} bytes), sha256 `{sha}`",
            f"- {model.dims}-D, trained point count {model.n_points:,}, {model.layers} layers"
-           + (f", gridded axes {list(model.grid_axes)}" if model.grid_axes else "")]
+           + (f", gridded axes {list(model.grid_axes)}" if model.grid_axes else "")
+           + (f", {model.input} input points (metadata `dpc.input`; libdpc's default input, AUTO, "
+              "feeds it these)" if model.input != "uniform" else "")]
     if "dpc.train.steps" not in meta:
         out.append(f"- made by: `python {meta.get('dpc.source', '?')}` (hand-designed, not trained)")
         return out
@@ -281,10 +284,13 @@ def scale_section(name: str, model, t: Target) -> list[str]:
             "Scale-aware radius; \"lowest frequencies\" = q in {(1,0), (0,1), (1,1), (1,−1)}, white "
             "noise = 1. At 64 m the spectrum is measured to ν = 1.5.", "", *table, "",
             f"![{name} at other point counts](figures/models/{fig.name})", "",
-            "A cascade of local filters moves each point a bounded distance per layer, so density "
-            "fluctuations on scales far beyond the receptive field relax slowly: E_low stays within "
-            "a small factor of its trained value, but the torus-scale frequencies (last column) keep "
-            "more and more of their white-noise power as m grows.", ""]
+            ("A cascade of local filters moves each point a bounded distance per layer, so density "
+             "fluctuations on scales far beyond the receptive field relax slowly: E_low stays within "
+             "a small factor of its trained value, but the torus-scale frequencies (last column) keep "
+             "more and more of their white-noise power as m grows." if model.input == "uniform" else
+             "The input points are stratified (one per grid cell), so there are no large-scale density "
+             "fluctuations for the local filters to leave behind: the torus-scale frequencies (last "
+             "column) stay near 0 at every m."), ""]
 
 
 def card_nd(name: str, card: Card, model) -> list[str]:

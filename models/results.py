@@ -84,7 +84,7 @@ def spectrum_image(ax, sets, dims=(0, 1), nu=2.0, title=""):
 # ---- Fig. 8 --------------------------------------------------------------------------------
 
 def fig8() -> None:
-    names = [n for n in ("bnot-2d", "bnot-2d-wide", "jitter-2d", "step-2d", "stair-2d", "green-2d", "pink-2d")
+    names = [n for n in ("bnot-2d", "bnot-2d-wide", "bnot-2d-stratified", "jitter-2d", "step-2d", "stair-2d", "green-2d", "pink-2d")
              if n in dpc.available_models()]
     fig, axs = plt.subplots(len(names), 3, figsize=(10, 2.7 * len(names)))
     rows = ["| model | target | rel. L1 (ν range) | E_low ν<0.5: model / target | E_low ν<0.75: model / target | peak: model / target |",
@@ -203,13 +203,14 @@ def _sampler(name: str, dims: int):
     stratified input) or a baseline."""
     base = name.removesuffix(STRATIFIED)
     if base in dpc.available_models():
-        model = dpc.load(base, input="stratified" if name != base else "uniform")
+        model = dpc.load(base, input="stratified" if name != base else "auto")
         return lambda count, m, seed: model.generate_batch(count, seed=seed, n_points=m)
     return lambda count, m, seed: baselines.generate(name, m, dims, count=count, seed=seed)
 
 
 def fig11() -> None:
-    cases = [(2, ["white", "jitter", "sobol", "halton", "bnot-2d", "bnot-2d-wide", "step-2d"], [64, 256, 1024, 4096]),
+    cases = [(2, ["white", "jitter", "sobol", "halton", "bnot-2d", "bnot-2d-wide", "bnot-2d-stratified", "step-2d"],
+              [64, 256, 1024, 4096]),
              (3, ["white", "jitter", "sobol", "halton", "bnot-3d", "projective-3d"], [64, 512, 4096])]
     fig, axs = plt.subplots(1, 2, figsize=(10, 3.8))
     rows = []
@@ -240,7 +241,7 @@ def fig11() -> None:
 
 def fig12() -> None:
     cases = [(2, ["white", "jitter", "sobol", "halton", "rank1", "bnot-2d", "bnot-2d" + STRATIFIED, "bnot-2d-wide",
-                  "step-2d"], [64, 256, 1024, 4096]),
+                  "bnot-2d-stratified", "step-2d"], [64, 256, 1024, 4096]),
              (3, ["white", "jitter", "sobol", "halton", "rank1", "bnot-3d", "projective-3d"], [64, 512, 4096])]
     fams = ("gaussian", "heaviside")
     fig, axs = plt.subplots(2, 2, figsize=(10, 7.2))

@@ -132,3 +132,23 @@ def test_stratified_input_keeps_large_sets_blue_at_the_largest_scales():
     assert got["uniform"][0] > 0.3
     assert got["stratified"][0] < 0.05
     assert got["stratified"][1] <= 0.005  # issue #5's BNOT bound
+
+
+def test_bnot_2d_stratified_gets_its_input_by_default_and_stays_blue_at_every_scale():
+    """The model records dpc.input = stratified, so the default input (auto) is stratified; at
+    the trained count it is within issue #5's BNOT bounds, and at 16x it keeps E_low and has
+    no torus-scale power (docs/models.md card: ratio <= 1.03, power <= 0.0008)."""
+    from dpc import analysis
+
+    model = dpc.load("bnot-2d-stratified")
+    assert model.input == "stratified" and model.metadata["dpc.input"] == "stratified"
+    lowest = np.array([[1, 0], [0, 1], [1, 1], [1, -1]])
+    for m, count in ((1024, 16), (16384, 4)):
+        sets = model.generate_batch(count, seed=0, n_points=m)
+        r = analysis.radial_spectrum(sets, nu_max=4.0)
+        assert r.low_frequency_energy(0.5) <= 0.005, m
+        assert float(np.mean(analysis.power_spectrum_direct(sets, lowest))) < 0.01, m
+    assert analysis.min_distance(model.generate_batch(16, seed=0)).mean_ratio >= 0.65
+    uniform = dpc.load("bnot-2d-stratified", input="uniform")
+    assert uniform.input == "uniform"
+    assert not np.array_equal(uniform.generate(0), model.generate(0))
