@@ -6,8 +6,7 @@
  * until 1.5 s or 25 runs, at least 3. Wall time and the process's CPU time (a software Vulkan
  * driver computes on CPU threads of this process) are reported. On Vulkan, the warm-up's output
  * (seed 0) is also compared with the CPU backend's for the same seed (toroidal difference,
- * max_abs_diff_vs_cpu), so a
- * timing on a new device is never reported for wrong points. */
+ * max_abs_diff_vs_cpu), so a timing on a new device is never reported for wrong points. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>

@@ -15,10 +15,12 @@ cmake --build "$build" --target dpc_bench_vulkan dpc_test_vulkan >/dev/null
 rm -rf .gpu && mkdir .gpu
 cp -L "$build/libdpc/libdpc.so.0" "$build/bench/dpc_bench_vulkan" "$build/tests/c/dpc_test_vulkan" .gpu/
 if ! ls .gl/libvulkan1_*.deb >/dev/null 2>&1; then
-  # The device tool's recipe: amd64 package lists of their own, so this machine's apt state is untouched.
-  mkdir -p .gl /tmp/amd64/partial
-  o='-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64'
+  # Package lists of their own (amd64 only), so this machine's apt state is untouched.
+  lists=$(mktemp -d)
+  mkdir -p .gl "$lists/partial"
+  o="-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=$lists"
   apt-get $o update >/dev/null
   (cd .gl && apt-get $o download libvulkan1 >/dev/null)
+  rm -rf "$lists"
 fi
 du -sh .gpu .gl

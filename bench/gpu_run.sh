@@ -6,7 +6,7 @@
 # DPC_BENCH_ARGS=--quick skips the 1,048,576-point cases. Logs, the test report and the updated docs/performance.md come back in $OUT.
 set -uo pipefail
 cd "$(dirname "$0")/.."
-out=${OUT:-/tmp/dpc-gpu-out}
+out=${OUT:-build/gpu-out}  # $OUT: the device tool's folder that comes back
 mkdir -p "$out"
 for f in .gl/*.deb; do dpkg -x "$f" /; done
 ldconfig

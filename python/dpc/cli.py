@@ -50,20 +50,20 @@ def _is_model(spec: str) -> bool:
 
 def _generate(spec: str, n_points: int | None, dims: int | None, count: int, seed: int,
               threads: int = 0, isa: str = "auto", backend: str = "auto",
-              input: str = "auto") -> tuple[np.ndarray, str, str]:  # noqa: A002
+              input: str = "auto") -> tuple[np.ndarray, str, object]:  # noqa: A002
     """Sets from a dpc model (bundled name or .onnx path) or a baseline name, with a progress
-    bar over chunks of sets (set c always comes from seed + c); returns (sets, name, how a model
-    ran: backend and ISA path or Vulkan device, and its input kind; "" for a baseline)."""
+    bar over chunks of sets (set c always comes from seed + c); returns (sets, name, the loaded
+    model or None for a baseline). ``input`` applies to models only."""
     if spec in baselines.BASELINES:
         base = baselines.get(spec)
         if n_points is None and not isinstance(base, baselines.ReferenceBaseline):
             raise click.UsageError(f"baseline {spec} needs -n/--points")
         if isinstance(base, baselines.ReferenceBaseline):
-            return base.generate_batch(count, n_points, dims, seed), spec, ""
+            return base.generate_batch(count, n_points, dims, seed), spec, None
         out = []
         for c in _progress(range(count), f"{spec}"):
             out.append(base.generate_batch(1, n_points, 2 if dims is None else dims, seed + c)[0])
-        return np.stack(out), spec, ""
+        return np.stack(out), spec, None
     if not _is_model(spec):
         if Path(spec).suffix.lower() in _POINT_EXTS:
             raise click.ClickException(f"no such file: {spec}")
@@ -77,9 +77,13 @@ def _generate(spec: str, n_points: int | None, dims: int | None, count: int, see
     for start in _progress(range(0, count, chunk), f"{model.name}"):
         parts.append(model.generate_batch(min(chunk, count - start), seed=seed + start,
                                           n_points=n_points))
-    ran_on = f"cpu, {model.isa}" if model.backend == "cpu" else f"vulkan, {model.device}"
-    ran_on += f"; {model.input} input"
-    return np.concatenate(parts).astype(np.float64), model.name, ran_on
+    return np.concatenate(parts).astype(np.float64), model.name, model
+
+
+def _ran_on(model) -> str:
+    """What ran a model, for the closing line: backend and ISA path or device, input kind."""
+    where = f"cpu, {model.isa}" if model.backend == "cpu" else f"vulkan, {model.device}"
+    return f"{where}; {model.input} input"
 
 
 _stratified_option = click.option(
@@ -103,9 +107,8 @@ def _read_inputs(specs, n_points, dims, count, seed, bin_dtype,
             out.append((Path(spec).stem, pointio.read_points(spec, dims=dims, bin_dtype=bin_dtype,
                                                              progress_bar=True)))
         else:
-            kind = "auto" if spec in baselines.BASELINES else _input_kind(stratified)
-            sets, name, ran_on = _generate(spec, n_points, dims, count, seed, input=kind)
-            out.append((name + (" (stratified)" if ran_on.endswith("stratified input") else ""), sets))
+            sets, name, model = _generate(spec, n_points, dims, count, seed, input=_input_kind(stratified))
+            out.append((name + (" (stratified)" if model and model.input == "stratified" else ""), sets))
     return out
 
 
@@ -259,7 +262,7 @@ def generate_cmd(model, n_points, dims, seed, count, output, fmt, bin_dtype, thr
         pointio.resolve_format(output, fmt)  # fail on a bad name before the work
     if stratified is not None and model in baselines.BASELINES:
         raise click.UsageError("--stratified/--uniform apply to models, not to baselines")
-    sets, name, ran_on = _generate(model, n_points, dims, count, seed, threads, isa, backend,
+    sets, name, loaded = _generate(model, n_points, dims, count, seed, threads, isa, backend,
                                    _input_kind(stratified))
     if output is None:
         if fmt not in (None, "txt", "utk", "text"):
@@ -271,7 +274,7 @@ def generate_cmd(model, n_points, dims, seed, count, output, fmt, bin_dtype, thr
         return
     pointio.write_points(output, sets, fmt, bin_dtype=bin_dtype, progress_bar=True)
     click.echo(f"wrote {sets.shape[0]} set(s) of {sets.shape[1]} {sets.shape[2]}-D points "
-               f"from {name}{f' ({ran_on})' if ran_on else ''} to {output}", err=True)
+               f"from {name}{f' ({_ran_on(loaded)})' if loaded else ''} to {output}", err=True)
 
 
 @cli.command("analyze")

@@ -73,14 +73,14 @@ static dpc_status choose_input(dpc_model *model, dpc_input requested) {
         else if (strcmp(v, "stratified") == 0) input = DPC_INPUT_STRATIFIED;
         else
             return dpc_fail(DPC_ERROR_FORMAT, "metadata dpc.input is \"%.64s\": \"uniform\" or \"stratified\"", v);
-        if (input == DPC_INPUT_STRATIFIED && c->grid_dims)
-            return dpc_fail(DPC_ERROR_FORMAT, "metadata dpc.input is \"stratified\", but the model has grid axes");
-    } else if (input == DPC_INPUT_STRATIFIED && c->grid_dims) {
-        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
-                        "stratified input is for models without grid axes; this model fixes %u of its %u dimensions "
-                        "to a grid",
-                        c->grid_dims, c->dims);
     }
+    if (input == DPC_INPUT_STRATIFIED && c->grid_dims) /* the file's fault, or the caller's */
+        return requested == DPC_INPUT_AUTO
+                   ? dpc_fail(DPC_ERROR_FORMAT, "metadata dpc.input is \"stratified\", but the model has grid axes")
+                   : dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
+                              "stratified input is for models without grid axes; this model fixes %u of its %u "
+                              "dimensions to a grid",
+                              c->grid_dims, c->dims);
     model->input = input;
     return DPC_OK;
 }
@@ -286,8 +286,6 @@ static void fill_uniform(uint64_t seed, size_t count, float *out) {
     for (size_t c = 0; c < count; c++) out[c] = dpc_uniform_at(state0, c);
 }
 
-static void fill_grid(const dpc_cascade *c, size_t m, float *x);
-
 /* The stratified input of docs/model-format.md §5 for m points in n dimensions. The cell lists
  * live in out itself (cell of point i in word i; for n >= 2 the cell permutation in words
  * m .. m + C), so the CPU and Vulkan paths need no allocation. m <= DPC_MAX_POINTS < 2^32. */
@@ -385,14 +383,6 @@ dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, float *ou
     return DPC_OK;
 }
 
-/* The input points of one set: the model's input kind, then the grid's cell centres. */
-static void fill_input(const dpc_model *model, uint64_t seed, size_t m, float *x) {
-    const dpc_cascade *c = &model->cascade;
-    if (model->input == DPC_INPUT_STRATIFIED) fill_stratified(seed, m, c->dims, x);
-    else fill_uniform(seed, m * c->dims, x);
-    fill_grid(c, m, x);
-}
-
 /* Resolve and check the point count of a request. */
 static dpc_status check_count(const dpc_model *model, size_t *n_points) {
     const dpc_cascade *c = &model->cascade;
@@ -416,6 +406,14 @@ static void fill_grid(const dpc_cascade *c, size_t m, float *x) {
             x[i * c->dims + c->grid_axis[g]] = (float)(((double)cell + 0.5) / c->grid_shape[g]);
         }
     }
+}
+
+/* The input points of one set: the model's input kind, then the grid's cell centres. */
+static void fill_input(const dpc_model *model, uint64_t seed, size_t m, float *x) {
+    const dpc_cascade *c = &model->cascade;
+    if (model->input == DPC_INPUT_STRATIFIED) fill_stratified(seed, m, c->dims, x);
+    else fill_uniform(seed, m * c->dims, x);
+    fill_grid(c, m, x);
 }
 
 static dpc_status generate_one(const dpc_model *model, const dpc_cpu_engine *engine, uint64_t seed,

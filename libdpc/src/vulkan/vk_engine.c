@@ -6,8 +6,8 @@
  * point-index order within a cell; grid_sum.comp: the filter sum over the cells around each
  * point), or from tiled all pairs in shared memory (pairs.comp, split over partner ranges
  * and summed by pairs_sum.comp when a set has too few points to fill a GPU) where the grid does
- * not pay; apply.comp ends the layer. Every point's sum is computed by one invocation in a fixed order,
- * so the bits depend on the device and driver but not on timing. The input points are made on
+ * not pay; apply.comp ends the layer. Every point's sum is computed in a fixed order, so the bits
+ * depend on the device and driver but not on timing. The input points are made on
  * the host by api.c (the same SplitMix64 code as the CPU backend) and uploaded. */
 #include <math.h>
 #include <pthread.h>
