@@ -1,4 +1,4 @@
-"""The ``dpc`` command line: list, generate, analyze, compare, dither.
+"""The ``dpc`` command line: list, generate, analyze, compare, mask, dither.
 
 UTK-style short flags: -m model, -n points, -d dims, -s seed, -c sets, -i input, -o output.
 Errors print one line ``dpc: error: ...`` and exit with 2 (bad usage) or 1 (anything else);
@@ -435,10 +435,72 @@ def _compare_plots(results, out: Path, nu_max: float) -> None:
     fig.savefig(out / "points.png", dpi=110, bbox_inches="tight")
 
 
+@cli.command("mask")
+@click.option("-m", "--mask", "name", default="mask-64", show_default=True,
+              help="Gridded mask model (bundled name or .onnx) or a baseline: void-and-cluster, "
+                   "stbn, white, bayer (see 'dpc mask --list').")
+@click.option("-n", "--size", type=click.IntRange(min=2), default=None,
+              help="Pixels per side (default: a model's trained grid; baselines need it).")
+@click.option("--frames", type=click.IntRange(min=1), default=None,
+              help="Frames of a spatiotemporal mask (default: the model's; stbn needs it).")
+@click.option("--channels", type=click.IntRange(min=1, max=4), default=None,
+              help="Values per pixel, for baselines (white, void-and-cluster).")
+@click.option("-s", "--seed", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Seed of the mask realisation.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False, writable=True), default=None,
+              help="Output: .npy (float64), .png (8/16-bit codes; R, G for 2 values) or .exr "
+                   "(float32). Spatiotemporal masks: one .npy, or stem_000.png ... per frame.")
+@click.option("--bits", type=click.Choice(["8", "16"]), default="16", show_default=True,
+              help="PNG bit depth.")
+@click.option("--list", "list_", is_flag=True, help="List the mask sources and exit.")
+def mask_cmd(name, size, frames, channels, seed, output, bits, list_):
+    """Write a blue-noise threshold mask (scalar, vector or spatiotemporal) and print its
+    low-band energies (white noise = 1; docs/masks.md)."""
+    from . import masks as M
+    from .analysis import masks as AM
+
+    if list_:
+        for k, v in M.available().items():
+            click.echo(f"  {k:22s} {v}")
+        return
+    if output is None:
+        raise click.UsageError("give -o/--output (.npy, .png or .exr)")
+    if Path(output).suffix.lower() not in M.MASK_EXTENSIONS:
+        raise click.UsageError("-o/--output must end in .npy, .png or .exr")
+    arr = M.mask(name, size=size, seed=seed, frames=frames, channels=channels)
+    st = arr.ndim == 3 and (frames is not None or name == "stbn"
+                            or M.kind_of(arr) == "spatiotemporal")
+    kind = M.kind_of(arr, st)
+    paths = M.write_mask(output, arr, bits=int(bits), spatiotemporal=st)
+    if kind == "scalar":
+        q = AM.scalar_quality(arr)
+        summary = (f"mask E_low {q['mask_elow']:.5f}, thresholded 1/8..7/8 mean "
+                   f"{q['levels_elow_mean']:.4f} worst {q['levels_elow_max']:.4f}")
+    elif kind == "vector":
+        q = AM.vector_quality(arr)
+        summary = (f"per channel: mask E_low <= {q['mask_elow_max']:.5f}, thresholded mean <= "
+                   f"{q['levels_elow_mean_max']:.4f}; joint boxes mean {q['joint_elow_mean']:.4f}")
+    else:
+        q = AM.spatiotemporal_quality(arr)
+        summary = (f"frames: mask E_low mean {q['mask_elow_mean']:.5f}, thresholded mean "
+                   f"{q['levels_elow_mean']:.4f}; temporal E_low {q['temporal_elow']:.3f}; "
+                   f"accumulated RMSE after {q['frames']} frames {q['accumulated_rmse'][-1]:.4f}")
+    where = str(paths[0]) if len(paths) == 1 else f"{paths[0]} ... {paths[-1]} ({len(paths)} files)"
+    click.echo(f"wrote {where}: {kind} mask {'x'.join(str(d) for d in arr.shape)} from {name} "
+               f"(seed {seed}); {summary}", err=True)
+
+
 @cli.command("dither")
 @click.argument("image", type=click.Path(exists=True, dir_okay=False))
 @click.option("-m", "--model", default="dither-32", show_default=True,
-              help="Gridded model (bundled name or .onnx) whose points give the threshold mask.")
+              help="Mask: a gridded mask model (bundled name or .onnx) or a baseline "
+                   "(void-and-cluster, stbn, white, bayer; see 'dpc mask --list').")
+@click.option("-n", "--size", type=click.IntRange(min=2), default=None,
+              help="Mask pixels per side (default: the model's grid; baselines need it).")
+@click.option("--channel", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Value channel of a vector mask.")
+@click.option("--frame", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Frame of a spatiotemporal mask.")
 @click.option("-s", "--seed", type=click.IntRange(min=0), default=0, show_default=True,
               help="Seed of the mask realisation.")
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False, writable=True),
@@ -447,21 +509,36 @@ def _compare_plots(results, out: Path, nu_max: float) -> None:
               help="Also write the mask: .npy (values in (0, 1)) or .png (8-bit grey).")
 @click.option("--white-noise", is_flag=True,
               help="Use a white-noise mask of the same size instead (for comparison).")
-def dither_cmd(image, model, seed, output, mask_output, white_noise):
-    """Ordered dithering of IMAGE with a blue-noise mask from a gridded model (tiled)."""
+def dither_cmd(image, model, size, channel, frame, seed, output, mask_output, white_noise):
+    """Ordered dithering of IMAGE with a blue-noise mask (tiled): a gridded mask model or a
+    baseline mask."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.image as mpimg
 
+    from . import masks as M
     from .analysis import dither as D
 
     if Path(output).suffix.lower() != ".png":
         raise click.UsageError("the output image must be a .png file")
     if mask_output is not None and Path(mask_output).suffix.lower() not in (".npy", ".png"):
         raise click.UsageError("--mask-output must end in .npy or .png")
-    mdl = _load_model(model)
-    mask = D.model_mask(mdl, seed=seed)
+    frames = None
+    if model == "stbn":
+        frames = frame + 1
+    arr = M.mask(model, size=size, seed=seed, frames=frames)
+    kind = M.kind_of(arr, model == "stbn")
+    if kind == "vector":
+        if channel >= arr.shape[2]:
+            raise click.UsageError(f"--channel {channel}: the mask has {arr.shape[2]} channels")
+        mask = arr[:, :, channel]
+    elif kind == "spatiotemporal":
+        if frame >= arr.shape[0]:
+            raise click.UsageError(f"--frame {frame}: the mask has {arr.shape[0]} frames")
+        mask = arr[frame]
+    else:
+        mask = arr
     if white_noise:
         mask = D.rank_normalise(np.random.default_rng(seed).random(mask.shape))
     try:

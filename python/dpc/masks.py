@@ -1,0 +1,360 @@
+"""Blue-noise threshold masks for dithering and real-time rendering (docs/masks.md).
+
+    >>> import dpc
+    >>> m = dpc.mask("mask-64", seed=3)                    # (64, 64) float64, values (rank + ½)/4096
+    >>> v = dpc.mask("mask-vector-64")                     # (64, 64, 2): per-pixel 2-D offsets
+    >>> st = dpc.mask("mask-st-32x16")                     # (16, 32, 32): frame t = st[t]
+    >>> vc = dpc.mask("void-and-cluster", size=128, seed=1)
+    >>> dpc.masks.write_mask("mask.png", m, bits=16)       # also .exr (float32) and .npy
+
+A mask is a float64 array of rank-normalised values: every value (k + ½)/S, k = 0 … S − 1, taken
+by exactly one pixel (S = the pixels of one threshold map). Shapes: scalar (N, N); vector
+(N, N, C), each channel ranked on its own; spatiotemporal (T, N, N), each frame ranked on its
+own. Pixel (ix, iy) is ``mask[iy, ix]``; every mask tiles seamlessly (it is made on the torus).
+
+Sources (:func:`available`):
+
+* a gridded dpc model (bundled name or ``.onnx`` path). Its grid axes give the pixel grid (and
+  frames), its free axes the values: 2 grid axes + 1 free axis → scalar, 2 + C → vector,
+  3 + 1 → spatiotemporal (the third grid axis is time). At the trained grid the mask is
+  ``model.generate(seed)``; at another size the same input construction (libdpc's uniform points
+  of ``seed``, grid axes set to cell centres, docs/model-format.md §5) is filtered with
+  ``model.filter``, whose radii scale with the point count (quality there: docs/masks.md).
+* baselines from :mod:`dpc.baselines`: ``void-and-cluster`` (Ulichney 1993; with ``channels=2``
+  two independent masks, with ``frames=T`` T independent masks), ``stbn`` (scalar spatiotemporal
+  blue noise after Wolfe et al. 2022; needs ``frames``), ``white``, ``bayer``.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from . import baselines as _bl
+from .errors import DpcError, InvalidArgumentError, ModelNotFoundError
+
+BASELINE_MASKS = {
+    "void-and-cluster": "Ulichney's void-and-cluster (1993), sigma 1.5, toroidal; channels=2: two "
+                        "independent masks; frames=T: T independent masks",
+    "stbn": "scalar spatiotemporal blue noise (Wolfe et al. 2022): void-and-cluster over (T, N, N) "
+            "with a spatial and a temporal Gaussian energy, sigma 1.9; needs frames",
+    "white": "white noise, rank-normalised (any shape)",
+    "bayer": "Bayer ordered-dither matrix (N a power of two)",
+}
+MASK_EXTENSIONS = (".npy", ".png", ".exr")
+
+
+# ---------------------------------------------------------------- making masks
+def rank_normalise(a: np.ndarray, kind: str) -> np.ndarray:
+    """(rank + ½)/S per threshold map: the whole array (scalar), per channel (vector, last
+    axis) or per frame (spatiotemporal, first axis)."""
+    from .analysis.dither import rank_normalise as rn
+    a = np.asarray(a, dtype=np.float64)
+    if kind == "scalar":
+        return rn(a)
+    if kind == "vector":
+        return np.stack([rn(a[..., c]) for c in range(a.shape[-1])], axis=-1)
+    if kind == "spatiotemporal":
+        return np.stack([rn(f) for f in a])
+    raise InvalidArgumentError(f"unknown mask kind {kind!r}")
+
+
+def mask_kind(model) -> str:
+    """'scalar', 'vector' or 'spatiotemporal' for a gridded dpc.Model (see the module doc)."""
+    axes = tuple(model.grid_axes)
+    free = [d for d in range(model.dims) if d not in axes]
+    if len(axes) == 2 and len(free) == 1:
+        return "scalar"
+    if len(axes) == 2 and len(free) >= 2:
+        return "vector"
+    if len(axes) == 3 and len(free) == 1:
+        return "spatiotemporal"
+    raise InvalidArgumentError(
+        f"model {model.metadata.get('dpc.name', '?')} is not a mask model: it needs 2 grid axes "
+        f"(+ 1 or more value axes) or 3 grid axes (x, y, time) + 1 value axis; it has grid axes "
+        f"{list(axes)} of {model.dims} dims")
+
+
+def _model_mask(model, size: int | None, frames: int | None, seed: int) -> np.ndarray:
+    kind = mask_kind(model)
+    axes = tuple(model.grid_axes)
+    shape = tuple(model.grid_shape)
+    if shape[0] != shape[1]:
+        raise InvalidArgumentError(f"the model's pixel grid is not square: {shape[:2]}")
+    n = shape[0] if size is None else _bl._check_mask_size(size, "size", 4)
+    if kind == "spatiotemporal":
+        t = shape[2] if frames is None else _bl._check_mask_size(frames, "frames", 2)
+        want = (n, n, t)
+    else:
+        if frames is not None:
+            raise InvalidArgumentError(f"frames applies to spatiotemporal masks; this is a {kind} mask")
+        want = (n, n)
+    m = math.prod(want)
+    if want == shape:
+        pts = model.generate(seed=seed)
+    else:
+        pts = _filter_at_any_size(model, _grid_input(seed, want, axes, model.dims))
+    free = [d for d in range(model.dims) if d not in axes]
+    vals = np.asarray(pts, dtype=np.float64)[:, free]
+    if kind == "scalar":
+        out = vals[:, 0].reshape(n, n)
+    elif kind == "vector":
+        out = vals.reshape(n, n, len(free))
+    else:
+        out = vals[:, 0].reshape(want[2], n, n)
+    return rank_normalise(out, kind)
+
+
+def _grid_input(seed: int, grid: tuple, axes: tuple, dims: int) -> np.ndarray:
+    """libdpc's input for a gridded model (docs/model-format.md §5) on another grid: the
+    uniform points of ``seed``, grid axes at the cell centres (first axis fastest)."""
+    import dpc
+    m = math.prod(grid)
+    pts = np.asarray(dpc.uniform(seed, m, dims), dtype=np.float64)
+    idx = np.arange(m)
+    div = 1
+    for a, g in zip(axes, grid):
+        pts[:, a] = ((idx // div) % g + 0.5) / g
+        div *= g
+    return pts
+
+
+def _filter_at_any_size(model, pts: np.ndarray) -> np.ndarray:
+    """Run a gridded model's cascade on points of any count. libdpc's dpc_generate/dpc_filter
+    serve a gridded model at its grid's point count only, so this runs the file's layers one by
+    one through libdpc's float64 layer kernels (dpc_layer_forward, the training API; radii
+    scale with the point count as in every layer, docs/model-format.md §3). Needs the onnx
+    package to read the layers (``pip install dpc[masks]``)."""
+    from . import _core
+    from .model_file import read_model
+    try:
+        spec = read_model(model.path)
+    except ImportError as e:
+        raise InvalidArgumentError(
+            f"a mask model at a size other than its grid needs the onnx package ({e})") from e
+    x = np.ascontiguousarray(pts, dtype=np.float64)
+    for layer in spec.layers:
+        x = _core.layer_forward(x, np.ascontiguousarray(layer.kernels, dtype=np.float64),
+                                list(layer.subspaces), [float(r) for r in layer.radius],
+                                float(layer.eps), int(layer.fixed), threads=0)
+        x = x - np.floor(x)
+    return x
+
+
+def _baseline_mask(name: str, size, frames, channels, seed: int) -> np.ndarray:
+    if size is None:
+        raise InvalidArgumentError(f"mask {name!r} needs a size")
+    n = _bl._check_mask_size(size, "size", 2)
+    c = 1 if channels is None else _bl._check_mask_size(channels, "channels", 1)
+    t = None if frames is None else _bl._check_mask_size(frames, "frames", 1)
+    if name == "white":
+        if c > 1 and t is not None:
+            raise InvalidArgumentError("white: give channels or frames, not both")
+        if t is not None:
+            return np.stack([_bl.white_mask((n, n), seed + k) for k in range(t)])
+        return _bl.white_mask((n, n), seed) if c == 1 else _bl.white_mask((n, n, c), seed)
+    if name == "bayer":
+        if c != 1 or t is not None:
+            raise InvalidArgumentError("bayer is a scalar mask (no channels, no frames)")
+        return _bl.bayer_mask(n)
+    if name == "void-and-cluster":
+        if c > 1 and t is not None:
+            raise InvalidArgumentError("void-and-cluster: give channels or frames, not both")
+        if t is not None:
+            return np.stack([_bl.void_and_cluster(n, seed + 1_000_003 * k) for k in range(t)])
+        if c == 1:
+            return _bl.void_and_cluster(n, seed)
+        return np.stack([_bl.void_and_cluster(n, seed + 1_000_003 * k) for k in range(c)], axis=-1)
+    if name == "stbn":
+        if t is None:
+            raise InvalidArgumentError("stbn needs frames (e.g. frames=16)")
+        if c != 1:
+            raise InvalidArgumentError("stbn here is the scalar construction (channels = 1)")
+        return _bl.stbn_scalar(n, t, seed)
+    raise InvalidArgumentError(f"unknown mask {name!r}")
+
+
+def available() -> dict[str, str]:
+    """Mask sources: the bundled gridded models and the baselines, with one line each."""
+    import dpc
+    out = {}
+    for name in dpc.available_models():
+        try:
+            model = dpc.load(name)
+            kind = mask_kind(model)
+        except DpcError:
+            continue
+        shape = "x".join(str(g) for g in model.grid_shape)
+        out[name] = f"dpc model, {kind}, trained at {shape}"
+    out.update(BASELINE_MASKS)
+    return out
+
+
+def mask(name: str, size: int | None = None, seed: int = 0, frames: int | None = None,
+         channels: int | None = None) -> np.ndarray:
+    """A rank-normalised mask from a gridded model (bundled name or .onnx path) or a baseline
+    (see the module doc). ``size`` (pixels per side) defaults to the model's grid; ``frames``:
+    spatiotemporal masks; ``channels``: baselines only (a vector model has its own)."""
+    s = int(seed)
+    if s != seed or s < 0:
+        raise InvalidArgumentError(f"seed must be an integer >= 0, got {seed!r}")
+    if not isinstance(name, (str, Path)):
+        raise InvalidArgumentError(f"mask name must be a string, got {type(name).__name__}")
+    if str(name) in BASELINE_MASKS:
+        return _baseline_mask(str(name), size, frames, channels, s)
+    import dpc
+    try:
+        model = dpc.load(str(name))
+    except ModelNotFoundError:
+        raise InvalidArgumentError(
+            f"unknown mask {name!r}: not a bundled model, a model file or one of "
+            f"{', '.join(BASELINE_MASKS)}") from None
+    if not model.grid_axes:
+        raise InvalidArgumentError(f"model {name} is not gridded: it has no pixel grid")
+    if channels is not None:
+        raise InvalidArgumentError("channels applies to baselines; a model has its own")
+    return _model_mask(model, size, frames, s)
+
+
+def kind_of(mask_array: np.ndarray, spatiotemporal: bool = False) -> str:
+    """Kind of an array: (N, N) scalar, (N, N, C) vector, (T, N, N) spatiotemporal (a 3-D
+    array is read as vector when its last axis is ≤ 4 and not equal to N, else as frames)."""
+    a = np.asarray(mask_array)
+    if a.ndim == 2:
+        return "scalar"
+    if a.ndim == 3:
+        if spatiotemporal:
+            return "spatiotemporal"
+        if a.shape[0] == a.shape[1] and a.shape[2] <= 4 and a.shape[2] != a.shape[0]:
+            return "vector"
+        if a.shape[1] == a.shape[2]:
+            return "spatiotemporal"
+    raise InvalidArgumentError(f"a mask is (N, N), (N, N, C) or (T, N, N); got {a.shape}")
+
+
+# ---------------------------------------------------------------- files
+def quantise(mask_array: np.ndarray, bits: int) -> np.ndarray:
+    """The integer codes a PNG of ``bits`` (8 or 16) stores: floor(v · 2^bits), v in [0, 1)."""
+    if bits not in (8, 16):
+        raise InvalidArgumentError(f"PNG bit depth must be 8 or 16, got {bits}")
+    a = np.asarray(mask_array, dtype=np.float64)
+    if a.size == 0 or not np.all(np.isfinite(a)) or a.min() < 0 or a.max() >= 1:
+        raise InvalidArgumentError("mask values must be finite and in [0, 1)")
+    return np.minimum(np.floor(a * (1 << bits)), (1 << bits) - 1).astype(np.uint16 if bits == 16 else np.uint8)
+
+
+def frame_paths(path, frames: int) -> list[Path]:
+    """The files of a spatiotemporal mask written to ``path``: stem_000.ext, stem_001.ext, …"""
+    p = Path(path)
+    width = max(3, len(str(frames - 1)))
+    return [p.with_name(f"{p.stem}_{k:0{width}d}{p.suffix}") for k in range(frames)]
+
+
+def _write_png(path: Path, img: np.ndarray, bits: int) -> None:
+    import png  # pypng
+    codes = quantise(img, bits)
+    if codes.ndim == 2:
+        rows, grey, planes = codes, True, 1
+    else:
+        c = codes.shape[2]
+        if c > 3:
+            raise InvalidArgumentError("PNG output holds at most 3 channels")
+        rgb = np.zeros(codes.shape[:2] + (3,), dtype=codes.dtype)
+        rgb[..., :c] = codes                                   # 2 values: R, G (B = 0)
+        rows, grey, planes = rgb.reshape(codes.shape[0], -1), False, 3
+    writer = png.Writer(width=codes.shape[1], height=codes.shape[0], greyscale=grey, bitdepth=bits)
+    with open(path, "wb") as f:
+        writer.write(f, rows.tolist())
+    del planes
+
+
+def _read_png(path: Path, channels: int | None) -> np.ndarray:
+    import png
+    w, h, rows, info = png.Reader(filename=str(path)).read()
+    bits, planes = info["bitdepth"], info["planes"]
+    if bits not in (8, 16):
+        raise InvalidArgumentError(f"{path}: {bits}-bit PNG; masks are 8 or 16 bits")
+    a = np.array([np.asarray(r, dtype=np.float64) for r in rows]).reshape(h, w, planes)
+    v = (a + 0.5) / (1 << bits)
+    if planes == 1:
+        return v[:, :, 0]
+    c = 2 if channels is None else channels
+    return v[:, :, :c]
+
+
+_EXR_CHANNELS = ("R", "G", "B", "A")
+
+
+def _write_exr(path: Path, img: np.ndarray) -> None:
+    import OpenEXR
+    a = np.asarray(img, dtype=np.float32)
+    if a.ndim == 2:
+        chans = {"Y": np.ascontiguousarray(a)}
+    else:
+        if a.shape[2] > 4:
+            raise InvalidArgumentError("EXR output holds at most 4 channels")
+        chans = {_EXR_CHANNELS[c]: np.ascontiguousarray(a[:, :, c]) for c in range(a.shape[2])}
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    with OpenEXR.File(header, chans) as f:
+        f.write(str(path))
+
+
+def _read_exr(path: Path) -> np.ndarray:
+    import OpenEXR
+    with OpenEXR.File(str(path)) as f:
+        ch = f.channels()
+        if "Y" in ch:
+            return np.asarray(ch["Y"].pixels, dtype=np.float64)
+        names = [c for c in _EXR_CHANNELS if c in ch]
+        if not names:
+            raise InvalidArgumentError(f"{path}: no Y or R/G/B/A channels")
+        return np.stack([np.asarray(ch[c].pixels, dtype=np.float64) for c in names], axis=-1)
+
+
+def write_mask(path, mask_array: np.ndarray, bits: int = 16, spatiotemporal: bool | None = None) -> list[Path]:
+    """Write a mask: ``.npy`` (float64, exact), ``.png`` (8- or 16-bit codes floor(v · 2^bits);
+    grey for scalar, R, G (B = 0) for 2 values) or ``.exr`` (float32, exact for masks up to
+    2^23 pixels; channel Y, or R, G, …). A spatiotemporal (T, N, N) mask goes to one ``.npy``,
+    or to T files stem_000.png … (each frame a scalar mask). Returns the paths written."""
+    p = Path(path)
+    ext = p.suffix.lower()
+    if ext not in MASK_EXTENSIONS:
+        raise InvalidArgumentError(f"mask file must end in {', '.join(MASK_EXTENSIONS)}; got {p.name!r}")
+    a = np.asarray(mask_array, dtype=np.float64)
+    kind = kind_of(a, bool(spatiotemporal))
+    if not np.all(np.isfinite(a)) or a.min() < 0 or a.max() >= 1:
+        raise InvalidArgumentError("mask values must be finite and in [0, 1)")
+    if ext == ".npy":
+        np.save(p, a)
+        return [p]
+    if ext == ".png" and bits not in (8, 16):
+        raise InvalidArgumentError(f"PNG bit depth must be 8 or 16, got {bits}")
+    images, paths = ([a], [p]) if kind != "spatiotemporal" else (list(a), frame_paths(p, a.shape[0]))
+    for img, q in zip(images, paths):
+        if ext == ".png":
+            _write_png(q, img, bits)
+        else:
+            _write_exr(q, img)
+    return paths
+
+
+def read_mask(path) -> np.ndarray:
+    """Read a mask file written by :func:`write_mask` (or a list of frame files, stacked into
+    (T, N, N)). PNG codes come back as (code + ½)/2^bits; EXR and .npy exactly as written."""
+    if isinstance(path, (list, tuple)):
+        if not path:
+            raise InvalidArgumentError("no mask files given")
+        return np.stack([read_mask(q) for q in path])
+    p = Path(path)
+    ext = p.suffix.lower()
+    if not p.is_file():
+        raise InvalidArgumentError(f"no such mask file: {p}")
+    if ext == ".npy":
+        return np.load(p)
+    if ext == ".png":
+        return _read_png(p, None)
+    if ext == ".exr":
+        return _read_exr(p)
+    raise InvalidArgumentError(f"mask file must end in {', '.join(MASK_EXTENSIONS)}; got {p.name!r}")

@@ -1,0 +1,233 @@
+"""Blue-noise threshold masks (issue 13): the baselines (void-and-cluster, STBN, white, Bayer),
+the quality measures of dpc.analysis.masks, dpc.masks.mask for models and baselines, the file
+formats, and the `dpc mask` / `dpc dither` commands."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import dpc
+from dpc import baselines as B
+from dpc import masks as M
+from dpc.analysis import masks as AM
+from dpc.analysis.dither import mask_quality, rank_normalise
+from dpc.cli import main
+from dpc.errors import InvalidArgumentError
+
+
+def _exact_levels(a: np.ndarray) -> bool:
+    """Every value (k + ½)/S, k = 0 … S − 1, exactly once."""
+    return np.array_equal(np.sort(a.ravel()), (np.arange(a.size) + 0.5) / a.size)
+
+
+# ---------------------------------------------------------------- void-and-cluster
+def test_void_and_cluster_reproduces_ulichney_quality():
+    # 32 x 32, sigma 1.5: the issue measured mask E_low 0.0019 and thresholded-pattern mean 0.050
+    # over 8 masks; white noise scores 1.
+    ms = np.stack([B.void_and_cluster(32, seed=s) for s in range(4)])
+    q = mask_quality(ms)
+    assert q["mask_elow"] < 0.004, q
+    assert q["levels_elow_mean"] < 0.07, q
+    w = mask_quality(np.stack([B.white_mask((32, 32), seed=s) for s in range(4)]))
+    assert w["mask_elow"] > 0.7 and w["levels_elow_mean"] > 0.7, w
+    for m in ms:
+        assert _exact_levels(m)
+
+
+def test_void_and_cluster_is_deterministic_and_seeded():
+    a, b, c = B.void_and_cluster(16, 3), B.void_and_cluster(16, 3), B.void_and_cluster(16, 4)
+    assert np.array_equal(a, b) and not np.array_equal(a, c)
+    assert _exact_levels(a) and a.shape == (16, 16)
+
+
+def test_void_and_cluster_rejects_bad_input():
+    for bad in (1, 0, -4, 2.5, "x"):
+        with pytest.raises(InvalidArgumentError):
+            B.void_and_cluster(bad)
+    with pytest.raises(InvalidArgumentError):
+        B.void_and_cluster(16, seed=-1)
+    with pytest.raises(InvalidArgumentError):
+        B.void_and_cluster(16, sigma=0)
+    with pytest.raises(InvalidArgumentError):
+        B.void_and_cluster(16, density=0.7)
+
+
+def test_bayer_and_white_masks():
+    assert _exact_levels(B.bayer_mask(8)) and _exact_levels(B.white_mask((8, 8), 1))
+    v = B.white_mask((8, 8, 2), 1)
+    assert v.shape == (8, 8, 2) and all(_exact_levels(v[..., c]) for c in range(2))
+    with pytest.raises(InvalidArgumentError):
+        B.bayer_mask(12)
+
+
+# ---------------------------------------------------------------- vector and spatiotemporal
+def test_two_independent_void_and_cluster_masks_are_blue_per_channel_not_jointly():
+    v = B.vector_void_and_cluster(32, seed=0)
+    q = AM.vector_quality(v)
+    assert q["mask_elow_max"] < 0.01 and q["levels_elow_mean_max"] < 0.1, q
+    # the joint box patterns are products of two unrelated blue patterns: far from blue
+    assert q["joint_elow_mean"] > 0.3, q
+    w = AM.vector_quality(B.white_mask((32, 32, 2), 0))
+    assert w["joint_elow_mean"] > 0.7
+
+
+def test_stbn_frames_blue_and_time_well_spread():
+    st = B.stbn_scalar(16, 8, seed=0)
+    assert st.shape == (8, 16, 16) and all(_exact_levels(f) for f in st)
+    q = AM.spatiotemporal_quality(st)
+    white = AM.spatiotemporal_quality(np.stack([B.white_mask((16, 16), s) for s in range(8)]))
+    indep = AM.spatiotemporal_quality(np.stack([B.void_and_cluster(16, 100 + s) for s in range(8)]))
+    assert q["mask_elow_mean"] < 0.5 * white["mask_elow_mean"], (q, white)
+    # accumulated 1-spp estimates over all 8 frames: well below white noise and independent masks
+    assert q["accumulated_rmse"][-1] < 0.6 * white["accumulated_rmse"][-1], (q, white)
+    assert q["accumulated_rmse"][-1] < 0.6 * indep["accumulated_rmse"][-1], (q, indep)
+
+
+def test_temporal_spectrum_of_white_noise_is_flat():
+    rng = np.random.default_rng(0)
+    ts = AM.temporal_spectrum(rng.random((16, 32, 32)))
+    assert abs(ts[1:].mean() - 1.0) < 0.05
+
+
+# ---------------------------------------------------------------- tiling
+def test_seam_ratio_tells_toroidal_masks_from_cropped_ones():
+    vc = np.stack([B.void_and_cluster(32, seed=s) for s in range(6)])
+    crops = np.stack([B.void_and_cluster(64, seed=s)[:32, :32] for s in range(3)])
+    assert AM.seam_ratio(vc) < 1.25
+    assert AM.seam_ratio(crops) > 1.5
+
+
+# ---------------------------------------------------------------- dpc.mask and files
+def test_mask_from_baselines_and_bad_input():
+    assert M.mask("void-and-cluster", size=16, seed=2).shape == (16, 16)
+    assert M.mask("void-and-cluster", size=16, channels=2).shape == (16, 16, 2)
+    assert M.mask("void-and-cluster", size=16, frames=3).shape == (3, 16, 16)
+    assert M.mask("stbn", size=8, frames=4).shape == (4, 8, 8)
+    assert M.mask("white", size=8, frames=2).shape == (2, 8, 8)
+    for kwargs in ({"size": None}, {"size": 1}, {"size": 16, "seed": -1},
+                   {"size": 16, "channels": 2, "frames": 2}):
+        with pytest.raises(InvalidArgumentError):
+            M.mask("void-and-cluster", **kwargs)
+    with pytest.raises(InvalidArgumentError):
+        M.mask("stbn", size=8)
+    with pytest.raises(InvalidArgumentError):
+        M.mask("no-such-mask", size=8)
+    with pytest.raises(InvalidArgumentError):
+        M.mask("bnot-2d")                         # not gridded
+
+
+def test_mask_from_a_gridded_model_at_its_size_and_another():
+    from pathlib import Path
+    grid = Path(__file__).resolve().parents[1] / "data" / "model_grid_3to1.onnx"
+    model = dpc.load(grid)
+    a = M.mask(str(grid), seed=1)
+    assert a.shape == (model.grid_shape[1], model.grid_shape[0]) and _exact_levels(a)
+    assert np.array_equal(a, rank_normalise(model.generate(seed=1)[:, 2].reshape(a.shape)))
+    pytest.importorskip("onnx")
+    b = M.mask(str(grid), seed=1, size=2 * a.shape[0])
+    assert b.shape == (2 * a.shape[0],) * 2 and _exact_levels(b)
+    with pytest.raises(InvalidArgumentError):
+        M.mask(str(grid), frames=4)
+
+
+@pytest.mark.parametrize("shape", [(32, 32), (32, 32, 2), (4, 16, 16)])
+def test_files_read_back_exactly(tmp_path, shape):
+    pytest.importorskip("png")
+    pytest.importorskip("OpenEXR")
+    st = len(shape) == 3 and shape[2] != 2
+    if st:
+        a = np.stack([B.white_mask(shape[1:], s) for s in range(shape[0])])
+    else:
+        a = B.white_mask(shape, 5)
+    for ext in (".npy", ".exr", ".png"):
+        for bits in ((8, 16) if ext == ".png" else (16,)):
+            paths = M.write_mask(tmp_path / f"m{bits}{ext}", a, bits=bits, spatiotemporal=st)
+            assert len(paths) == (shape[0] if st and ext != ".npy" else 1)
+            r = M.read_mask(paths if len(paths) > 1 else paths[0])
+            assert r.shape == a.shape
+            if ext == ".png":
+                # the stored codes are exactly floor(v * 2^bits); 16 bits keep every rank of a
+                # mask of up to 65,536 pixels, so rank normalisation recovers the mask exactly
+                assert np.array_equal(M.quantise(r, bits), M.quantise(a, bits))
+                if bits == 16:
+                    back = M.rank_normalise(r, M.kind_of(a, st))
+                    assert np.array_equal(back, a)
+                else:
+                    # 8 bits: every code is taken by exactly its share of each threshold map
+                    codes = M.quantise(r, 8)
+                    maps = [codes] if not st else list(codes)
+                    if codes.ndim == 3 and not st:
+                        maps = [codes[..., c] for c in range(codes.shape[2])]
+                    for cm in maps:
+                        counts = np.bincount(cm.ravel(), minlength=256)
+                        assert np.all(counts == cm.size // 256)
+            else:
+                assert np.array_equal(r, a)
+
+
+def test_write_mask_rejects_bad_input(tmp_path):
+    a = B.white_mask((8, 8), 0)
+    with pytest.raises(InvalidArgumentError):
+        M.write_mask(tmp_path / "m.jpg", a)
+    with pytest.raises(InvalidArgumentError):
+        M.write_mask(tmp_path / "m.png", a, bits=12)
+    with pytest.raises(InvalidArgumentError):
+        M.write_mask(tmp_path / "m.npy", a + 1.0)
+    with pytest.raises(InvalidArgumentError):
+        M.read_mask(tmp_path / "missing.png")
+
+
+# ---------------------------------------------------------------- CLI
+def test_mask_command_writes_and_reports(tmp_path, capsys):
+    pytest.importorskip("png")
+    out = tmp_path / "vc.png"
+    rc = main(["mask", "-m", "void-and-cluster", "-n", "32", "-s", "1", "-o", str(out)])
+    err = capsys.readouterr().err
+    assert rc == 0, err
+    assert "mask E_low" in err
+    assert np.array_equal(M.rank_normalise(M.read_mask(out), "scalar"), B.void_and_cluster(32, 1))
+    rc = main(["mask", "-m", "stbn", "-n", "8", "--frames", "3", "-o", str(tmp_path / "st.npy")])
+    assert rc == 0 and np.load(tmp_path / "st.npy").shape == (3, 8, 8)
+    rc = main(["mask", "-m", "stbn", "-n", "8", "--frames", "3", "-o", str(tmp_path / "st.png")])
+    assert rc == 0 and all((tmp_path / f"st_{k:03d}.png").is_file() for k in range(3))
+    assert main(["mask", "-m", "void-and-cluster", "-n", "8", "-o", str(tmp_path / "x.jpg")]) == 2
+    assert main(["mask", "-m", "void-and-cluster", "-o", str(tmp_path / "x.npy")]) == 1
+    assert "needs a size" in capsys.readouterr().err
+
+
+def test_dither_command_with_a_baseline_mask(tmp_path, capsys):
+    import matplotlib.image as mpimg
+    ramp = np.tile(np.linspace(0, 1, 64), (32, 1))
+    src = tmp_path / "ramp.png"
+    mpimg.imsave(src, ramp, cmap="gray", vmin=0, vmax=1)
+    out = tmp_path / "out.png"
+    rc = main(["dither", str(src), "-m", "void-and-cluster", "-n", "16", "-o", str(out)])
+    assert rc == 0, capsys.readouterr().err
+    white = mpimg.imread(out)[..., 0] > 0.5
+    assert abs(white.mean() - ramp.mean()) < 0.05
+    rc = main(["dither", str(src), "-m", "stbn", "-n", "8", "--frame", "2", "-o", str(out)])
+    assert rc == 0
+
+
+# ---------------------------------------------------------------- C: baking a mask at load time
+def test_c_example_bakes_the_same_ranks_as_dpc_mask(tmp_path):
+    import shutil
+    import subprocess
+    from pathlib import Path
+    root = Path(__file__).resolve().parents[2]
+    libs = sorted(root.glob("build/**/libdpc/libdpc.so"))
+    cc = shutil.which("cc")
+    if not libs or cc is None:
+        pytest.skip("needs a C compiler and a built libdpc (build/**/libdpc/libdpc.so)")
+    lib = libs[0].parent
+    exe = tmp_path / "bake_mask"
+    subprocess.run([cc, "-std=c11", "-O2", str(root / "docs/examples/bake_mask.c"),
+                    f"-I{root / 'libdpc/include'}", f"-L{lib}", "-ldpc", f"-Wl,-rpath,{lib}",
+                    "-o", str(exe)], check=True)
+    grid = root / "tests" / "data" / "model_grid_3to1.onnx"
+    out = subprocess.run([str(exe), str(grid), "5"], check=True, capture_output=True, text=True).stdout
+    ranks = np.array([int(v) for line in out.splitlines() if not line.startswith("#")
+                      for v in line.split()])
+    a = M.mask(str(grid), seed=5)
+    assert np.array_equal(ranks.reshape(a.shape), np.round(a * a.size - 0.5).astype(int))
