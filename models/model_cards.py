@@ -112,7 +112,7 @@ def elow_text(r, nu: float) -> str:
 
 @dataclass
 class Card:
-    kind: str                                     # plane | nd | subspaces | dither | integrand
+    kind: str                                     # plane | nd | subspaces | dither | integrand | mask
     targets: dict = field(default_factory=dict)   # subspace axes -> target key
     nu_range: tuple = (0.25, 3.0)
     scales: bool = False                          # the point-count study (issue #5 item 3)
@@ -137,6 +137,9 @@ CARDS = {
     "projective-3d": Card("subspaces", {"xy": "bnot", "xz": "bnot", "yz": "bnot"}),
     "mixed-3d": Card("subspaces", {"xy": "step", "xz": "jitter", "yz": "bnot"}),
     "dither-32": Card("dither"),
+    "mask-64": Card("mask"),
+    "mask-vector-64": Card("mask"),
+    "mask-st-32x16": Card("mask"),
 }
 
 
@@ -407,8 +410,51 @@ def card_dither(name: str, card: Card, model) -> list[str]:
             f"(figures/models/{path.name})", ""]
 
 
+def card_mask(name: str, card: Card, model) -> list[str]:
+    """Mask models (scalar, vector, spatiotemporal): dpc.analysis.masks numbers next to
+    void-and-cluster (STBN for spatiotemporal) and white noise at the trained size, 8 masks
+    (4 volumes) each; docs/masks.md has the full comparison (python models/mask_report.py)."""
+    from dpc import masks as M
+    from dpc.analysis import masks as AM
+    kind = M.mask_kind(model)
+    n = model.grid_shape[0]
+    if kind == "scalar":
+        rows = ["| mask | masks | mask E_low | thresholded 1/8 … 7/8: mean | worst level |",
+                "|---|---:|---:|---:|---:|"]
+        for label, fn in ((f"**{name}**", lambda s: M.mask(name, seed=s)),
+                          ("void-and-cluster", lambda s: baselines.void_and_cluster(n, s)),
+                          ("white noise", lambda s: baselines.white_mask((n, n), s))):
+            q = AM.scalar_quality(np.stack([fn(s) for s in range(8)]))
+            rows.append(f"| {label} | 8 | {q['mask_elow']:.5f} | {q['levels_elow_mean']:.4f} | "
+                        f"{q['levels_elow_max']:.4f} |")
+    elif kind == "vector":
+        rows = ["| mask | masks | per channel: mask E_low | per channel: thresholded mean | "
+                "joint boxes: mean | joint boxes: worst |", "|---|---:|---:|---:|---:|---:|"]
+        for label, fn in ((f"**{name}**", lambda s: M.mask(name, seed=s)),
+                          ("void-and-cluster × 2", lambda s: baselines.vector_void_and_cluster(n, s)),
+                          ("white noise × 2", lambda s: baselines.white_mask((n, n, 2), s))):
+            q = AM.vector_quality(np.stack([fn(s) for s in range(8)]))
+            rows.append(f"| {label} | 8 | {q['mask_elow_max']:.5f} | {q['levels_elow_mean_max']:.4f} | "
+                        f"{q['joint_elow_mean']:.4f} | {q['joint_elow_max']:.4f} |")
+    else:
+        t = model.grid_shape[2]
+        rows = ["| mask | volumes | frames: mask E_low | frames: thresholded mean | temporal E_low | "
+                "accumulated RMSE, all frames |", "|---|---:|---:|---:|---:|---:|"]
+        for label, fn in ((f"**{name}**", lambda s: M.mask(name, seed=s)),
+                          ("STBN (scalar)", lambda s: baselines.stbn_scalar(n, t, s)),
+                          ("white noise", lambda s: np.stack([baselines.white_mask((n, n), 1000 * s + k)
+                                                              for k in range(t)]))):
+            q = AM.spatiotemporal_quality(np.stack([fn(s) for s in range(4)]))
+            rows.append(f"| {label} | 4 | {q['mask_elow_mean']:.5f} | {q['levels_elow_mean']:.4f} | "
+                        f"{q['temporal_elow']:.3f} | {q['accumulated_rmse'][-1]:.4f} |")
+    print("\n".join(rows))
+    return ["", f"A {kind} threshold mask (`dpc mask -m {name}`); metrics of `dpc.analysis.masks` "
+            "(white-noise mask = 1, low band 0 < |q| ≤ 6), seeds 0 … 7 (volumes 0 … 3). The full "
+            "comparison, figures and other sizes: [masks.md](masks.md).", "", *rows, ""]
+
+
 KINDS = {"plane": card_plane, "nd": card_nd, "subspaces": card_subspaces,
-         "integrand": card_integrand, "dither": card_dither}
+         "integrand": card_integrand, "dither": card_dither, "mask": card_mask}
 
 
 # ---- the page -------------------------------------------------------------------------------
