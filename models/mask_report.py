@@ -125,19 +125,23 @@ def scalar_rows(label: str, ms: np.ndarray, secs: float) -> tuple[str, dict]:
     q = AM.scalar_quality(ms)
     seam = AM.seam_ratio(ms) if ms.shape[1] >= 8 else float("nan")
     return (f"| {label} | {len(ms)} | {q['mask_elow']:.5f} | {q['levels_elow_mean']:.4f} | "
-            f"{q['levels_elow_max']:.4f} | {seam:.2f} | {secs:.2f} |"), q
+            f"{q['levels_elow_max']:.4f} | {q['levels_peak_mean']:.1f} | {seam:.2f} | {secs:.2f} |"), q
 
 
 def scalar() -> None:
     header = ["| mask | masks | mask E_low | thresholded 1/8 … 7/8: mean E_low | worst level | "
-              "seam ratio | seconds per mask |", "|---|---:|---:|---:|---:|---:|---:|"]
+              "largest single-frequency power | seam ratio | seconds per mask |",
+              "|---|---:|---:|---:|---:|---:|---:|---:|"]
     lines = ["## Scalar masks", "",
              "`python models/mask_report.py scalar`. Per size: the dpc models (at their trained "
              "grid, or filtered at another size with radii that scale with the point count), "
              "void-and-cluster (σ = 1.5), white noise and Bayer; seeds 0 … count−1. Seam ratio: "
              "`dpc.analysis.masks.seam_ratio` (≈ 1: tiles seamlessly; a 32 × 32 crop of a 64 × 64 "
              "void-and-cluster mask scores > 1.5 in the tests). Seconds: wall time on the shared "
-             "2-core machine (a model at another size runs libdpc's float64 layer kernels).", ""]
+             "2-core machine, including loading the model (a model at another size runs libdpc's "
+             "float64 layer kernels). Largest single-frequency power: the thresholded patterns' "
+             "highest peak outside DC, mean over levels (Bayer's low band is empty because all "
+             "its power sits in a few spikes).", ""]
     verdict = []
     models = [m for m in (SCALAR_MODEL, "dither-32") if model_available(m)]
     figs = {}

@@ -231,3 +231,30 @@ def test_c_example_bakes_the_same_ranks_as_dpc_mask(tmp_path):
                       for v in line.split()])
     a = M.mask(str(grid), seed=5)
     assert np.array_equal(ranks.reshape(a.shape), np.round(a * a.size - 0.5).astype(int))
+
+
+# ---------------------------------------------------------------- the bundled mask models
+def _bundled(name: str) -> None:
+    if name not in dpc.available_models():
+        pytest.skip(f"{name} is not bundled")
+
+
+def test_mask_64_is_a_tileable_rank_normalised_blue_noise_mask():
+    _bundled("mask-64")
+    ms = np.stack([M.mask("mask-64", seed=s) for s in range(4)])
+    assert ms.shape == (4, 64, 64) and all(_exact_levels(m) for m in ms)
+    q = mask_quality(ms)
+    # measured (docs/masks.md, 8 masks): 0.075 / 0.072; white noise 1.0, dither-32 0.19 / 0.19
+    assert q["mask_elow"] < 0.12 and q["levels_elow_mean"] < 0.12, q
+    assert AM.seam_ratio(ms) < 1.3
+
+
+@pytest.mark.xfail(strict=True, reason="issue 13's goal is not reached: mask-64 at 64 x 64 has "
+                   "mask / thresholded low-band energies ~0.07 / 0.07 against void-and-cluster's "
+                   "0.00015 / 0.025 (docs/masks.md). Strict: remove this marker when a model meets it.")
+def test_mask_64_at_least_as_good_as_void_and_cluster():
+    _bundled("mask-64")
+    ours = mask_quality(np.stack([M.mask("mask-64", seed=s) for s in range(4)]))
+    vc = mask_quality(np.stack([B.void_and_cluster(64, seed=s) for s in range(4)]))
+    for key in ("mask_elow", "levels_elow_mean", "levels_elow_max"):
+        assert ours[key] <= vc[key], (key, ours[key], vc[key])
