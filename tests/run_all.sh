@@ -30,7 +30,7 @@ step "python packages"
 # torch first and pinned: the CPU build of 2.13.0 is on this image's disk; anything else pulls CUDA.
 python3 -m pip install -q --disable-pip-version-check torch==2.13.0
 python3 -m pip install -q --disable-pip-version-check scikit-build-core pybind11 ninja cmake
-python3 -m pip install -q --disable-pip-version-check --no-build-isolation -C cmake.define.DPC_VULKAN=ON "$ROOT[test,train]"
+python3 -m pip install -q --disable-pip-version-check --no-build-isolation -C cmake.define.DPC_VULKAN=ON "$ROOT[test,train,mitsuba]"
 # lavapipe is installed above: the Vulkan tests must find a device, not skip.
 export DPC_TEST_REQUIRE_VULKAN=1
 

@@ -107,6 +107,8 @@ class Model {
         call([&] { return dpc_filter(model_, m, p); });
     }
 
+    const dpc_model *handle() const { return model_; }
+
   private:
     dpc_model *model_ = nullptr;
     dpc_model_info info_{};
@@ -125,6 +127,68 @@ py::array_t<float> stratified(uint64_t seed, size_t m, size_t n) {
     py::array_t<float> out({m, n});
     float *p = out.mutable_data();
     call([&] { return dpc_stratified(seed, m, n, p); });
+    return out;
+}
+
+// ---- the sampler (dpc_sampler_*) -------------------------------------------------------------
+
+using ArrayU32 = py::array_t<uint32_t, py::array::c_style>;
+
+class Sampler {
+  public:
+    Sampler(const std::vector<const Model *> &models, uint32_t spp, uint32_t dims, uint64_t seed) {
+        std::vector<const dpc_model *> handles;
+        for (const Model *m : models) handles.push_back(m->handle());
+        dpc_sampler_options o;
+        dpc_sampler_options_init(&o);
+        o.models = handles.data();
+        o.n_models = static_cast<uint32_t>(handles.size());
+        o.samples_per_pixel = spp;
+        o.dimensions = dims;
+        o.seed = seed;
+        call([&] { return dpc_sampler_create(&o, &sampler_); });
+        spp_ = spp;
+        dims_ = dims;
+    }
+    ~Sampler() { dpc_sampler_free(sampler_); }
+    Sampler(const Sampler &) = delete;
+    Sampler &operator=(const Sampler &) = delete;
+
+    // Lookups for arrays of equal size (the Python side broadcasts): out has `width` floats per entry.
+    py::array_t<float> get(const ArrayU32 &x, const ArrayU32 &y, const ArrayU32 &index, const ArrayU32 &dim,
+                           int width) const {
+        const py::ssize_t n = x.size();
+        if (y.size() != n || index.size() != n || dim.size() != n)
+            raise_status(DPC_ERROR_INVALID_ARGUMENT, "x, y, index and dim must have the same size");
+        py::array_t<float> out(width == 2 ? std::vector<py::ssize_t>{n, 2} : std::vector<py::ssize_t>{n});
+        float *o = out.mutable_data();
+        const uint32_t *xp = x.data(), *yp = y.data(), *ip = index.data(), *dp = dim.data();
+        call([&] {
+            dpc_status st = DPC_OK;
+            for (py::ssize_t i = 0; i < n && st == DPC_OK; i++)
+                st = width == 2 ? dpc_sampler_get_2d(sampler_, xp[i], yp[i], ip[i], dp[i], o + 2 * i)
+                                : dpc_sampler_get_1d(sampler_, xp[i], yp[i], ip[i], dp[i], o + i);
+            return st;
+        });
+        return out;
+    }
+
+    py::array_t<float> table(uint32_t t) const {
+        const float *p = nullptr;
+        call([&] { return dpc_sampler_table(sampler_, t, &p); });
+        py::array_t<float> out({static_cast<py::ssize_t>(spp_), static_cast<py::ssize_t>(2)});
+        std::copy(p, p + static_cast<size_t>(spp_) * 2, out.mutable_data());
+        return out;
+    }
+
+  private:
+    dpc_sampler *sampler_ = nullptr;
+    uint32_t spp_ = 0, dims_ = 0;
+};
+
+py::array_t<float> sampler_mask() {
+    py::array_t<float> out({32, 32, 3});
+    std::copy(dpc_sampler_mask(), dpc_sampler_mask() + 32 * 32 * 3, out.mutable_data());
     return out;
 }
 
@@ -236,6 +300,12 @@ PYBIND11_MODULE(_core, mod) {
         .def("generate", &Model::generate, py::arg("seed"), py::arg("n_points"))
         .def("generate_batch", &Model::generate_batch, py::arg("seed"), py::arg("count"), py::arg("n_points"))
         .def("filter", &Model::filter, py::arg("points"));
+    py::class_<Sampler>(mod, "Sampler")
+        .def(py::init<const std::vector<const Model *> &, uint32_t, uint32_t, uint64_t>(), py::arg("models"),
+             py::arg("spp"), py::arg("dims"), py::arg("seed"))
+        .def("get", &Sampler::get, py::arg("x"), py::arg("y"), py::arg("index"), py::arg("dim"), py::arg("width"))
+        .def("table", &Sampler::table, py::arg("t"));
+    mod.def("sampler_mask", &sampler_mask);
     mod.def("uniform", &uniform, py::arg("seed"), py::arg("m"), py::arg("n"));
     mod.def("stratified", &stratified, py::arg("seed"), py::arg("m"), py::arg("n"));
     register_layer_training(mod);

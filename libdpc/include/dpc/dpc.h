@@ -245,6 +245,79 @@ DPC_API dpc_status dpc_uniform(uint64_t seed, size_t n_points, size_t dims, floa
 DPC_API dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, float *out);
 
 /* ---------------------------------------------------------------------------------------------
+ * Sampler: values for (pixel, sample index, dimension), for a renderer
+ *
+ * A sampler holds, for each of its D dimension slots, a dpc point set of spp points (spp =
+ * samples per pixel), generated once when it is created, on the scalar path with one thread, so
+ * the tables are the same on every machine. A lookup for pixel (x, y), sample index i and
+ * dimension d reads table d mod D at point (i mod spp) rotated by a per-pixel offset, and shifts
+ * it toroidally by the pixel's entry of a 32 x 32 screen-space mask (moved and rotated per
+ * dimension): each pixel gets the model's blue-noise set, and neighbouring pixels get shifts
+ * chosen so that their errors cancel at low screen frequencies (blue-noise error in screen
+ * space at low sample counts). docs/rendering.md defines every step and the reasoning.
+ *
+ * - Values are in [0, 1). Every value is a pure function of (the models' files, their input
+ *   kinds, spp, D, seed, x, y, i, d), the same bits across runs, threads and machines (IEEE-754
+ *   float arithmetic in a fixed order; no FMA contraction).
+ * - Any pixel: x and y are taken modulo 2^32 (negative coordinates cast to uint32_t tile
+ *   seamlessly). Any dimension: d >= D reuses table d mod D with its own index rotation and
+ *   shift. Any index: indices i >= spp continue in passes of spp samples, pass i / spp rotated
+ *   by its own shift (each pass is a shifted copy of the table: use spp >= the samples you take).
+ * - Each value, over seeds, is uniformly distributed on a grid of 2^-24: estimates are unbiased.
+ * - get_1d draws from the stratified lattice (j + u) / spp (one value per stratum, u the pixel's
+ *   mask value), get_2d from the model's set; dimension d of get_1d and of get_2d share their
+ *   index rotation and shift, so use each dimension for one of them.
+ * - A created sampler is immutable: lookups take no lock, allocate nothing and may run on any
+ *   number of threads. It does not keep the models: they may be freed after dpc_sampler_create.
+ *   To stay within a few nanoseconds, lookups leave the thread's error message alone unless
+ *   they fail (the one exception to the convention at the top of this header).
+ * - Memory: sizeof(dpc_sampler) + D * (8 * spp + 24) bytes (64 spp, 16 dimensions: 8.4 KiB),
+ *   plus a 12 KiB mask shared by all samplers.
+ * ------------------------------------------------------------------------------------------- */
+
+typedef struct dpc_sampler dpc_sampler;
+
+#define DPC_SAMPLER_MAX_SPP (1u << 16)
+#define DPC_SAMPLER_MAX_DIMENSIONS 4096u
+
+typedef struct dpc_sampler_options {
+    uint32_t struct_size; /* sizeof(dpc_sampler_options), set by dpc_sampler_options_init */
+    /* Point models the tables come from, without grid axes, dims >= 2 each. A model of n dims
+     * fills n / 2 consecutive slots from one set (its dimensions 0-1, 2-3, ...: an n-D model's
+     * joint structure carries over to those slots); the models are used in turn, starting over
+     * after the last, until D slots are filled. */
+    const dpc_model *const *models;
+    uint32_t n_models;          /* >= 1 */
+    uint32_t samples_per_pixel; /* spp: points per table, 1 .. DPC_SAMPLER_MAX_SPP (default 16) */
+    uint32_t dimensions;        /* D: tables, 1 .. DPC_SAMPLER_MAX_DIMENSIONS (default 16) */
+    uint64_t seed;              /* default 0 */
+} dpc_sampler_options;
+
+/* Fill *options with the defaults (no models: set models and n_models). */
+DPC_API void dpc_sampler_options_init(dpc_sampler_options *options);
+
+/* Build a sampler: D sets of spp points through the models' cascades (64 spp, 16 dimensions:
+ * milliseconds; bench/bench_sampler.c). On failure *out_sampler is NULL. */
+DPC_API dpc_status dpc_sampler_create(const dpc_sampler_options *options, dpc_sampler **out_sampler);
+/* Release a sampler. NULL is a no-op. */
+DPC_API void dpc_sampler_free(dpc_sampler *sampler);
+
+/* One value in [0, 1) for pixel (x, y), sample index, dimension. */
+DPC_API dpc_status dpc_sampler_get_1d(const dpc_sampler *sampler, uint32_t x, uint32_t y, uint32_t index,
+                                      uint32_t dimension, float *out);
+/* Two values in [0, 1): out[0], out[1]. */
+DPC_API dpc_status dpc_sampler_get_2d(const dpc_sampler *sampler, uint32_t x, uint32_t y, uint32_t index,
+                                      uint32_t dimension, float *out);
+
+/* The sampler's tables: table t (0 <= t < D) is spp points of 2 floats, row-major; *out_table
+ * stays valid while the sampler lives. For inspection and for reimplementing lookups elsewhere
+ * (e.g. on a GPU) from docs/rendering.md. */
+DPC_API dpc_status dpc_sampler_table(const dpc_sampler *sampler, uint32_t t, const float **out_table);
+/* The 32 x 32 screen-space mask shared by all samplers: 3072 floats, pixel (x, y) at
+ * (y * 32 + x) * 3: its 2-D shift, then its 1-D offset. Static storage. */
+DPC_API const float *dpc_sampler_mask(void);
+
+/* ---------------------------------------------------------------------------------------------
  * Training support: one filter layer in float64
  *
  * The forward and backward passes of one PointFilter layer (docs/model-format.md section 3) for a

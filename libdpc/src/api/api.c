@@ -13,22 +13,9 @@
 #include "common/rng.h"
 #include "cpu/cpu_cascade.h"
 #include "cpu/cpu_layer_train.h"
-#include "model/model.h"
-#if defined(DPC_HAVE_VULKAN)
-#include "vulkan/vk_backend.h"
-#endif
+#include "api/model_handle.h"
 
 #define MAX_FLOATS_PER_SET (1ull << 28) /* n_points * dims: 1 GiB of floats */
-
-struct dpc_model {
-    dpc_cascade cascade;
-    dpc_cpu_engine engine; /* CPU backend; also what info.isa / info.threads report */
-    dpc_backend backend;   /* resolved: CPU or VULKAN */
-    dpc_input input;       /* resolved: UNIFORM or STRATIFIED, the points generate filters */
-#if defined(DPC_HAVE_VULKAN)
-    dpc_vk_engine *vk; /* the Vulkan backend, when backend == DPC_BACKEND_VULKAN */
-#endif
-};
 
 #define STR2(x) #x
 #define STR(x) STR2(x)
@@ -420,6 +407,14 @@ static dpc_status generate_one(const dpc_model *model, const dpc_cpu_engine *eng
                                size_t m, float *out) {
     fill_input(model, seed, m, out);
     return dpc_cpu_filter(&model->cascade, engine, m, out);
+}
+
+dpc_status dpc_model_generate_pinned(const dpc_model *model, uint64_t seed, size_t m, float *out) {
+    dpc_cpu_engine scalar;
+    dpc_status st = dpc_cpu_engine_init(&scalar, DPC_ISA_SCALAR, 1);
+    if (st != DPC_OK) return st;
+    if ((st = check_count(model, &m)) != DPC_OK) return st;
+    return generate_one(model, &scalar, seed, m, out);
 }
 
 #if defined(DPC_HAVE_VULKAN)

@@ -1,0 +1,97 @@
+/* The sampler's ABI boundary: checks every argument, builds the tables (docs/rendering.md). */
+#include <stdlib.h>
+#include <string.h>
+
+#include "api/model_handle.h"
+#include "common/error.h"
+#include "sampler/sampler.h"
+
+#define MAX_TABLE_POINTS (1ull << 24) /* D * spp: 128 MiB of tables */
+
+void dpc_sampler_options_init(dpc_sampler_options *options) {
+    if (!options) return;
+    memset(options, 0, sizeof *options);
+    options->struct_size = (uint32_t)sizeof *options;
+    options->samples_per_pixel = 16;
+    options->dimensions = 16;
+}
+
+static dpc_status check_options(const dpc_sampler_options *o) {
+    if (o->struct_size != sizeof *o)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
+                        "options.struct_size is %u, expected %u: initialise with dpc_sampler_options_init",
+                        o->struct_size, (unsigned)sizeof *o);
+    if (!o->models || o->n_models == 0)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "options.models is NULL or n_models is 0: give at least one model");
+    for (uint32_t j = 0; j < o->n_models; j++) {
+        const dpc_model *m = o->models[j];
+        if (!m) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "options.models[%u] is NULL", j);
+        if (m->cascade.dims < 2)
+            return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
+                            "options.models[%u] (%.64s) has %u dimension: a sampler needs models of 2 or more", j,
+                            dpc_model_name(m), m->cascade.dims);
+        if (m->cascade.grid_dims)
+            return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
+                            "options.models[%u] (%.64s) is gridded: a sampler needs point models", j,
+                            dpc_model_name(m));
+    }
+    if (o->samples_per_pixel < 1 || o->samples_per_pixel > DPC_SAMPLER_MAX_SPP)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "options.samples_per_pixel is %u, must be 1 .. %u",
+                        o->samples_per_pixel, DPC_SAMPLER_MAX_SPP);
+    if (o->dimensions < 1 || o->dimensions > DPC_SAMPLER_MAX_DIMENSIONS)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "options.dimensions is %u, must be 1 .. %u", o->dimensions,
+                        DPC_SAMPLER_MAX_DIMENSIONS);
+    if ((uint64_t)o->samples_per_pixel * o->dimensions > MAX_TABLE_POINTS)
+        return dpc_fail(DPC_ERROR_LIMIT, "%u samples per pixel x %u dimensions exceeds 2^24 table points",
+                        o->samples_per_pixel, o->dimensions);
+    return DPC_OK;
+}
+
+dpc_status dpc_sampler_create(const dpc_sampler_options *options, dpc_sampler **out_sampler) {
+    dpc_clear_error();
+    if (!out_sampler) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "out_sampler is NULL");
+    *out_sampler = NULL;
+    if (!options) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "options is NULL");
+    dpc_status st = check_options(options);
+    if (st != DPC_OK) return st;
+    dpc_sampler *s = (dpc_sampler *)calloc(1, sizeof *s);
+    if (!s) return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory");
+    if ((st = dpc_sampler_build(s, options)) != DPC_OK) {
+        dpc_sampler_free(s);
+        return st;
+    }
+    *out_sampler = s;
+    return DPC_OK;
+}
+
+void dpc_sampler_free(dpc_sampler *sampler) {
+    if (!sampler) return;
+    free(sampler->tables);
+    free(sampler->keyed);
+    free(sampler);
+}
+
+dpc_status dpc_sampler_get_1d(const dpc_sampler *sampler, uint32_t x, uint32_t y, uint32_t index, uint32_t dimension,
+                              float *out) {
+    if (!sampler || !out) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "sampler or out is NULL");
+    *out = dpc_sampler_lookup_1d(sampler, x, y, index, dimension);
+    return DPC_OK;
+}
+
+dpc_status dpc_sampler_get_2d(const dpc_sampler *sampler, uint32_t x, uint32_t y, uint32_t index, uint32_t dimension,
+                              float *out) {
+    if (!sampler || !out) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "sampler or out is NULL");
+    dpc_sampler_lookup_2d(sampler, x, y, index, dimension, out);
+    return DPC_OK;
+}
+
+dpc_status dpc_sampler_table(const dpc_sampler *sampler, uint32_t t, const float **out_table) {
+    dpc_clear_error();
+    if (!sampler || !out_table) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "sampler or out_table is NULL");
+    if (t >= sampler->slots)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "table %u out of range (the sampler has %u)", t, sampler->slots);
+    *out_table = sampler->tables + (size_t)t * sampler->spp * 2;
+    return DPC_OK;
+}
+
+const float *dpc_sampler_mask(void) { return dpc_sampler_mask_data; }

@@ -1,0 +1,25 @@
+/* What a dpc_model handle holds, shared by the API files (api.c, api_sampler.c). */
+#ifndef DPC_API_MODEL_HANDLE_H
+#define DPC_API_MODEL_HANDLE_H
+
+#include "cpu/cpu_cascade.h"
+#include "model/model.h"
+#if defined(DPC_HAVE_VULKAN)
+#include "vulkan/vk_backend.h"
+#endif
+
+struct dpc_model {
+    dpc_cascade cascade;
+    dpc_cpu_engine engine; /* CPU backend; also what info.isa / info.threads report */
+    dpc_backend backend;   /* resolved: CPU or VULKAN */
+    dpc_input input;       /* resolved: UNIFORM or STRATIFIED, the points generate filters */
+#if defined(DPC_HAVE_VULKAN)
+    dpc_vk_engine *vk; /* the Vulkan backend, when backend == DPC_BACKEND_VULKAN */
+#endif
+};
+
+/* dpc_generate_n of the model's cascade and input kind, always on the scalar path with one
+ * thread, whatever the handle's ISA, threads and backend: the points every machine gives. */
+dpc_status dpc_model_generate_pinned(const dpc_model *model, uint64_t seed, size_t m, float *out);
+
+#endif

@@ -1,0 +1,73 @@
+/* Building a sampler's tables (docs/rendering.md, "Definition"). */
+#include <stdlib.h>
+#include <string.h>
+
+#include "api/model_handle.h"
+#include "common/error.h"
+#include "sampler/sampler.h"
+
+/* Seed of the s-th set a sampler generates. */
+static uint64_t set_seed(uint64_t base, uint64_t s) { return dpc_mix64(base + (s + 1) * 0xD1B54A32D192ED03ull); }
+
+typedef struct ranked {
+    float v;
+    uint32_t i;
+} ranked;
+
+static int by_value(const void *a, const void *b) {
+    const ranked *x = (const ranked *)a, *y = (const ranked *)b;
+    if (x->v != y->v) return x->v < y->v ? -1 : 1;
+    return (x->i > y->i) - (x->i < y->i); /* ties by position: a total order, so the same on every libc */
+}
+
+/* Stratify both 1-D projections of an n-point table: each coordinate becomes the centre of its
+ * rank's stratum, (rank + 1/2) / n. The 2-D arrangement (which x goes with which y) is the
+ * model's; each axis gets one value per stratum, as a renderer's axis-aligned edges want. */
+static void stratify_projections(float *table, uint32_t n, ranked *scratch) {
+    for (int c = 0; c < 2; c++) {
+        for (uint32_t i = 0; i < n; i++) scratch[i] = (ranked){table[(size_t)i * 2 + c], i};
+        qsort(scratch, n, sizeof *scratch, by_value);
+        for (uint32_t r = 0; r < n; r++) table[(size_t)scratch[r].i * 2 + c] = ((float)r + 0.5f) / (float)n;
+    }
+}
+
+dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
+    const uint32_t n = o->samples_per_pixel, D = o->dimensions;
+    uint32_t widest = 0;
+    for (uint32_t j = 0; j < o->n_models; j++)
+        if (o->models[j]->cascade.dims > widest) widest = o->models[j]->cascade.dims;
+    s->spp = n;
+    s->slots = D;
+    s->seed = o->seed;
+    s->base = dpc_mix64(o->seed);
+    s->inv_spp = 1.0f / (float)n;
+    s->tables = (float *)malloc((size_t)D * n * 2 * sizeof(float));
+    s->keyed = (struct dpc_sampler_keyed *)malloc((size_t)D * sizeof *s->keyed);
+    float *set = (float *)malloc((size_t)n * widest * sizeof(float)); /* one set of the widest model */
+    ranked *scratch = (ranked *)malloc((size_t)n * sizeof *scratch);
+    dpc_status st = DPC_OK;
+    if (!s->tables || !s->keyed || !set || !scratch) {
+        st = dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory for a sampler of %u x %u points", D, n);
+        goto done;
+    }
+    for (uint32_t d = 0; d < D; d++) s->keyed[d] = dpc_sampler_keyed_of(dpc_sampler_key(s->base, d, 0));
+    /* Fill the slots in order: the next model in turn gives a set, its dimension pairs fill slots. */
+    uint32_t t = 0;
+    for (uint64_t k = 0; t < D; k++) {
+        const dpc_model *m = o->models[k % o->n_models];
+        const uint32_t dims = m->cascade.dims;
+        if ((st = dpc_model_generate_pinned(m, set_seed(s->base, k), n, set)) != DPC_OK) goto done;
+        for (uint32_t a = 0; a + 1 < dims && t < D; a += 2, t++) {
+            float *table = s->tables + (size_t)t * n * 2;
+            for (uint32_t i = 0; i < n; i++) {
+                table[(size_t)i * 2] = set[(size_t)i * dims + a];
+                table[(size_t)i * 2 + 1] = set[(size_t)i * dims + a + 1];
+            }
+            stratify_projections(table, n, scratch);
+        }
+    }
+done:
+    free(set);
+    free(scratch);
+    return st;
+}

@@ -1,0 +1,133 @@
+/* The renderer-facing sampler (dpc_sampler_*): per dimension slot, a dpc point set of spp points
+ * generated once on the pinned scalar path; per pixel, a toroidal shift from a screen-space mask
+ * and a rotation of the sample index. A lookup is a few integer hashes, two table reads and two
+ * float additions: no allocation, no lock, the same bits on every machine.
+ * The definition is written out in docs/rendering.md ("Definition"); tests/python/
+ * reference_sampler.py is an independent transcription of it. */
+#ifndef DPC_SAMPLER_SAMPLER_H
+#define DPC_SAMPLER_SAMPLER_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "common/rng.h"
+#include "dpc/dpc.h"
+
+#define DPC_SAMPLER_TILE 32u /* the mask repeats every 32 pixels in x and in y */
+
+/* The screen-space mask: DPC_SAMPLER_TILE^2 pixels, row-major (y * 32 + x), three values each in
+ * [0, 1): a 2-D shift (channels 0, 1) and a 1-D offset (channel 2) (sampler_mask.c, made by
+ * make_sampler_mask.py). */
+#define DPC_SAMPLER_MASK_CHANNELS 3u
+extern const float dpc_sampler_mask_data[DPC_SAMPLER_TILE * DPC_SAMPLER_TILE * DPC_SAMPLER_MASK_CHANNELS];
+
+struct dpc_sampler {
+    uint32_t spp;     /* n: points per table */
+    uint32_t slots;   /* D: tables; dimension d reads table d mod D */
+    uint64_t seed;
+    uint64_t base;    /* mix64 of the seed: the root of every key */
+    float inv_spp;    /* 1 / n, for 1-D values */
+    float *tables;    /* D * n * 2 floats: table t, point j at (t * n + j) * 2 */
+    struct dpc_sampler_keyed *keyed; /* D: what key (d, pass 0) gives, for d < D: the common case */
+};
+
+/* Key of (dimension d, pass r): everything a lookup derives for that dimension and block of
+ * spp sample indices comes from it. */
+static inline uint64_t dpc_sampler_key(uint64_t base, uint32_t dim, uint32_t pass) {
+    return dpc_mix64(base ^ dpc_mix64(((uint64_t)pass << 32 | dim) + 0x9E3779B97F4A7C15ull));
+}
+
+/* 24 bits of a key as a float in [0, 1), exact. */
+static inline float dpc_sampler_unit(uint64_t bits) { return (float)(bits & 0xFFFFFFu) * (1.0f / 16777216.0f); }
+
+/* What a key gives: the mask offset (ox, oy) and the rotation (c0, c1) of every value. */
+struct dpc_sampler_keyed {
+    uint64_t key;
+    uint32_t ox, oy;
+    float c[2];
+};
+
+static inline struct dpc_sampler_keyed dpc_sampler_keyed_of(uint64_t key) {
+    struct dpc_sampler_keyed k;
+    k.key = key;
+    k.ox = (uint32_t)key & (DPC_SAMPLER_TILE - 1);
+    k.oy = (uint32_t)(key >> 5) & (DPC_SAMPLER_TILE - 1);
+    k.c[0] = dpc_sampler_unit(key >> 10);
+    k.c[1] = dpc_sampler_unit(key >> 34);
+    return k;
+}
+
+/* a + b - floor(a + b) for a, b in [0, 1): the result of the float addition minus 1 when it
+ * reaches 1 (exact, so a sum that rounds up to 1 gives 0). */
+static inline float dpc_sampler_wrap(float a, float b) {
+    const float t = a + b;
+    /* t - (t >= 1 ? 1 : 0) without a branch (the outcome is a coin flip, so a branch would
+     * mispredict half the time): the bits of 1.0f masked by the comparison. */
+    const uint32_t one_bits = (0u - (uint32_t)(t >= 1.0f)) & 0x3F800000u;
+    float one;
+    memcpy(&one, &one_bits, sizeof one);
+    return t - one;
+}
+
+typedef struct dpc_sampler_point {
+    uint32_t table; /* t = dim mod D */
+    uint32_t j;     /* point of table t: k rotated by the pixel's offset */
+    float mask[3];  /* the pixel's mask values, moved by the key's (ox, oy) */
+    float c[2];     /* the key's rotation of every value */
+} dpc_sampler_point;
+
+/* Fill a zeroed sampler from checked options: keys, then D tables from the models' sets, each
+ * with its 1-D projections stratified. On failure the caller frees it. */
+dpc_status dpc_sampler_build(struct dpc_sampler *s, const dpc_sampler_options *o);
+
+/* The pieces every lookup shares (docs/rendering.md, "Definition"). */
+static inline dpc_sampler_point dpc_sampler_locate(const struct dpc_sampler *s, uint32_t x, uint32_t y,
+                                                   uint32_t index, uint32_t dim) {
+    const uint32_t n = s->spp;
+    uint32_t pass = 0, k = index, table = dim;
+    if (index >= n) { /* later passes: rare, so the divisions stay off the common path */
+        pass = index / n;
+        k = index - pass * n;
+    }
+    if (dim >= s->slots) table = dim % s->slots;
+    const struct dpc_sampler_keyed kd =
+        pass == 0 && dim < s->slots ? s->keyed[dim] : dpc_sampler_keyed_of(dpc_sampler_key(s->base, dim, pass));
+    /* the pixel's rotation of the sample index: decorrelates how dimensions pair up */
+    const uint64_t h = dpc_mix64(kd.key ^ ((uint64_t)y << 32 | x));
+    uint32_t j = k + (uint32_t)(((h >> 32) * n) >> 32);
+    j -= j >= n ? n : 0;
+    /* the pixel's mask entry, moved by (ox, oy) for this key */
+    const float *m = dpc_sampler_mask_data + (((y + kd.oy) & (DPC_SAMPLER_TILE - 1)) * DPC_SAMPLER_TILE +
+                                              ((x + kd.ox) & (DPC_SAMPLER_TILE - 1))) * DPC_SAMPLER_MASK_CHANNELS;
+    dpc_sampler_point p;
+    p.table = table;
+    p.j = j;
+    p.mask[0] = m[0];
+    p.mask[1] = m[1];
+    p.mask[2] = m[2];
+    p.c[0] = kd.c[0];
+    p.c[1] = kd.c[1];
+    return p;
+}
+
+static inline void dpc_sampler_lookup_2d(const struct dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index,
+                                         uint32_t dim, float out[2]) {
+    const dpc_sampler_point p = dpc_sampler_locate(s, x, y, index, dim);
+    const float *t = s->tables + ((size_t)p.table * s->spp + p.j) * 2;
+    out[0] = dpc_sampler_wrap(t[0], dpc_sampler_wrap(p.mask[0], p.c[0]));
+    out[1] = dpc_sampler_wrap(t[1], dpc_sampler_wrap(p.mask[1], p.c[1]));
+}
+
+/* 1-D: the stratified lattice (j + u) / n, u the pixel's 1-D mask value rotated by c0, then
+ * the whole lattice rotated by c1: one value per stratum, and the offset inside the stratum is
+ * blue noise across pixels, so neighbouring pixels fill each other's strata. */
+static inline float dpc_sampler_lookup_1d(const struct dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index,
+                                          uint32_t dim) {
+    const dpc_sampler_point p = dpc_sampler_locate(s, x, y, index, dim);
+    const float u = dpc_sampler_wrap(p.mask[2], p.c[0]);
+    const float lattice = ((float)p.j + u) * s->inv_spp; /* in [0, 1]: 1 only by rounding */
+    return dpc_sampler_wrap(lattice < 1.0f ? lattice : 0.0f, p.c[1]);
+}
+
+#endif

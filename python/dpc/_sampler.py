@@ -1,0 +1,97 @@
+"""dpc.Sampler: sample values for (pixel, sample index, dimension), over libdpc's dpc_sampler."""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+
+from . import _core
+from ._model import Model, load
+from .errors import InvalidArgumentError
+
+DEFAULT_MODEL = "bnot-2d-stratified"
+MAX_SPP = 1 << 16
+MAX_DIMENSIONS = 4096
+
+
+def _integer(value, name: str, low: int, high: int) -> int:
+    """An int in [low, high] (bools and floats are refused, integral or not)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise InvalidArgumentError(f"{name} must be an integer, got {value!r}")
+    v = int(value)
+    if not low <= v <= high:
+        raise InvalidArgumentError(f"{name} must be in {low} .. {high}, got {v}")
+    return v
+
+
+def _uint32_array(value, name: str, *, wrap: bool) -> np.ndarray:
+    """Integers as uint32: pixels wrap modulo 2^32 (negative ones tile seamlessly); indices and
+    dimensions must lie in 0 .. 2^32 - 1."""
+    a = np.asarray(value)
+    if a.dtype.kind not in "iu":
+        raise InvalidArgumentError(f"{name} must hold integers, got dtype {a.dtype}")
+    if wrap:
+        return (a.astype(np.int64) % (1 << 32)).astype(np.uint32)
+    if a.size and (a.min() < 0 or a.max() > 0xFFFFFFFF):
+        raise InvalidArgumentError(f"{name} must lie in 0 .. 2^32 - 1")
+    return a.astype(np.uint32)
+
+
+class Sampler:
+    """Sample values for a renderer: dimension slot ``d`` of pixel ``(x, y)``, sample ``index``.
+
+    Each of the ``dimensions`` slots holds one dpc point set of ``samples_per_pixel`` points
+    (made once, on libdpc's scalar path, so every machine gets the same values); each pixel
+    reads it rotated and toroidally shifted by its entry of a 32 x 32 screen-space mask, so
+    neighbouring pixels' errors cancel at low screen frequencies. docs/rendering.md defines
+    every step. Values are float32 in [0, 1); the same C object backs the C API, the Mitsuba
+    plugin and this class, so all three give the same bits.
+
+    >>> s = dpc.Sampler("bnot-2d-stratified", samples_per_pixel=16)
+    >>> s.get_2d(x=np.arange(640)[None, :], y=np.arange(480)[:, None], index=0, dimension=0).shape
+    (480, 640, 2)
+    """
+
+    def __init__(self, models=DEFAULT_MODEL, samples_per_pixel: int = 16, dimensions: int = 16, seed: int = 0):
+        if isinstance(models, (str, bytes)) or isinstance(models, Model) or hasattr(models, "__fspath__"):
+            models = [models]
+        models = list(models)
+        if not models:
+            raise InvalidArgumentError("models must name at least one model")
+        self.models: list[Model] = [m if isinstance(m, Model) else load(m) for m in models]
+        self.samples_per_pixel = _integer(samples_per_pixel, "samples_per_pixel", 1, MAX_SPP)
+        self.dimensions = _integer(dimensions, "dimensions", 1, MAX_DIMENSIONS)
+        self.seed = _integer(seed, "seed", 0, (1 << 64) - 1)
+        self._h = _core.Sampler([m._h for m in self.models], self.samples_per_pixel, self.dimensions, self.seed)
+
+    def __repr__(self) -> str:
+        names = ", ".join(m.name for m in self.models)
+        return (f"dpc.Sampler([{names}], samples_per_pixel={self.samples_per_pixel}, "
+                f"dimensions={self.dimensions}, seed={self.seed})")
+
+    def _lookup(self, x, y, index, dimension, width: int) -> np.ndarray:
+        arrays = np.broadcast_arrays(_uint32_array(x, "x", wrap=True), _uint32_array(y, "y", wrap=True),
+                                     _uint32_array(index, "index", wrap=False),
+                                     _uint32_array(dimension, "dimension", wrap=False))
+        shape = arrays[0].shape
+        flat = [np.ascontiguousarray(a.ravel()) for a in arrays]
+        out = self._h.get(*flat, width)
+        return out.reshape(shape + ((2,) if width == 2 else ()))
+
+    def get_1d(self, x, y, index, dimension) -> np.ndarray:
+        """Values in [0, 1) of the stratified 1-D lattice; arguments broadcast like numpy's."""
+        return self._lookup(x, y, index, dimension, 1)
+
+    def get_2d(self, x, y, index, dimension) -> np.ndarray:
+        """Points in [0, 1)^2 from the model's set: shape ``broadcast shape + (2,)``."""
+        return self._lookup(x, y, index, dimension, 2)
+
+    def table(self, t: int) -> np.ndarray:
+        """The (samples_per_pixel, 2) point set of table ``t`` (0 <= t < dimensions)."""
+        return self._h.table(_integer(t, "t", 0, self.dimensions - 1))
+
+    @staticmethod
+    def mask() -> np.ndarray:
+        """The shared 32 x 32 screen-space mask: (32, 32, 3) float32, [y, x] = (2-D shift, 1-D offset)."""
+        return _core.sampler_mask()

@@ -1,0 +1,214 @@
+// The Mitsuba 3 sampler plugin "dpc": next_1d / next_2d served by libdpc's dpc_sampler, so each
+// pixel gets a dpc blue-noise set and neighbouring pixels' errors cancel at low screen
+// frequencies (docs/rendering.md). dpc.mitsuba compiles this file against the installed
+// Mitsuba and the libdpc inside the dpc package, and puts the plugin on Mitsuba's search path.
+//
+// Mitsuba's scalar renderer seeds a pixel's sampler with
+//   render_seed * width * height + block_id * block_size^2 + morton_index(pixel in block)
+// and renders each block's pixels in Morton order on one forked sampler. The first seed a fork
+// sees starts a block, so (seed - first seed) mod block_size^2 is the Morton index: the pixel's
+// position inside its block. With the 32-pixel mask tile dividing the block size (32 unless the
+// integrator's block_size says otherwise), block-local positions tile the mask seamlessly across
+// blocks without knowing where a block lies.
+#include <cstdlib>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <mitsuba/core/properties.h>
+#include <mitsuba/render/sampler.h>
+
+#include "dpc/dpc.h"
+
+#ifndef DPC_MODELS_DIR
+#define DPC_MODELS_DIR ""
+#endif
+
+NAMESPACE_BEGIN(mitsuba)
+
+namespace dpc_plugin {
+
+inline std::vector<std::string> split(const std::string &s, char sep) {
+    std::vector<std::string> out;
+    size_t start = 0;
+    while (start <= s.size()) {
+        size_t end = s.find(sep, start);
+        if (end == std::string::npos) end = s.size();
+        if (end > start) out.push_back(s.substr(start, end - start));
+        start = end + 1;
+    }
+    return out;
+}
+
+// A bundled name ("bnot-2d-stratified") or a path: $DPC_MODEL_PATH's folders, then the package's.
+inline std::string resolve(const std::string &name) {
+    if (name.find('/') != std::string::npos || (name.size() > 5 && name.substr(name.size() - 5) == ".onnx"))
+        return name;
+    std::vector<std::string> dirs;
+    if (const char *env = std::getenv("DPC_MODEL_PATH")) dirs = split(env, ':');
+    dirs.push_back(DPC_MODELS_DIR);
+    for (const std::string &d : dirs) {
+        std::string path = d + "/" + name + ".onnx";
+        if (FILE *f = std::fopen(path.c_str(), "rb")) {
+            std::fclose(f);
+            return path;
+        }
+    }
+    return name; // dpc_model_load_file reports it
+}
+
+// One libdpc sampler, shared by a plugin instance and all its forks.
+struct Table {
+    dpc_sampler *sampler = nullptr;
+    ~Table() { dpc_sampler_free(sampler); }
+};
+
+inline std::shared_ptr<Table> build(const std::vector<std::string> &models, uint32_t spp, uint32_t dims,
+                                    uint64_t seed, std::string &error) {
+    std::vector<dpc_model *> loaded;
+    auto table = std::make_shared<Table>();
+    for (const std::string &m : models) {
+        dpc_model *h = nullptr;
+        if (dpc_model_load_file(resolve(m).c_str(), nullptr, &h) != DPC_OK) {
+            error = std::string("model \"") + m + "\": " + dpc_last_error();
+            break;
+        }
+        loaded.push_back(h);
+    }
+    if (error.empty()) {
+        dpc_sampler_options o;
+        dpc_sampler_options_init(&o);
+        std::vector<const dpc_model *> handles(loaded.begin(), loaded.end());
+        o.models = handles.data();
+        o.n_models = (uint32_t) handles.size();
+        o.samples_per_pixel = spp;
+        o.dimensions = dims;
+        o.seed = seed;
+        if (dpc_sampler_create(&o, &table->sampler) != DPC_OK) error = dpc_last_error();
+    }
+    for (dpc_model *h : loaded) dpc_model_free(h);
+    return error.empty() ? table : nullptr;
+}
+
+inline uint32_t compact_bits(uint32_t v) { // every other bit of v, packed
+    v &= 0x55555555u;
+    v = (v | (v >> 1)) & 0x33333333u;
+    v = (v | (v >> 2)) & 0x0F0F0F0Fu;
+    v = (v | (v >> 4)) & 0x00FF00FFu;
+    v = (v | (v >> 8)) & 0x0000FFFFu;
+    return v;
+}
+
+} // namespace dpc_plugin
+
+template <typename Float, typename Spectrum>
+class DpcSampler final : public Sampler<Float, Spectrum> {
+public:
+    MI_IMPORT_BASE(Sampler, m_sample_count, m_base_seed, m_dimension_index, m_sample_index)
+    MI_IMPORT_TYPES()
+
+    DpcSampler(const Properties &props) : Base(props) {
+        if constexpr (dr::is_jit_v<Float>)
+            Throw("the dpc sampler serves Mitsuba's scalar variants (e.g. scalar_rgb); this is %s",
+                  this->variant_name());
+        m_models = dpc_plugin::split(std::string(props.get<std::string_view>("model", "bnot-2d-stratified")), ',');
+        if (m_models.empty()) Throw("property \"model\" names no model");
+        int dims = props.get<int>("dimensions", 16);
+        int block = props.get<int>("block_size", 32);
+        if (dims < 1 || dims > (int) DPC_SAMPLER_MAX_DIMENSIONS)
+            Throw("property \"dimensions\" is %d, must be 1 .. %u", dims, DPC_SAMPLER_MAX_DIMENSIONS);
+        if (block < 32 || block > 4096 || (block & (block - 1)))
+            Throw("property \"block_size\" is %d: a power of two from 32 (the mask tile) to 4096", block);
+        m_dims = (uint32_t) dims;
+        m_block_pixels = (uint32_t) block * (uint32_t) block;
+        rebuild();
+    }
+
+    void set_sample_count(uint32_t spp) override {
+        if (spp == m_sample_count && m_table) return;
+        m_sample_count = spp;
+        rebuild();
+    }
+
+    ref<Sampler<Float, Spectrum>> fork() override {
+        DpcSampler *s = new DpcSampler(*this);
+        s->m_phase_known = false; // the fork's first seed starts a block
+        return s;
+    }
+
+    ref<Sampler<Float, Spectrum>> clone() override { return new DpcSampler(*this); }
+
+    void seed(UInt32 seed, uint32_t wavefront_size = (uint32_t) -1) override {
+        Base::seed(seed, wavefront_size);
+        if constexpr (!dr::is_jit_v<Float>) {
+            if (!m_phase_known) {
+                m_phase = seed;
+                m_phase_known = true;
+            }
+            uint32_t i = (uint32_t) (seed - m_phase) & (m_block_pixels - 1);
+            m_x = dpc_plugin::compact_bits(i);
+            m_y = dpc_plugin::compact_bits(i >> 1);
+        }
+    }
+
+    Float next_1d(Mask active = true) override {
+        if constexpr (!dr::is_jit_v<Float>) {
+            DRJIT_MARK_USED(active);
+            float v = 0.f;
+            dpc_sampler_get_1d(m_table->sampler, m_x, m_y, m_sample_index, m_dimension_index++, &v);
+            return v;
+        } else {
+            DRJIT_MARK_USED(active);
+            Throw("not available in JIT variants");
+        }
+    }
+
+    Point2f next_2d(Mask active = true) override {
+        if constexpr (!dr::is_jit_v<Float>) {
+            DRJIT_MARK_USED(active);
+            float v[2] = { 0.f, 0.f };
+            dpc_sampler_get_2d(m_table->sampler, m_x, m_y, m_sample_index, m_dimension_index++, v);
+            return Point2f(v[0], v[1]);
+        } else {
+            DRJIT_MARK_USED(active);
+            Throw("not available in JIT variants");
+        }
+    }
+
+    std::string to_string() const override {
+        std::string models;
+        for (const std::string &m : m_models) models += (models.empty() ? "" : ",") + m;
+        return "DpcSampler[model = " + models + ", sample_count = " + std::to_string(m_sample_count) +
+               ", dimensions = " + std::to_string(m_dims) + ", seed = " + std::to_string(m_base_seed) + "]";
+    }
+
+    MI_DECLARE_CLASS(DpcSampler)
+
+private:
+    DpcSampler(const DpcSampler &other) : Base(other) {
+        m_models = other.m_models;
+        m_dims = other.m_dims;
+        m_block_pixels = other.m_block_pixels;
+        m_table = other.m_table;
+        m_phase = other.m_phase;
+        m_phase_known = other.m_phase_known;
+        m_x = other.m_x;
+        m_y = other.m_y;
+    }
+
+    void rebuild() {
+        std::string error;
+        m_table = dpc_plugin::build(m_models, m_sample_count, m_dims, m_base_seed, error);
+        if (!m_table) Throw("dpc sampler: %s", error);
+    }
+
+    std::vector<std::string> m_models;
+    uint32_t m_dims = 16, m_block_pixels = 1024;
+    std::shared_ptr<dpc_plugin::Table> m_table;
+    uint32_t m_phase = 0;
+    bool m_phase_known = false;
+    uint32_t m_x = 0, m_y = 0;
+};
+
+MI_EXPORT_PLUGIN(DpcSampler)
+NAMESPACE_END(mitsuba)

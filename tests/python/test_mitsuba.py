@@ -1,0 +1,108 @@
+"""The Mitsuba 3 sampler plugin "dpc" (dpc.mitsuba): it builds, registers, renders from a scene
+dict and from XML like Mitsuba's own samplers, gives the values of dpc.Sampler, is unbiased and
+fast, and says clearly what it cannot do."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+dpc = pytest.importorskip("dpc")
+mi = pytest.importorskip("mitsuba", reason="mitsuba is not installed (pip install .[mitsuba])")
+mi.set_variant("scalar_rgb")
+import dpc.mitsuba  # noqa: E402  (builds the plugin once and registers it)
+
+
+def _scene(sampler: dict, spp: int, width: int = 32, integrator=None) -> object:
+    d = mi.cornell_box()
+    d["sensor"]["sampler"] = dict(sampler, sample_count=spp)
+    d["sensor"]["film"].update(width=width, height=width, rfilter={"type": "box"})
+    d["integrator"] = integrator or {"type": "direct"}
+    return mi.load_dict(d)
+
+
+def test_renders_from_a_scene_dict_unbiased():
+    """Over 64 seeds of 4-spp dpc renders, every pixel's mean is within 4 standard errors of a
+    16,384-spp independent render, and so is the image mean."""
+    ref = np.array(mi.render(_scene({"type": "independent"}, 16384))).mean(-1)
+    imgs = np.stack([np.array(mi.render(_scene({"type": "dpc", "seed": s}, 4))).mean(-1) for s in range(64)])
+    assert np.all(np.isfinite(imgs))
+    se = imgs.std(0, ddof=1) / 8 + 1e-3          # + the reference's own error, at most ~1e-3 here
+    assert np.abs((imgs.mean(0) - ref) / se).max() < 4
+    totals = imgs.mean(axis=(1, 2))
+    assert abs(totals.mean() - ref.mean()) < 4 * (totals.std(ddof=1) / 8 + 1e-4)
+
+
+def test_loads_from_xml_with_every_property():
+    xml = """<scene version="3.0.0">
+      <integrator type="direct"/>
+      <sensor type="perspective">
+        <sampler type="dpc">
+          <integer name="sample_count" value="8"/>
+          <integer name="seed" value="3"/>
+          <string name="model" value="bnot-2d-stratified,bnot-4d"/>
+          <integer name="dimensions" value="6"/>
+          <integer name="block_size" value="32"/>
+        </sampler>
+        <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film>
+      </sensor>
+      <shape type="sphere"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+    </scene>"""
+    scene = mi.load_string(xml)
+    sampler = scene.sensors()[0].sampler()
+    assert sampler.sample_count() == 8
+    assert "bnot-2d-stratified,bnot-4d" in str(sampler)
+    img = np.array(mi.render(scene))
+    assert img.shape == (16, 16, 3) and np.all(np.isfinite(img))
+
+
+def test_values_are_those_of_dpc_sampler():
+    """The plugin asks libdpc for (pixel in its 32x32 block, sample index, dimension): a fork
+    seeded like Mitsuba's renderer seeds pixel (x, y) of block b gives dpc.Sampler's values."""
+    plugin = mi.load_dict({"type": "dpc", "sample_count": 4, "seed": 9, "dimensions": 3})
+    ref = dpc.Sampler("bnot-2d-stratified", samples_per_pixel=4, dimensions=3, seed=9)
+    block_base = 5 * 1024 + 77   # a fork's first seed starts a block, whatever the render seed
+    fork = plugin.fork()
+    fork.seed(block_base)
+    for morton, (x, y) in [(0, (0, 0)), (1, (1, 0)), (2, (0, 1)), (11, (1, 3)), (1023, (31, 31))]:
+        fork.seed(block_base + morton)
+        for i in range(5):                       # index 4 is a second pass
+            got = [fork.next_2d(), fork.next_1d(), fork.next_2d()]
+            assert np.array_equal(np.array(got[0]), ref.get_2d(x, y, i, 0))
+            assert np.float32(got[1]) == ref.get_1d(x, y, i, 1)
+            assert np.array_equal(np.array(got[2]), ref.get_2d(x, y, i, 2))
+            fork.advance()
+
+
+def test_bad_properties_say_what_is_wrong():
+    for props, says in [({"model": "no-such-model"}, "no-such-model"), ({"dimensions": 0}, "dimensions"),
+                        ({"block_size": 48}, "block_size"), ({"sample_count": 0}, "samples_per_pixel")]:
+        with pytest.raises(Exception, match=says):
+            mi.load_dict({"type": "dpc", **props})
+
+
+def test_render_time_is_close_to_independent():
+    """Not a benchmark (bench/bench_rendering.py is): a loose check that a lookup costs
+    nanoseconds, not a Python call: within 3x of independent on one 64x64, 64-spp render."""
+    times = {}
+    for name in ("independent", "dpc"):
+        scene = _scene({"type": name}, 64, width=64)
+        mi.render(scene)
+        t = time.perf_counter()
+        mi.render(scene)
+        times[name] = time.perf_counter() - t
+    assert times["dpc"] < 3 * times["independent"], times
+
+
+def test_jit_variants_are_refused_with_the_reason():
+    try:
+        mi.set_variant("llvm_ad_rgb")
+    except Exception as e:  # noqa: BLE001  (no LLVM on this machine: nothing to check)
+        pytest.skip(f"llvm_ad_rgb unavailable here: {e}")
+    try:
+        with pytest.raises(Exception, match="scalar variants"):
+            mi.load_dict({"type": "dpc"})
+    finally:
+        mi.set_variant("scalar_rgb")
