@@ -1,0 +1,320 @@
+"""dpc's sampler in a real renderer: Mitsuba 3 (scalar_rgb), against every built-in sampler.
+
+    python bench/bench_rendering.py [--width 128] [--seeds 8] [--quick]
+
+Three scenes built from Mitsuba's own scene dicts: the Cornell box with the `direct` integrator,
+a soft-shadow scene (a sphere over a plane under a large area light, `direct`), and the Cornell
+box path-traced (`path`, max_depth 5). Box pixel filter, so a pixel's value is the mean of its
+own samples. For each scene, sampler (independent, stratified, multijitter, orthogonal,
+ldsampler, dpc) and sample count, `--seeds` renders (the sampler's `seed` property 0, 1, ...):
+- image MSE and relative MSE (mean of err^2 / (ref^2 + 0.01)) against a reference: ldsampler at
+  REF_SPP, rendered as two halves with other seeds (their difference bounds its own error);
+- the error image's screen-space power spectrum: low-frequency energy, the mean power over
+  0 < |nu| <= 3/16 cycles per pixel over the mean power over all nu != 0 (white noise = 1);
+- render time (median over seeds, wall clock, all threads), as a ratio to independent's.
+Mitsuba rounds some samplers' counts (stratified: squares, ldsampler: powers of two,
+orthogonal: squares of primes): the count a sampler really used is reported.
+Writes docs/rendering.md's results section and docs/figures/rendering/*.png; prints whether the
+goals of the sampler issue are met.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import re
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+CACHE = ROOT / "build" / "bench-rendering"
+DOC = ROOT / "docs" / "rendering.md"
+FIGS = ROOT / "docs" / "figures" / "rendering"
+SAMPLERS = ["independent", "stratified", "multijitter", "orthogonal", "ldsampler", "dpc"]
+MSE_SPP = [4, 16, 64, 256]
+SCREEN_SPP = [1, 2, 4, 16]
+REF_SPP = 8192
+BAND = 3 / 16
+
+
+def scene_dict(mi, name: str, width: int) -> dict:
+    film = {"type": "hdrfilm", "width": width, "height": width, "rfilter": {"type": "box"}}
+    if name in ("cornell-direct", "cornell-path"):
+        d = mi.cornell_box()
+        d["sensor"]["film"] = film
+        d["integrator"] = {"type": "direct"} if name == "cornell-direct" else {"type": "path", "max_depth": 5}
+        return d
+    if name == "soft-shadow":
+        T = mi.ScalarTransform4f
+        return {
+            "type": "scene",
+            "integrator": {"type": "direct", "emitter_samples": 1, "bsdf_samples": 0},
+            "sensor": {"type": "perspective", "fov": 40,
+                       "to_world": T().look_at(origin=[0, -1.5, 4], target=[0, 0, 0], up=[0, 1, 0]),
+                       "film": film},
+            "floor": {"type": "rectangle", "to_world": T().scale([3, 3, 1]), "bsdf": {"type": "diffuse"}},
+            "occluder": {"type": "sphere", "center": [0, 0, 0.6], "radius": 0.5, "bsdf": {"type": "diffuse"}},
+            "light": {"type": "rectangle",
+                      "to_world": T().translate([1.0, 1.0, 2.2]).rotate([1, 0, 0], 180).scale([1.2, 1.2, 1]),
+                      "emitter": {"type": "area", "radiance": {"type": "rgb", "value": 2.0}}},
+        }
+    raise ValueError(name)
+
+
+SCENES = ["cornell-direct", "soft-shadow", "cornell-path"]
+DIRECT_SCENES = ["cornell-direct", "soft-shadow"]
+
+
+def render(mi, scene: str, sampler: str, spp: int, seed: int, width: int):
+    d = scene_dict(mi, scene, width)
+    d["sensor"]["sampler"] = {"type": sampler, "sample_count": spp, "seed": seed}
+    sc = mi.load_dict(d)
+    used = sc.sensors()[0].sampler().sample_count()
+    t = time.perf_counter()
+    img = np.array(mi.render(sc), dtype=np.float64)
+    return img, time.perf_counter() - t, used
+
+
+def reference(mi, scene: str, width: int):
+    CACHE.mkdir(parents=True, exist_ok=True)
+    path = CACHE / f"ref-{scene}-{width}-{REF_SPP}.npz"
+    if path.is_file():
+        z = np.load(path)
+        return z["ref"], float(z["ref_mse"])
+    halves = [render(mi, scene, "ldsampler", REF_SPP // 2, 1000 + k, width)[0] for k in range(2)]
+    ref = 0.5 * (halves[0] + halves[1])
+    ref_mse = float(((halves[0] - halves[1]) ** 2).mean() / 4)   # error of the mean of two halves
+    np.savez(path, ref=ref, ref_mse=ref_mse)
+    return ref, ref_mse
+
+
+def low_band_energy(err: np.ndarray) -> float:
+    e = err - err.mean()
+    q = np.fft.fftfreq(e.shape[0])
+    qq = np.hypot(q[:, None], q[None, :])
+    p = np.abs(np.fft.fft2(e)) ** 2
+    return float(p[(qq > 0) & (qq <= BAND)].mean() / p[qq > 0].mean())
+
+
+def radial_power(err: np.ndarray, bins: int = 24):
+    e = err - err.mean()
+    q = np.fft.fftfreq(e.shape[0])
+    qq = np.hypot(q[:, None], q[None, :])
+    p = np.abs(np.fft.fft2(e)) ** 2
+    p /= p[qq > 0].mean()
+    edges = np.linspace(0, 0.5 * np.sqrt(2), bins + 1)
+    idx = np.digitize(qq.ravel(), edges) - 1
+    vals = np.array([p.ravel()[(idx == b) & (qq.ravel() > 0)].mean() if np.any((idx == b) & (qq.ravel() > 0))
+                     else np.nan for b in range(bins)])
+    return 0.5 * (edges[1:] + edges[:-1]), vals
+
+
+def cpu_name() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown CPU"
+
+
+def run(args) -> dict:
+    import mitsuba as mi
+
+    mi.set_variant("scalar_rgb")
+    import dpc.mitsuba  # noqa: F401  (registers the plugin)
+
+    results = {"width": args.width, "seeds": args.seeds, "ref_spp": REF_SPP, "cpu": cpu_name(),
+               "mitsuba": mi.__version__, "scenes": {}}
+    errors_for_figure = {}
+    for scene in SCENES:
+        t0 = time.perf_counter()
+        ref, ref_mse = reference(mi, scene, args.width)
+        lum_ref = ref.mean(-1)
+        rs = {"ref_mse": ref_mse, "samplers": {}}
+        print(f"{scene}: reference ldsampler {REF_SPP} spp ready ({time.perf_counter() - t0:.0f} s), "
+              f"its own MSE ~{ref_mse:.2e}", flush=True)
+        for sampler in SAMPLERS:
+            rows = {}
+            for spp in sorted(set(MSE_SPP) | set(SCREEN_SPP)):
+                mse, rel, el, times, used = [], [], [], [], None
+                for seed in range(args.seeds):
+                    img, t, used = render(mi, scene, sampler, spp, seed, args.width)
+                    err = img - ref
+                    mse.append(float((err ** 2).mean()))
+                    rel.append(float((err ** 2 / (ref ** 2 + 0.01)).mean()))
+                    el.append(low_band_energy(img.mean(-1) - lum_ref))
+                    times.append(t)
+                    if seed == 0 and spp in (1, 4):
+                        errors_for_figure[(scene, sampler, spp)] = img.mean(-1) - lum_ref
+                rows[spp] = {"spp_used": used, "mse": float(np.mean(mse)), "mse_se": float(np.std(mse, ddof=1) / np.sqrt(len(mse))),
+                             "relmse": float(np.mean(rel)), "elow": float(np.mean(el)),
+                             "elow_se": float(np.std(el, ddof=1) / np.sqrt(len(el))),
+                             "time": float(np.median(times))}
+                print(f"  {sampler:12s} {spp:4d} spp (used {used:4d}): MSE {rows[spp]['mse']:.3e}  "
+                      f"rel {rows[spp]['relmse']:.3e}  E_low {rows[spp]['elow']:.3f}  "
+                      f"{rows[spp]['time']:.3f} s", flush=True)
+            rs["samplers"][sampler] = rows
+        results["scenes"][scene] = rs
+    results["figure_errors"] = {f"{k[0]}|{k[1]}|{k[2]}": v for k, v in errors_for_figure.items()}
+    return results
+
+
+def goals(res: dict) -> list[tuple[str, bool, str]]:
+    out = []
+    for scene in SCENES:
+        s = res["scenes"][scene]["samplers"]
+        for spp in MSE_SPP:
+            d = s["dpc"][spp]["mse"]
+            if scene in DIRECT_SCENES:
+                best_name = min((n for n in SAMPLERS if n != "dpc"), key=lambda n: s[n][spp]["mse"])
+                b = s[best_name][spp]["mse"]
+                out.append((f"{scene}, {spp} spp: dpc MSE <= best built-in ({best_name})", d <= b,
+                            f"{d:.3e} vs {b:.3e} (x{d / b:.2f})"))
+            else:
+                b = s["ldsampler"][spp]["mse"]
+                out.append((f"{scene}, {spp} spp: dpc MSE <= ldsampler", d <= b, f"{d:.3e} vs {b:.3e} (x{d / b:.2f})"))
+        d, b = s["dpc"][4]["elow"], s["ldsampler"][4]["elow"]
+        out.append((f"{scene}, 4 spp: dpc screen low-frequency energy <= 0.25 x ldsampler's", d <= 0.25 * b,
+                    f"{d:.3f} vs 0.25 x {b:.3f} = {0.25 * b:.3f} (ratio {d / b:.2f})"))
+        for spp in (64,):
+            d, b = s["dpc"][spp]["time"], s["independent"][spp]["time"]
+            out.append((f"{scene}, {spp} spp: dpc render time <= 3 x independent's", d <= 3 * b,
+                        f"{d:.3f} s vs {b:.3f} s (x{d / b:.2f})"))
+    return out
+
+
+def figures(res: dict) -> list[str]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    FIGS.mkdir(parents=True, exist_ok=True)
+    made = []
+    errs = {tuple(k.split("|")[:2]) + (int(k.split("|")[2]),): np.asarray(v) for k, v in res["figure_errors"].items()}
+    for spp in (1, 4):
+        fig, axes = plt.subplots(len(SCENES), len(SAMPLERS), figsize=(2.1 * len(SAMPLERS), 2.2 * len(SCENES)))
+        for r, scene in enumerate(SCENES):
+            lim = max(np.percentile(np.abs(errs[(scene, n, spp)]), 99) for n in SAMPLERS)
+            for c, name in enumerate(SAMPLERS):
+                ax = axes[r, c]
+                ax.imshow(errs[(scene, name, spp)], cmap="RdBu", vmin=-lim, vmax=lim)
+                ax.set_xticks([]), ax.set_yticks([])
+                row = res["scenes"][scene]["samplers"][name][spp]
+                ax.set_title(f"{name} ({row['spp_used']} spp)\nE_low {row['elow']:.2f}", fontsize=8)
+                if c == 0:
+                    ax.set_ylabel(scene, fontsize=8)
+        fig.suptitle(f"Error images (render - reference), {spp} spp, seed 0", fontsize=10)
+        fig.tight_layout()
+        p = FIGS / f"errors-{spp}spp.png"
+        fig.savefig(p, dpi=90)
+        plt.close(fig)
+        made.append(p.name)
+    fig, axes = plt.subplots(1, len(SCENES), figsize=(4.2 * len(SCENES), 3.4))
+    for ax, scene in zip(axes, SCENES):
+        for name in SAMPLERS:
+            rows = res["scenes"][scene]["samplers"][name]
+            xs = [rows[s]["spp_used"] for s in MSE_SPP]
+            ax.loglog(xs, [rows[s]["mse"] for s in MSE_SPP], "o-" if name == "dpc" else ".--", label=name,
+                      lw=2 if name == "dpc" else 1)
+        ax.set_xlabel("samples per pixel")
+        ax.set_ylabel("image MSE")
+        ax.set_title(scene)
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].legend(fontsize=8)
+    fig.tight_layout()
+    p = FIGS / "mse.png"
+    fig.savefig(p, dpi=90)
+    plt.close(fig)
+    made.append(p.name)
+    fig, axes = plt.subplots(1, len(SCENES), figsize=(4.2 * len(SCENES), 3.4))
+    for ax, scene in zip(axes, SCENES):
+        for name in SAMPLERS:
+            f, pw = radial_power(errs[(scene, name, 4)])
+            ax.plot(f, pw, "-" if name == "dpc" else "--", label=name, lw=2 if name == "dpc" else 1)
+        ax.axvline(BAND, color="grey", lw=0.8)
+        ax.set_xlabel("|nu| (cycles per pixel)")
+        ax.set_ylabel("error power (mean = 1)")
+        ax.set_title(f"{scene}, 4 spp, seed 0")
+        ax.set_yscale("log")
+    axes[0].legend(fontsize=8)
+    fig.tight_layout()
+    p = FIGS / "spectra-4spp.png"
+    fig.savefig(p, dpi=90)
+    plt.close(fig)
+    made.append(p.name)
+    return made
+
+
+def section(res: dict, checks, figs) -> str:
+    L = [f"Measured by `python bench/bench_rendering.py` on {res['cpu']} (2 threads), Mitsuba "
+         f"{res['mitsuba']} `scalar_rgb`, {res['width']} x {res['width']} pixels, {res['seeds']} seeds per "
+         f"cell (the sampler's `seed` property). Reference: ldsampler at {res['ref_spp']:,} spp.", ""]
+    for scene in SCENES:
+        s = res["scenes"][scene]
+        L += [f"### {scene}", "", f"Reference's own MSE (from its two halves): {s['ref_mse']:.1e}.", ""]
+        L += ["Image MSE (relative MSE), mean over seeds; samples per pixel actually used in brackets where "
+              "Mitsuba rounded the count:", ""]
+        L += ["| sampler | " + " | ".join(f"{spp} spp" for spp in MSE_SPP) + " |",
+              "|---|" + "---:|" * len(MSE_SPP)]
+        for name in SAMPLERS:
+            cells = []
+            for spp in MSE_SPP:
+                r = s["samplers"][name][spp]
+                used = f" [{r['spp_used']}]" if r["spp_used"] != spp else ""
+                cells.append(f"{r['mse']:.2e} ({r['relmse']:.2e}){used}")
+            L.append(f"| {'**dpc**' if name == 'dpc' else name} | " + " | ".join(cells) + " |")
+        L += ["", "Screen-space low-frequency error energy (white noise = 1), mean over seeds:", ""]
+        L += ["| sampler | " + " | ".join(f"{spp} spp" for spp in SCREEN_SPP) + " | time at 64 spp |",
+              "|---|" + "---:|" * (len(SCREEN_SPP) + 1)]
+        for name in SAMPLERS:
+            cells = []
+            for spp in SCREEN_SPP:
+                r = s["samplers"][name][spp]
+                used = f" [{r['spp_used']}]" if r["spp_used"] != spp else ""
+                cells.append(f"{r['elow']:.3f}{used}")
+            t, t0 = s["samplers"][name][64]["time"], s["samplers"]["independent"][64]["time"]
+            L.append(f"| {'**dpc**' if name == 'dpc' else name} | " + " | ".join(cells)
+                     + f" | {t:.2f} s (x{t / t0:.2f}) |")
+        L.append("")
+    L += ["### Goals", "", "| goal | met | measured |", "|---|---|---|"]
+    L += [f"| {g} | {'yes' if ok else '**no**'} | {m} |" for g, ok, m in checks]
+    L += [""] + [f"![{f}](figures/rendering/{f})" for f in figs] + [""]
+    return "\n".join(L)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--width", type=int, default=128)
+    ap.add_argument("--seeds", type=int, default=8)
+    ap.add_argument("--quick", action="store_true", help="64 x 64 pixels, 3 seeds, REF_SPP 4096: a smoke run "
+                    "that does not write docs/")
+    args = ap.parse_args()
+    global REF_SPP
+    if args.quick:
+        args.width, args.seeds, REF_SPP = 64, 3, 4096
+    res = run(args)
+    checks = goals(res)
+    print("\nGoals:")
+    for g, ok, m in checks:
+        print(f"  [{'met' if ok else 'MISSED'}] {g}: {m}")
+    if args.quick:
+        return
+    figs = figures(res)
+    CACHE.mkdir(parents=True, exist_ok=True)
+    (CACHE / "results.json").write_text(json.dumps({k: v for k, v in res.items() if k != "figure_errors"}, indent=1))
+    text = DOC.read_text()
+    begin, end = "<!-- bench_rendering:begin -->", "<!-- bench_rendering:end -->"
+    new = f"{begin}\n{section(res, checks, figs)}\n{end}"
+    text = re.sub(re.escape(begin) + ".*?" + re.escape(end), lambda _: new, text, flags=re.S)
+    DOC.write_text(text)
+    print(f"wrote {DOC} and {len(figs)} figures in {FIGS}")
+
+
+if __name__ == "__main__":
+    main()
