@@ -72,7 +72,8 @@ typedef enum dpc_status {
     DPC_ERROR_UNSUPPORTED = 4,      /* valid file or request this build cannot serve (version, ISA) */
     DPC_ERROR_OUT_OF_MEMORY = 5,    /* an allocation failed */
     DPC_ERROR_LIMIT = 6,            /* request exceeds a documented limit (e.g. point count) */
-    DPC_ERROR_INTERNAL = 7          /* a bug in libdpc: please report it */
+    DPC_ERROR_INTERNAL = 7,         /* a bug in libdpc: please report it */
+    DPC_ERROR_CANCELLED = 8         /* a progress callback asked to stop (dpc_generate_ex) */
 } dpc_status;
 
 /* Detail of the most recent failure on the calling thread. Every fallible call clears it when it
@@ -122,9 +123,10 @@ typedef enum dpc_backend {
 
 /* The input points a model filters (docs/model-format.md §5).
  * - AUTO (default): the kind the model was trained on, from its metadata "dpc.input" ("uniform"
- *   or "stratified"), uniform when the file has no such key (files from before the key, and the
- *   bundled models: all trained on uniform points).
- * - UNIFORM: independent uniform points, the points the bundled models were trained on.
+ *   or "stratified"), uniform when the file has no such key (files from before the key). Of the
+ *   bundled models, bnot-2d-stratified says "stratified"; the others were trained on uniform
+ *   points.
+ * - UNIFORM: independent uniform points.
  * - STRATIFIED: the same uniform numbers placed one point per cell of a g^n grid (g^n <= m,
  *   the cells left over spread at random), in random order. A local filter cascade cannot
  *   remove large-scale density fluctuations, so from uniform input a blue-noise model's power
@@ -150,7 +152,21 @@ typedef struct dpc_load_options {
     /* Default DPC_INPUT_AUTO. Added after `backend`: a struct_size of
      * offsetof(dpc_load_options, input) is still accepted, as AUTO. */
     dpc_input input;
+    /* Bound on the work a model may ask for, so that a host can load files it does not trust:
+     * the expected neighbours per point of every layer and subspace, min(m - 1, V_k rho^k)
+     * (V_k the volume of the unit k-ball, k the subspace's dimensions, rho its radius in mean
+     * spacings, m the requested point count), must not exceed it, else a generate or filter call
+     * fails with DPC_ERROR_LIMIT before any work (a file with radius 1e6 would otherwise make
+     * every layer all pairs, O(m^2)). Default DPC_DEFAULT_MAX_NEIGHBOURS, which every bundled
+     * model passes at every count (their largest: 400, mask-vector-64; bnot-2d: 50); INFINITY
+     * removes the bound. Must be > 0 (NaN is refused). dpc_model_neighbours() tells a model's
+     * value. Added after `input`: a struct_size of offsetof(dpc_load_options, max_neighbours)
+     * is still accepted, with the default. */
+    double max_neighbours;
 } dpc_load_options;
+
+/* The default of dpc_load_options.max_neighbours. */
+#define DPC_DEFAULT_MAX_NEIGHBOURS 4096.0
 
 /* Fill *options with the defaults. */
 DPC_API void dpc_load_options_init(dpc_load_options *options);
@@ -164,6 +180,17 @@ DPC_API dpc_status dpc_model_load_memory(const void *data, size_t size,
                                          const dpc_load_options *options, dpc_model **out_model);
 /* Release a model. NULL is a no-op. No call may use the model during or after this one. */
 DPC_API void dpc_model_free(dpc_model *model);
+
+/* Load a model by name, e.g. "bnot-2d": the first regular file NAME.onnx in the folders of the
+ * environment variable DPC_MODEL_PATH (separated by ':'), then in dpc_model_dir(). A name is
+ * 1 .. 255 characters of [A-Za-z0-9._-], not starting with '.' (so it never names a path).
+ * DPC_ERROR_IO with the folders searched when no file is found. */
+DPC_API dpc_status dpc_model_load_named(const char *name, const dpc_load_options *options,
+                                        dpc_model **out_model);
+/* The folder `cmake --install` put the bundled models in (<prefix>/share/dpc/models, fixed when
+ * libdpc was configured), or "" for a build that installs none (the Python package's copy:
+ * dpc.load finds its own). Static string. */
+DPC_API const char *dpc_model_dir(void);
 
 /* ---------------------------------------------------------------------------------------------
  * Model information
@@ -193,6 +220,10 @@ DPC_API dpc_status dpc_model_get_input(const dpc_model *model, dpc_input *out_in
 /* What runs the cascade, for people: "cpu", or the Vulkan device's name (e.g. "NVIDIA H100 PCIe",
  * "llvmpipe (LLVM 15.0.6, 256 bits)"). "" for NULL. Valid while the model lives. */
 DPC_API const char *dpc_model_device(const dpc_model *model);
+
+/* The largest expected neighbour count per point of any layer and subspace of the model, V_k
+ * rho^k (see dpc_load_options.max_neighbours; not yet capped at m - 1). */
+DPC_API dpc_status dpc_model_neighbours(const dpc_model *model, double *out_neighbours);
 
 /* Model name (metadata "dpc.name"), or "" when the file has none. Valid while the model lives. */
 DPC_API const char *dpc_model_name(const dpc_model *model);
@@ -227,6 +258,37 @@ DPC_API dpc_status dpc_generate_n(const dpc_model *model, uint64_t seed, size_t 
  * dpc_generate_n(model, seed + c, n_points, ...) (seed arithmetic wraps modulo 2^64). */
 DPC_API dpc_status dpc_generate_batch(const dpc_model *model, uint64_t seed, size_t count,
                                       size_t n_points, float *out);
+
+/* Check a request as dpc_generate_batch(model, seed, count, n_points, out) would, without doing
+ * it: the same status and message for a bad count (DPC_ERROR_LIMIT beyond DPC_MAX_POINTS, 2^28
+ * floats per set, the model's max_neighbours or size_t; DPC_ERROR_INVALID_ARGUMENT for a
+ * gridded model's wrong count or count = 0), and on success the floats out needs,
+ * count * n_points * dims. For hosts that allocate out themselves (the Python binding). */
+DPC_API dpc_status dpc_generate_size(const dpc_model *model, size_t count, size_t n_points,
+                                     size_t *out_floats);
+
+/* Progress and cancellation of a long call. libdpc calls progress(user, done, total) as work
+ * finishes: total = count * layers units, one per layer of each set. It is called at least
+ * after every set, and after every layer where the backend reports layers; calls never overlap
+ * (libdpc serialises them), but they may come from libdpc's worker threads. Returning nonzero
+ * asks libdpc to stop: the call returns DPC_ERROR_CANCELLED as soon as the running layer (or
+ * set, or Vulkan batch) ends, and the contents of out are unspecified. The callback must not
+ * call libdpc on the same model. */
+typedef int (*dpc_progress_fn)(void *user, uint64_t done, uint64_t total);
+
+typedef struct dpc_generate_options {
+    uint32_t struct_size;     /* sizeof(dpc_generate_options), set by dpc_generate_options_init */
+    dpc_progress_fn progress; /* NULL (default): no callback, never cancelled */
+    void *user;               /* passed to progress */
+} dpc_generate_options;
+
+/* Fill *options with the defaults. */
+DPC_API void dpc_generate_options_init(dpc_generate_options *options);
+
+/* dpc_generate_batch with options (NULL: defaults): the same points, bit for bit, plus progress
+ * and cancellation. */
+DPC_API dpc_status dpc_generate_ex(const dpc_model *model, uint64_t seed, size_t count, size_t n_points,
+                                   const dpc_generate_options *options, float *out);
 
 /* Run the model's cascade on caller-provided points (in place): points holds n_points * dims
  * floats, each in [0, 1) (else DPC_ERROR_INVALID_ARGUMENT); gridded dimensions are left as given. */

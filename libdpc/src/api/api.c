@@ -1,5 +1,7 @@
 /* The only file on the ABI boundary: checks every argument, turns every failure into a status
  * with a message, and hands valid requests to the model and the backend. */
+#include <errno.h>
+#include <fcntl.h>
 #include <float.h>
 #include <math.h>
 #include <pthread.h>
@@ -8,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "common/error.h"
 #include "common/rng.h"
@@ -16,6 +19,13 @@
 #include "api/model_handle.h"
 
 #define MAX_FLOATS_PER_SET (1ull << 28) /* n_points * dims: 1 GiB of floats */
+
+/* Where `cmake --install` puts the bundled models (CMake defines it for this file). */
+#ifndef DPC_MODEL_DIR
+#define DPC_MODEL_DIR ""
+#endif
+
+#define M_PI_VALUE 3.14159265358979323846
 
 #define STR2(x) #x
 #define STR(x) STR2(x)
@@ -36,6 +46,7 @@ const char *dpc_status_string(dpc_status status) {
     case DPC_ERROR_OUT_OF_MEMORY: return "DPC_ERROR_OUT_OF_MEMORY";
     case DPC_ERROR_LIMIT: return "DPC_ERROR_LIMIT";
     case DPC_ERROR_INTERNAL: return "DPC_ERROR_INTERNAL";
+    case DPC_ERROR_CANCELLED: return "DPC_ERROR_CANCELLED";
     }
     return "DPC_ERROR_UNKNOWN";
 }
@@ -48,6 +59,25 @@ void dpc_load_options_init(dpc_load_options *options) {
     options->threads = 1;
     options->backend = DPC_BACKEND_AUTO;
     options->input = DPC_INPUT_AUTO;
+    options->max_neighbours = DPC_DEFAULT_MAX_NEIGHBOURS;
+}
+
+/* The expected neighbours per point the model asks for: the largest V_k rho^k over every layer
+ * and subspace that moves something (V_k = pi^(k/2) / Gamma(k/2 + 1), the unit k-ball). */
+static double model_neighbours(const dpc_cascade *c) {
+    double most = 0.0;
+    for (uint32_t l = 0; l < c->n_layers; l++) {
+        const dpc_layer *L = &c->layers[l];
+        for (uint32_t t = 0; t < L->n_sub; t++) {
+            if (!(L->masks[t] & ~L->fixed)) continue; /* moves nothing: the engine skips it */
+            unsigned k = 0;
+            for (uint64_t bits = L->masks[t]; bits; bits &= bits - 1) k++;
+            const double ball = pow(M_PI_VALUE, 0.5 * k) / tgamma(0.5 * k + 1.0);
+            const double n = ball * pow((double)L->radius[t], (double)k);
+            if (!(n <= most)) most = n; /* inf stays inf */
+        }
+    }
+    return most;
 }
 
 /* Resolve the input kind of a freshly parsed model: AUTO takes the file's "dpc.input". */
@@ -110,9 +140,11 @@ dpc_status dpc_model_load_memory(const void *data, size_t size, const dpc_load_o
          * default the rest. */
         const size_t before_backend = offsetof(dpc_load_options, backend);
         const size_t before_input = offsetof(dpc_load_options, input);
+        const size_t before_neighbours = offsetof(dpc_load_options, max_neighbours);
         if (options->struct_size == sizeof opts) {
             opts = *options;
-        } else if (options->struct_size == before_backend || options->struct_size == before_input) {
+        } else if (options->struct_size == before_backend || options->struct_size == before_input ||
+                   options->struct_size == before_neighbours) {
             memcpy(&opts, options, options->struct_size);
             opts.struct_size = (uint32_t)sizeof opts;
         } else {
@@ -127,8 +159,12 @@ dpc_status dpc_model_load_memory(const void *data, size_t size, const dpc_load_o
     if (opts.input != DPC_INPUT_AUTO && opts.input != DPC_INPUT_UNIFORM && opts.input != DPC_INPUT_STRATIFIED)
         return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "options.input is %d: use DPC_INPUT_AUTO, _UNIFORM or _STRATIFIED",
                         (int)opts.input);
+    if (!(opts.max_neighbours > 0.0))
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "options.max_neighbours is %g: must be > 0 (INFINITY: no bound)",
+                        opts.max_neighbours);
     dpc_model *model = (dpc_model *)calloc(1, sizeof *model);
     if (!model) return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory");
+    model->max_neighbours = opts.max_neighbours;
     dpc_status st = dpc_cpu_engine_init(&model->engine, opts.isa, opts.threads);
     if (st == DPC_OK) st = dpc_cascade_parse((const uint8_t *)data, size, &model->cascade);
     if (st == DPC_OK && (st = choose_input(model, opts.input)) != DPC_OK) dpc_cascade_release(&model->cascade);
@@ -136,6 +172,7 @@ dpc_status dpc_model_load_memory(const void *data, size_t size, const dpc_load_o
         free(model);
         return st;
     }
+    model->neighbours = model_neighbours(&model->cascade);
     st = choose_backend(model, opts.backend);
     if (st != DPC_OK) {
         dpc_cascade_release(&model->cascade);
@@ -151,35 +188,52 @@ dpc_status dpc_model_load_file(const char *path, const dpc_load_options *options
     if (!out_model) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "out_model is NULL");
     *out_model = NULL;
     if (!path) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "path is NULL");
-    FILE *f = fopen(path, "rb");
-    if (!f) return dpc_fail(DPC_ERROR_IO, "cannot open model file '%.300s'", path);
+    /* O_NONBLOCK: opening a FIFO (or a device that waits) returns at once instead of blocking
+     * until a writer appears; fstat then refuses everything but a regular file. For a regular
+     * file O_NONBLOCK changes nothing. */
+    int fd;
+    do fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    while (fd < 0 && errno == EINTR);
+    if (fd < 0) return dpc_fail(DPC_ERROR_IO, "cannot open model file '%.300s': %s", path, strerror(errno));
     struct stat info;
-    if (fstat(fileno(f), &info) != 0 || !S_ISREG(info.st_mode)) {
-        fclose(f);
-        return dpc_fail(DPC_ERROR_IO, "'%.300s' is not a regular file", path);
+    if (fstat(fd, &info) != 0) {
+        const int e = errno;
+        close(fd);
+        return dpc_fail(DPC_ERROR_IO, "cannot stat model file '%.300s': %s", path, strerror(e));
     }
-    long size = -1;
-    if (fseek(f, 0, SEEK_END) == 0) size = ftell(f);
-    if (size < 0 || fseek(f, 0, SEEK_SET) != 0) {
-        fclose(f);
-        return dpc_fail(DPC_ERROR_IO, "cannot read model file '%.300s' (not a regular file?)", path);
+    if (!S_ISREG(info.st_mode)) {
+        close(fd);
+        const char *what = S_ISDIR(info.st_mode)    ? "a directory"
+                           : S_ISFIFO(info.st_mode) ? "a FIFO"
+                           : S_ISCHR(info.st_mode)  ? "a character device"
+                           : S_ISBLK(info.st_mode)  ? "a block device"
+                           : S_ISSOCK(info.st_mode) ? "a socket"
+                                                    : "not a regular file";
+        return dpc_fail(DPC_ERROR_IO, "'%.300s' is %s: a model must be a regular file", path, what);
     }
-    if ((unsigned long long)size > DPC_MAX_FILE_BYTES) {
-        fclose(f);
+    if (info.st_size < 0 || (unsigned long long)info.st_size > DPC_MAX_FILE_BYTES) {
+        close(fd);
         return dpc_fail(DPC_ERROR_LIMIT, "model file '%.300s' is larger than 1 GiB", path);
     }
-    void *buf = malloc(size ? (size_t)size : 1);
+    const size_t size = (size_t)info.st_size;
+    void *buf = malloc(size ? size : 1);
     if (!buf) {
-        fclose(f);
+        close(fd);
         return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory reading '%.300s'", path);
     }
-    size_t got = fread(buf, 1, (size_t)size, f);
-    fclose(f);
-    if (got != (size_t)size) {
+    size_t got = 0;
+    while (got < size) {
+        const ssize_t r = read(fd, (char *)buf + got, size - got);
+        if (r < 0 && errno == EINTR) continue;
+        if (r <= 0) break;
+        got += (size_t)r;
+    }
+    close(fd);
+    if (got != size) {
         free(buf);
         return dpc_fail(DPC_ERROR_IO, "short read of model file '%.300s'", path);
     }
-    dpc_status st = dpc_model_load_memory(buf, (size_t)size, options, out_model);
+    dpc_status st = dpc_model_load_memory(buf, size, options, out_model);
     free(buf);
     if (st != DPC_OK) {
         /* Prefix the file name to the reader's message. */
@@ -188,6 +242,52 @@ dpc_status dpc_model_load_file(const char *path, const dpc_load_options *options
         return dpc_fail(st, "%.200s: %s", path, msg);
     }
     return DPC_OK;
+}
+
+const char *dpc_model_dir(void) { return DPC_MODEL_DIR; }
+
+/* Whether dir/name.onnx is a regular file; its path in buf. */
+static int named_file(const char *dir, size_t dir_len, const char *name, char *buf, size_t cap) {
+    if (dir_len == 0) return 0;
+    const int n = snprintf(buf, cap, "%.*s/%s.onnx", (int)dir_len, dir, name);
+    if (n < 0 || (size_t)n >= cap) return 0;
+    struct stat info;
+    return stat(buf, &info) == 0 && S_ISREG(info.st_mode);
+}
+
+dpc_status dpc_model_load_named(const char *name, const dpc_load_options *options, dpc_model **out_model) {
+    dpc_clear_error();
+    if (!out_model) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "out_model is NULL");
+    *out_model = NULL;
+    if (!name) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "name is NULL");
+    const size_t len = strlen(name);
+    if (len == 0 || len > 255 || name[0] == '.')
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "model name '%.300s' must be 1 .. 255 characters, not starting with '.'",
+                        name);
+    for (size_t i = 0; i < len; i++) {
+        const char ch = name[i];
+        if (!((ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') || (ch >= '0' && ch <= '9') || ch == '-' ||
+              ch == '_' || ch == '.'))
+            return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
+                            "model name '%.300s' has character %zu outside [A-Za-z0-9._-] (give a path to "
+                            "dpc_model_load_file instead)",
+                            name, i);
+    }
+    char path[4096];
+    const char *env = getenv("DPC_MODEL_PATH");
+    if (env) {
+        for (const char *p = env;;) {
+            const char *end = strchr(p, ':');
+            const size_t n = end ? (size_t)(end - p) : strlen(p);
+            if (named_file(p, n, name, path, sizeof path)) return dpc_model_load_file(path, options, out_model);
+            if (!end) break;
+            p = end + 1;
+        }
+    }
+    const char *dir = dpc_model_dir();
+    if (named_file(dir, strlen(dir), name, path, sizeof path)) return dpc_model_load_file(path, options, out_model);
+    return dpc_fail(DPC_ERROR_IO, "no model named '%s': no file %s.onnx in DPC_MODEL_PATH (%.1000s) or in %s", name, name,
+                    env ? env : "unset", dir[0] ? dir : "(this build installs no models)");
 }
 
 void dpc_model_free(dpc_model *model) {
@@ -232,6 +332,13 @@ const char *dpc_model_device(const dpc_model *model) {
     if (model->backend == DPC_BACKEND_VULKAN) return dpc_vk_engine_device(model->vk);
 #endif
     return "cpu";
+}
+
+dpc_status dpc_model_neighbours(const dpc_model *model, double *out_neighbours) {
+    dpc_clear_error();
+    if (!model || !out_neighbours) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "model or out_neighbours is NULL");
+    *out_neighbours = model->neighbours;
+    return DPC_OK;
 }
 
 dpc_status dpc_model_get_input(const dpc_model *model, dpc_input *out_input) {
@@ -370,6 +477,14 @@ dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, float *ou
     return DPC_OK;
 }
 
+static double model_max_radius(const dpc_cascade *c) {
+    double r = 0.0;
+    for (uint32_t l = 0; l < c->n_layers; l++)
+        for (uint32_t t = 0; t < c->layers[l].n_sub; t++)
+            if ((double)c->layers[l].radius[t] > r) r = (double)c->layers[l].radius[t];
+    return r;
+}
+
 /* Resolve and check the point count of a request. */
 static dpc_status check_count(const dpc_model *model, size_t *n_points) {
     const dpc_cascade *c = &model->cascade;
@@ -380,6 +495,13 @@ static dpc_status check_count(const dpc_model *model, size_t *n_points) {
     if (c->grid_dims && m != c->n_points)
         return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "gridded model generates exactly %u points, %zu requested",
                         c->n_points, m);
+    /* the work bound of dpc_load_options.max_neighbours */
+    const double asked = model->neighbours < (double)(m - 1) ? model->neighbours : (double)(m - 1);
+    if (asked > model->max_neighbours)
+        return dpc_fail(DPC_ERROR_LIMIT,
+                        "the model asks for %.4g neighbours per point at %zu points (radius %.4g spacings at most), "
+                        "beyond the load option max_neighbours = %.4g: load it with a larger bound if you trust it",
+                        asked, m, model_max_radius(c), model->max_neighbours);
     *n_points = m;
     return DPC_OK;
 }
@@ -403,10 +525,46 @@ static void fill_input(const dpc_model *model, uint64_t seed, size_t m, float *x
     fill_grid(c, m, x);
 }
 
+/* Progress of one dpc_generate_ex call (dpc_progress_fn): shared by its worker threads, the
+ * callback called under the lock so that calls never overlap. */
+typedef struct progress {
+    dpc_progress_fn fn;
+    void *user;
+    uint64_t done, total;
+    int cancelled;
+    pthread_mutex_t lock;
+} progress;
+
+/* Count `units` more as done and tell the callback; DPC_ERROR_CANCELLED once it asked to stop. */
+static dpc_status progress_add(progress *p, uint64_t units) {
+    if (!p || !p->fn) return DPC_OK;
+    pthread_mutex_lock(&p->lock);
+    if (!p->cancelled && units) {
+        p->done += units;
+        if (p->fn(p->user, p->done, p->total) != 0) p->cancelled = 1;
+    }
+    const int cancelled = p->cancelled;
+    pthread_mutex_unlock(&p->lock);
+    return cancelled ? DPC_ERROR_CANCELLED : DPC_OK;
+}
+
+#if defined(DPC_CPU_HAS_LAYER_HOOK)
+/* The engine's hook after each layer (cpu_cascade.h): one unit of progress. */
+static dpc_status after_layer(void *ctx) { return progress_add((progress *)ctx, 1); }
+#endif
+
 static dpc_status generate_one(const dpc_model *model, const dpc_cpu_engine *engine, uint64_t seed,
-                               size_t m, float *out) {
+                               size_t m, float *out, progress *p) {
+    if (progress_add(p, 0) != DPC_OK) return DPC_ERROR_CANCELLED;
     fill_input(model, seed, m, out);
-    return dpc_cpu_filter(&model->cascade, engine, m, out);
+    if (!p || !p->fn) return dpc_cpu_filter(&model->cascade, engine, m, out);
+#if defined(DPC_CPU_HAS_LAYER_HOOK)
+    return dpc_cpu_filter_hooked(&model->cascade, engine, m, out, after_layer, p);
+#else
+    /* this engine reports no layers: the whole set at once */
+    const dpc_status st = dpc_cpu_filter(&model->cascade, engine, m, out);
+    return st != DPC_OK ? st : progress_add(p, model->cascade.n_layers);
+#endif
 }
 
 dpc_status dpc_model_generate_pinned(const dpc_model *model, uint64_t seed, size_t m, float *out) {
@@ -414,7 +572,7 @@ dpc_status dpc_model_generate_pinned(const dpc_model *model, uint64_t seed, size
     dpc_status st = dpc_cpu_engine_init(&scalar, DPC_ISA_SCALAR, 1);
     if (st != DPC_OK) return st;
     if ((st = check_count(model, &m)) != DPC_OK) return st;
-    return generate_one(model, &scalar, seed, m, out);
+    return generate_one(model, &scalar, seed, m, out, NULL);
 }
 
 #if defined(DPC_HAVE_VULKAN)
@@ -450,7 +608,7 @@ dpc_status dpc_generate_n(const dpc_model *model, uint64_t seed, size_t n_points
 #if defined(DPC_HAVE_VULKAN)
     if (model->backend == DPC_BACKEND_VULKAN) return vk_generate(model, seed, 1, n_points, out);
 #endif
-    return generate_one(model, &model->engine, seed, n_points, out);
+    return generate_one(model, &model->engine, seed, n_points, out, NULL);
 }
 
 dpc_status dpc_generate(const dpc_model *model, uint64_t seed, float *out) {
@@ -474,39 +632,69 @@ typedef struct batch_job {
     uint64_t seed;
     size_t count, m, stride, next_step, first;
     float *out;
+    progress *progress;
     dpc_status status;
 } batch_job;
 
 static void *batch_worker(void *arg) {
     batch_job *j = (batch_job *)arg;
     for (size_t c = j->first; c < j->count && j->status == DPC_OK; c += j->next_step)
-        j->status = generate_one(j->model, &j->engine, j->seed + c, j->m, j->out + c * j->stride);
+        j->status = generate_one(j->model, &j->engine, j->seed + c, j->m, j->out + c * j->stride, j->progress);
     return NULL;
 }
 
-dpc_status dpc_generate_batch(const dpc_model *model, uint64_t seed, size_t count, size_t n_points, float *out) {
+void dpc_generate_options_init(dpc_generate_options *options) {
+    if (!options) return;
+    memset(options, 0, sizeof *options);
+    options->struct_size = (uint32_t)sizeof *options;
+}
+
+dpc_status dpc_generate_size(const dpc_model *model, size_t count, size_t n_points, size_t *out_floats) {
     dpc_clear_error();
-    if (!model || !out) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "model or out is NULL");
+    if (!model || !out_floats) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "model or out_floats is NULL");
+    *out_floats = 0;
     if (count == 0) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "count must be positive");
     dpc_status st = check_count(model, &n_points);
     if (st != DPC_OK) return st;
     const size_t stride = n_points * model->cascade.dims;
     if (count > SIZE_MAX / stride) return dpc_fail(DPC_ERROR_LIMIT, "count * n_points * dims overflows");
+    *out_floats = count * stride;
+    return DPC_OK;
+}
+
+static dpc_status generate_batch(const dpc_model *model, uint64_t seed, size_t count, size_t n_points, progress *p,
+                                 float *out) {
+    if (!model || !out) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "model or out is NULL");
+    size_t floats;
+    dpc_status st = dpc_generate_size(model, count, n_points, &floats);
+    if (st != DPC_OK) return st;
+    if (!n_points) n_points = model->cascade.n_points;
+    const size_t stride = n_points * model->cascade.dims;
+    if (p) p->total = (uint64_t)count * model->cascade.n_layers;
 #if defined(DPC_HAVE_VULKAN)
-    if (model->backend == DPC_BACKEND_VULKAN) return vk_generate(model, seed, count, n_points, out); /* many sets per dispatch */
+    if (model->backend == DPC_BACKEND_VULKAN) { /* many sets per dispatch: progress once, at the end */
+        if (progress_add(p, 0) != DPC_OK) return dpc_fail(DPC_ERROR_CANCELLED, "cancelled by the progress callback");
+        if ((st = vk_generate(model, seed, count, n_points, out)) != DPC_OK) return st;
+        if (progress_add(p, p ? p->total : 0) != DPC_OK)
+            return dpc_fail(DPC_ERROR_CANCELLED, "cancelled by the progress callback");
+        return DPC_OK;
+    }
 #endif
     unsigned threads = model->engine.threads;
     if (threads > count) threads = (unsigned)count;
     if (threads <= 1 || n_points >= 65536) { /* big sets parallelise inside each set instead */
         for (size_t c = 0; c < count; c++)
-            if ((st = generate_one(model, &model->engine, seed + c, n_points, out + c * stride)) != DPC_OK) return st;
+            if ((st = generate_one(model, &model->engine, seed + c, n_points, out + c * stride, p)) != DPC_OK)
+                return st == DPC_ERROR_CANCELLED
+                           ? dpc_fail(st, "cancelled by the progress callback (%zu of %zu sets done)", c, count)
+                           : st;
         return DPC_OK;
     }
     batch_job jobs[64];
     pthread_t ids[64];
     int started[64];
     for (unsigned t = 0; t < threads; t++) {
-        jobs[t] = (batch_job){model, model->engine, seed, count, n_points, stride, threads, t, out, DPC_OK};
+        jobs[t] = (batch_job){model, model->engine, seed, count, n_points, stride, threads, t, out, p, DPC_OK};
         jobs[t].engine.threads = 1;
     }
     for (unsigned t = 1; t < threads; t++) started[t] = pthread_create(&ids[t], NULL, batch_worker, &jobs[t]) == 0;
@@ -516,9 +704,39 @@ dpc_status dpc_generate_batch(const dpc_model *model, uint64_t seed, size_t coun
         else batch_worker(&jobs[t]);
     }
     for (unsigned t = 0; t < threads; t++)
+        if (jobs[t].status == DPC_ERROR_CANCELLED) return dpc_fail(DPC_ERROR_CANCELLED, "cancelled by the progress callback");
+    for (unsigned t = 0; t < threads; t++)
         if (jobs[t].status != DPC_OK)
             return dpc_fail(jobs[t].status, "generating a set of the batch failed (%s)", dpc_status_string(jobs[t].status));
     return DPC_OK;
+}
+
+dpc_status dpc_generate_batch(const dpc_model *model, uint64_t seed, size_t count, size_t n_points, float *out) {
+    dpc_clear_error();
+    return generate_batch(model, seed, count, n_points, NULL, out);
+}
+
+dpc_status dpc_generate_ex(const dpc_model *model, uint64_t seed, size_t count, size_t n_points,
+                           const dpc_generate_options *options, float *out) {
+    dpc_clear_error();
+    dpc_generate_options opts;
+    dpc_generate_options_init(&opts);
+    if (options) {
+        if (options->struct_size != sizeof opts)
+            return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
+                            "options.struct_size is %u, expected %u: initialise with dpc_generate_options_init",
+                            options->struct_size, (unsigned)sizeof opts);
+        opts = *options;
+    }
+    if (!opts.progress) return generate_batch(model, seed, count, n_points, NULL, out);
+    progress p;
+    memset(&p, 0, sizeof p);
+    p.fn = opts.progress;
+    p.user = opts.user;
+    if (pthread_mutex_init(&p.lock, NULL) != 0) return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "cannot create a mutex");
+    const dpc_status st = generate_batch(model, seed, count, n_points, &p, out);
+    pthread_mutex_destroy(&p.lock);
+    return st;
 }
 
 dpc_status dpc_filter(const dpc_model *model, size_t n_points, float *points) {

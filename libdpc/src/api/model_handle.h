@@ -13,6 +13,8 @@ struct dpc_model {
     dpc_cpu_engine engine; /* CPU backend; also what info.isa / info.threads report */
     dpc_backend backend;   /* resolved: CPU or VULKAN */
     dpc_input input;       /* resolved: UNIFORM or STRATIFIED, the points generate filters */
+    double neighbours;     /* max over layers and subspaces of V_k rho^k (dpc_model_neighbours) */
+    double max_neighbours; /* dpc_load_options.max_neighbours: the bound check_count applies */
 #if defined(DPC_HAVE_VULKAN)
     dpc_vk_engine *vk; /* the Vulkan backend, when backend == DPC_BACKEND_VULKAN */
 #endif
