@@ -1,5 +1,7 @@
 /* Minimal libdpc user: load a model, generate one point set, print the first points.
- *   cc generate.c -Ilibdpc/include -Lbuild/libdpc -ldpc -o generate && ./generate models/repulsion-2d.onnx */
+ * From the repository root, after `cmake -S . -B build && cmake --build build`:
+ *   cc libdpc/examples/generate.c -Ilibdpc/include -Lbuild/libdpc -Wl,-rpath,"$PWD/build/libdpc" -ldpc -o generate && ./generate models/repulsion-2d.onnx
+ * Against an installed libdpc: cc generate.c $(pkg-config --cflags --libs dpc) -o generate */
 #include <stdio.h>
 #include <stdlib.h>
 

@@ -1,0 +1,40 @@
+/* A downstream C program: finds a bundled model by name (dpc_model_load_named: DPC_MODEL_PATH,
+ * then the installed share/dpc/models) and generates one set with it. Built by
+ * tests/downstream/run.sh against an installed libdpc, through find_package(dpc), pkg-config
+ * and add_subdirectory. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <dpc/dpc.h>
+
+int main(int argc, char **argv) {
+    const char *name = argc > 1 ? argv[1] : "bnot-2d";
+    dpc_model *model = NULL;
+    if (dpc_model_load_named(name, NULL, &model) != DPC_OK) {
+        fprintf(stderr, "downstream: %s\n", dpc_last_error());
+        return 1;
+    }
+    dpc_model_info info;
+    dpc_model_get_info(model, &info);
+    float *points = malloc(dpc_output_size(model, 1, 0) * sizeof(float));
+    if (!points || dpc_generate(model, 7, points) != DPC_OK) {
+        fprintf(stderr, "downstream: %s\n", points ? dpc_last_error() : "out of memory");
+        return 1;
+    }
+    double sum = 0.0;
+    for (size_t i = 0; i < (size_t)info.n_points * info.dims; i++) sum += points[i];
+    printf("downstream: libdpc %s, %s: %u points in %u-D, mean coordinate %.3f, models in %s\n",
+           dpc_version_string(), dpc_model_name(model), info.n_points, info.dims,
+           sum / ((double)info.n_points * info.dims), dpc_model_dir());
+#ifdef DPC_EXPECTED_MODEL_DIR
+    /* the folder the CMake package says (DPC_MODEL_DIR) is the one libdpc searches */
+    if (strcmp(DPC_EXPECTED_MODEL_DIR, dpc_model_dir()) != 0) {
+        fprintf(stderr, "downstream: DPC_MODEL_DIR is %s, dpc_model_dir() %s\n", DPC_EXPECTED_MODEL_DIR, dpc_model_dir());
+        return 1;
+    }
+#endif
+    free(points);
+    dpc_model_free(model);
+    return 0;
+}

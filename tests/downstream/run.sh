@@ -1,0 +1,80 @@
+#!/usr/bin/env bash
+# Builds libdpc C-only (the C++ compiler is set to a path that does not exist, so configuring
+# fails if anything needs C++), installs it into a fresh prefix, then builds and runs a separate
+# downstream project against it: with find_package(dpc CONFIG) (dpc::dpc and dpc::dpc_static),
+# with pkg-config (shared, and static), and with add_subdirectory of the checkout; last, the
+# build line written in libdpc/examples/generate.c, exactly as written there.
+#   bash tests/downstream/run.sh            # about a minute on 2 cores
+set -euo pipefail
+ROOT=$(cd "$(dirname "$0")/../.." && pwd)
+WORK=$(mktemp -d /tmp/dpc-downstream.XXXXXX)
+trap 'rm -rf "$WORK"' EXIT
+GEN=(); command -v ninja >/dev/null && GEN=(-G Ninja)
+step() { printf -- '-- %s\n' "$*"; }
+quiet() { "$@" >"$WORK/log" 2>&1 || { cat "$WORK/log"; echo "failed: $*"; exit 1; }; }
+check() { # expected-substring command...
+  local want=$1; shift
+  local out; out=$("$@")
+  echo "   $out"
+  [[ $out == *"$want"* ]] || { echo "expected '$want'"; exit 1; }
+}
+
+step "libdpc, C only (CMAKE_CXX_COMPILER=/nonexistent/c++), installed to a fresh prefix"
+quiet cmake -S "$ROOT" -B "$WORK/build" "${GEN[@]}" -DCMAKE_BUILD_TYPE=Release -DDPC_BUILD_PYTHON=OFF \
+      -DCMAKE_CXX_COMPILER=/nonexistent/c++ -DCMAKE_INSTALL_PREFIX="$WORK/prefix"
+quiet cmake --build "$WORK/build" -j "$(nproc)"
+quiet cmake --install "$WORK/build"
+LIBDIR=$(ls -d "$WORK/prefix"/lib*/ | head -1); LIBDIR=${LIBDIR%/}
+for f in include/dpc/dpc.h share/dpc/models/bnot-2d.onnx share/dpc/models/bnot-2d-stratified.onnx; do
+  [ -f "$WORK/prefix/$f" ] || { echo "missing $f"; exit 1; }
+done
+for f in libdpc.so libdpc.a pkgconfig/dpc.pc cmake/dpc/dpcConfig.cmake cmake/dpc/dpcConfigVersion.cmake \
+         cmake/dpc/dpcTargets.cmake; do
+  [ -e "$LIBDIR/$f" ] || { echo "missing $LIBDIR/$f"; exit 1; }
+done
+echo "   installed: $(cd "$WORK/prefix" && find . -type f | sort | sed 's|^\./||' | grep -v '\.onnx$' | tr '\n' ' ')"
+echo "   models: $(ls "$WORK/prefix/share/dpc/models" | grep -c '\.onnx$') .onnx files in share/dpc/models"
+
+step "downstream project, find_package(dpc CONFIG)"
+quiet cmake -S "$ROOT/tests/downstream" -B "$WORK/fp" "${GEN[@]}" -DDPC_DOWNSTREAM_MODE=find_package \
+      -DCMAKE_PREFIX_PATH="$WORK/prefix" -DCMAKE_CXX_COMPILER=/nonexistent/c++
+grep '^-- dpc 0' "$WORK/log" | sed 's/^/   /'
+quiet cmake --build "$WORK/fp"
+check "bnot-2d: 1024 points in 2-D" "$WORK/fp/use_shared"
+check "bnot-2d: 1024 points in 2-D" "$WORK/fp/use_static"
+ldd "$WORK/fp/use_static" | grep -q libdpc && { echo "use_static links libdpc.so"; exit 1; }
+ldd "$WORK/fp/use_shared" | grep -q "$LIBDIR/libdpc.so" || { echo "use_shared does not use the installed libdpc.so"; exit 1; }
+
+step "downstream program, pkg-config"
+export PKG_CONFIG_PATH="$LIBDIR/pkgconfig"
+echo "   pkg-config --modversion dpc: $(pkg-config --modversion dpc); modeldir: $(pkg-config --variable=modeldir dpc)"
+# shellcheck disable=SC2046
+cc -std=c11 "$ROOT/tests/downstream/main.c" $(pkg-config --cflags dpc) $(pkg-config --libs dpc) \
+   -Wl,-rpath,"$(pkg-config --variable=libdir dpc)" -o "$WORK/pc_shared"
+check "bnot-2d: 1024 points in 2-D" "$WORK/pc_shared" bnot-2d
+# shellcheck disable=SC2046
+cc -std=c11 "$ROOT/tests/downstream/main.c" $(pkg-config --cflags dpc) -L"$(pkg-config --variable=libdir dpc)" \
+   -Wl,-Bstatic -ldpc -Wl,-Bdynamic $(pkg-config --static --libs dpc | tr ' ' '\n' | grep -v -e '^-ldpc$' -e '^-L') \
+   -o "$WORK/pc_static"
+check "bnot-2d-stratified: 1024 points in 2-D" "$WORK/pc_static" bnot-2d-stratified
+ldd "$WORK/pc_static" | grep -q libdpc && { echo "pc_static links libdpc.so"; exit 1; }
+DPC_MODEL_PATH="$ROOT/tests/data" check "points in 3-D" "$WORK/pc_shared" model_3d_proj
+
+step "downstream project, add_subdirectory(dpc checkout)"
+quiet cmake -S "$ROOT/tests/downstream" -B "$WORK/sub" "${GEN[@]}" -DDPC_DOWNSTREAM_MODE=add_subdirectory \
+      -DDPC_SOURCE_DIR="$ROOT" -DCMAKE_CXX_COMPILER=/nonexistent/c++
+quiet cmake --build "$WORK/sub"
+DPC_MODEL_PATH="$ROOT/models" check "bnot-2d: 1024 points in 2-D" "$WORK/sub/use_shared"
+DPC_MODEL_PATH="$ROOT/models" check "bnot-2d: 1024 points in 2-D" "$WORK/sub/use_static"
+
+step "the build line of libdpc/examples/generate.c, as written there"
+line=$(sed -n 's/^ \*   \(cc .*\)$/\1/p' "$ROOT/libdpc/examples/generate.c")
+[ -n "$line" ] || { echo "no build line in generate.c"; exit 1; }
+mkdir -p "$WORK/example/build"
+ln -s "$ROOT/libdpc" "$WORK/example/libdpc"
+ln -s "$ROOT/models" "$WORK/example/models"
+ln -s "$WORK/build/libdpc" "$WORK/example/build/libdpc"   # what `cmake --build build` made
+echo "   \$ $line"
+(cd "$WORK/example" && check "repulsion-2d: 1024 points in 2-D, 40 layers" bash -c "$line")
+
+echo "downstream: all passed"
