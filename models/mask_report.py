@@ -219,7 +219,10 @@ def vector() -> None:
         row[2].imshow((m[..., 0] < 0.5) & (m[..., 1] < 0.5), cmap="gray_r", interpolation="nearest")
         row[3].imshow((m[..., 0] < 0.25) & (m[..., 1] < 0.25), cmap="gray_r", interpolation="nearest")
         for ax, t in zip(row, ("value u", "value v", "u < 1/2 and v < 1/2", "u < 1/4 and v < 1/4")):
-            ax.set(xticks=[], yticks=[], title=f"{label.strip('*')}: {t}" if t == "value u" else t)
+            short = label.strip("*").split(" (")[0]
+            ax.set_xticks([])
+            ax.set_yticks([])
+            ax.set_title(f"{short}: {t}" if t == "value u" else t, fontsize=8)
     path = savefig(fig, "vector.png")
     lines += ["", f"![vector masks]({path})", ""]
     write_section("vector", lines)
