@@ -5,7 +5,14 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdlib>
+#include <memory>
+#include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "dpc/dpc.h"
@@ -34,21 +41,89 @@ void call(F &&f) {
     if (status != DPC_OK) raise_status(status, message);
 }
 
+// ---- generation off the Python thread: Ctrl-C, progress, no partial output ---------------------
+
+// One generate request, run on a worker thread so that the calling thread can notice Ctrl-C
+// (PyErr_CheckSignals) and report progress while libdpc works. The job owns the output buffer
+// and keeps the model alive: if the worker has not stopped shortly after a cancel, it is
+// detached and frees both when libdpc returns, so nothing outlives what it uses.
+struct Job {
+    std::shared_ptr<dpc_model> model;
+    uint64_t seed = 0;
+    size_t count = 0, n_points = 0;
+    float *buf = nullptr;  // malloc'd; handed to numpy on success
+    std::atomic<bool> cancel{false};
+    std::atomic<uint64_t> done{0}, total{0};
+    std::mutex mu;
+    std::condition_variable cv;
+    bool finished = false;
+    dpc_status status = DPC_OK;
+    std::string message;
+    ~Job() { std::free(buf); }
+};
+
+int job_progress(void *user, uint64_t done, uint64_t total) {
+    Job *j = static_cast<Job *>(user);
+    j->done.store(done);
+    j->total.store(total);
+    return j->cancel.load() ? 1 : 0;
+}
+
+void job_run(const std::shared_ptr<Job> &j) {
+    dpc_generate_options o;
+    dpc_generate_options_init(&o);
+    o.progress = job_progress;
+    o.user = j.get();
+    const dpc_status st = dpc_generate_ex(j->model.get(), j->seed, j->count, j->n_points, &o, j->buf);
+    std::string msg = st != DPC_OK ? dpc_last_error() : "";
+    {
+        std::lock_guard<std::mutex> g(j->mu);
+        j->status = st;
+        j->message = std::move(msg);
+        j->finished = true;
+    }
+    j->cv.notify_all();
+}
+
+// Wait (GIL released) up to `ms` milliseconds for the job; whether it finished.
+bool job_wait(Job &j, int ms) {
+    py::gil_scoped_release release;
+    std::unique_lock<std::mutex> lk(j.mu);
+    return j.cv.wait_for(lk, std::chrono::milliseconds(ms), [&] { return j.finished; });
+}
+
+// Stop a job the caller no longer wants: ask libdpc to stop, give it a moment, else let the
+// worker finish on its own (it owns the buffer and the model reference).
+void job_abandon(const std::shared_ptr<Job> &j, std::thread &t) {
+    j->cancel.store(true);
+    if (job_wait(*j, 300)) t.join();
+    else t.detach();
+}
+
+// Below this many point-layers a request runs on the calling thread (a thread costs more than
+// it takes; it ends within milliseconds anyway).
+constexpr double INLINE_WORK = 1 << 21;
+
 class Model {
   public:
-    Model(const std::string &path, int isa, unsigned threads, int backend, int input) {
+    Model(const std::string &path, int isa, unsigned threads, int backend, int input, double max_neighbours) {
+        if (path.find('\0') != std::string::npos)
+            raise_status(DPC_ERROR_INVALID_ARGUMENT, "the model path contains a NUL character");
         dpc_load_options options;
         dpc_load_options_init(&options);
         options.isa = static_cast<dpc_isa>(isa);
         options.threads = threads;
         options.backend = static_cast<dpc_backend>(backend);
         options.input = static_cast<dpc_input>(input);
-        call([&] { return dpc_model_load_file(path.c_str(), &options, &model_); });
-        call([&] { return dpc_model_get_info(model_, &info_); });
-        call([&] { return dpc_model_get_backend(model_, &backend_); });
-        call([&] { return dpc_model_get_input(model_, &input_); });
+        options.max_neighbours = max_neighbours;
+        dpc_model *raw = nullptr;
+        call([&] { return dpc_model_load_file(path.c_str(), &options, &raw); });
+        model_.reset(raw, dpc_model_free);
+        call([&] { return dpc_model_get_info(raw, &info_); });
+        call([&] { return dpc_model_get_backend(raw, &backend_); });
+        call([&] { return dpc_model_get_input(raw, &input_); });
+        call([&] { return dpc_model_neighbours(raw, &neighbours_); });
     }
-    ~Model() { dpc_model_free(model_); }
     Model(const Model &) = delete;
     Model &operator=(const Model &) = delete;
 
@@ -68,34 +143,80 @@ class Model {
         d["threads"] = info_.threads;
         d["backend"] = static_cast<int>(backend_);
         d["input"] = static_cast<int>(input_);
-        d["device"] = std::string(dpc_model_device(model_));
+        d["device"] = std::string(dpc_model_device(model_.get()));
+        d["neighbours"] = neighbours_;
         return d;
     }
 
     py::dict metadata() const {
         py::dict d;
-        for (size_t i = 0, n = dpc_model_metadata_count(model_); i < n; i++) {
+        for (size_t i = 0, n = dpc_model_metadata_count(model_.get()); i < n; i++) {
             const char *k, *v;
-            call([&] { return dpc_model_metadata_at(model_, i, &k, &v); });
+            call([&] { return dpc_model_metadata_at(model_.get(), i, &k, &v); });
             d[py::str(k)] = py::str(v);
         }
         return d;
     }
 
-    py::array_t<float> generate(uint64_t seed, size_t n_points) const {
-        size_t m = n_points ? n_points : info_.n_points;
-        py::array_t<float> out({m, static_cast<size_t>(info_.dims)});
-        float *p = out.mutable_data();
-        call([&] { return dpc_generate_n(model_, seed, n_points, p); });
-        return out;
+    // The floats of a request, checked by libdpc (every count error is its status) and against
+    // the caller's byte limit, before anything is allocated.
+    size_t checked_floats(size_t count, size_t n_points, double max_bytes) const {
+        size_t floats = 0;
+        call([&] { return dpc_generate_size(model_.get(), count, n_points, &floats); });
+        const double bytes = static_cast<double>(floats) * sizeof(float);
+        if (bytes > max_bytes)
+            raise_status(DPC_ERROR_LIMIT,
+                         "the output would take " + std::to_string(floats) + " floats (" + gib(bytes) +
+                             "), more than the limit of " + gib(max_bytes) +
+                             ": pass max_bytes (CLI: --max-output, environment: DPC_MAX_OUTPUT_BYTES) to raise it");
+        return floats;
     }
 
-    py::array_t<float> generate_batch(uint64_t seed, size_t count, size_t n_points) const {
-        size_t m = n_points ? n_points : info_.n_points;
-        py::array_t<float> out({count, m, static_cast<size_t>(info_.dims)});
-        float *p = out.mutable_data();
-        call([&] { return dpc_generate_batch(model_, seed, count, n_points, p); });
-        return out;
+    py::array_t<float> generate(uint64_t seed, size_t count, size_t n_points, bool batch, double max_bytes,
+                                py::object progress) const {
+        const size_t floats = checked_floats(count, n_points, max_bytes);
+        const size_t m = n_points ? n_points : info_.n_points;
+        auto job = std::make_shared<Job>();
+        job->model = model_;
+        job->seed = seed;
+        job->count = count;
+        job->n_points = n_points;
+        job->buf = static_cast<float *>(std::malloc(std::max<size_t>(floats, 1) * sizeof(float)));
+        if (!job->buf) raise_status(DPC_ERROR_OUT_OF_MEMORY, "out of memory for " + gib(floats * 4.0) + " of points");
+        const double work = static_cast<double>(count) * m * info_.layers;
+        if (progress.is_none() && work < INLINE_WORK) {
+            call([&] { return dpc_generate_batch(model_.get(), seed, count, n_points, job->buf); });
+        } else {
+            std::thread t(job_run, job);
+            uint64_t shown = UINT64_MAX;
+            while (!job_wait(*job, 50)) {
+                if (PyErr_CheckSignals() != 0) {  // Ctrl-C (KeyboardInterrupt) or another signal's exception
+                    job_abandon(job, t);
+                    throw py::error_already_set();
+                }
+                const uint64_t done = job->done.load();
+                if (!progress.is_none() && done != shown) {
+                    shown = done;
+                    try {
+                        progress(done, job->total.load());
+                    } catch (...) {
+                        job_abandon(job, t);
+                        throw;
+                    }
+                }
+            }
+            t.join();
+            if (job->status != DPC_OK) raise_status(job->status, job->message);
+            if (!progress.is_none() && job->done.load() != shown) progress(job->done.load(), job->total.load());
+        }
+        float *data = job->buf;
+        job->buf = nullptr;
+        py::capsule owner(data, [](void *p) { std::free(p); });
+        std::vector<py::ssize_t> shape;
+        if (batch) shape.push_back(static_cast<py::ssize_t>(count));
+        shape.push_back(static_cast<py::ssize_t>(m));
+        shape.push_back(static_cast<py::ssize_t>(info_.dims));
+        return py::array_t<float>(shape, data, owner);
     }
 
     void filter(py::array_t<float, py::array::c_style> points) const {
@@ -104,29 +225,37 @@ class Model {
         if (!points.writeable()) raise_status(DPC_ERROR_INVALID_ARGUMENT, "points must be writeable");
         size_t m = static_cast<size_t>(points.shape(0));
         float *p = points.mutable_data();
-        call([&] { return dpc_filter(model_, m, p); });
+        call([&] { return dpc_filter(model_.get(), m, p); });
     }
 
-    const dpc_model *handle() const { return model_; }
+    const dpc_model *handle() const { return model_.get(); }
 
   private:
-    dpc_model *model_ = nullptr;
+    static std::string gib(double bytes) {
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "%.3g GiB", bytes / (1024.0 * 1024.0 * 1024.0));
+        return buf;
+    }
+
+    std::shared_ptr<dpc_model> model_;
     dpc_model_info info_{};
     dpc_backend backend_ = DPC_BACKEND_CPU;
     dpc_input input_ = DPC_INPUT_UNIFORM;
+    double neighbours_ = 0.0;
 };
 
-py::array_t<float> uniform(uint64_t seed, size_t m, size_t n) {
+// The input generators: sizes checked before the array is allocated.
+py::array_t<float> input_points(uint64_t seed, size_t m, size_t n, double max_bytes, bool stratified) {
+    if (m == 0 || n == 0) raise_status(DPC_ERROR_INVALID_ARGUMENT, "m and n must be positive");
+    if (stratified && m > DPC_MAX_POINTS)
+        raise_status(DPC_ERROR_LIMIT, std::to_string(m) + " points requested, at most " + std::to_string(DPC_MAX_POINTS));
+    if (m > SIZE_MAX / n / sizeof(float)) raise_status(DPC_ERROR_LIMIT, "m * n overflows");
+    if (static_cast<double>(m) * n * sizeof(float) > max_bytes)
+        raise_status(DPC_ERROR_LIMIT, "the output would take " + std::to_string(m * n) +
+                                          " floats, more than max_bytes: pass a larger max_bytes to raise it");
     py::array_t<float> out({m, n});
     float *p = out.mutable_data();
-    call([&] { return dpc_uniform(seed, m, n, p); });
-    return out;
-}
-
-py::array_t<float> stratified(uint64_t seed, size_t m, size_t n) {
-    py::array_t<float> out({m, n});
-    float *p = out.mutable_data();
-    call([&] { return dpc_stratified(seed, m, n, p); });
+    call([&] { return stratified ? dpc_stratified(seed, m, n, p) : dpc_uniform(seed, m, n, p); });
     return out;
 }
 
@@ -293,20 +422,30 @@ PYBIND11_MODULE(_core, mod) {
     mod.attr("__version__") = dpc_version_string();
     mod.attr("FORMAT_VERSION") = DPC_FORMAT_VERSION;
     py::class_<Model>(mod, "Model")
-        .def(py::init<const std::string &, int, unsigned, int, int>(), py::arg("path"), py::arg("isa"),
-             py::arg("threads"), py::arg("backend"), py::arg("input"))
+        .def(py::init<const std::string &, int, unsigned, int, int, double>(), py::arg("path"), py::arg("isa"),
+             py::arg("threads"), py::arg("backend"), py::arg("input"),
+             py::arg("max_neighbours") = DPC_DEFAULT_MAX_NEIGHBOURS)
         .def("info", &Model::info)
         .def("metadata", &Model::metadata)
-        .def("generate", &Model::generate, py::arg("seed"), py::arg("n_points"))
-        .def("generate_batch", &Model::generate_batch, py::arg("seed"), py::arg("count"), py::arg("n_points"))
+        .def("generate", &Model::generate, py::arg("seed"), py::arg("count"), py::arg("n_points"), py::arg("batch"),
+             py::arg("max_bytes"), py::arg("progress") = py::none(),
+             "count sets of n_points points (0: the trained count): (count, m, n) if batch else (m, n); "
+             "runs off the calling thread when large, so Ctrl-C stops it (KeyboardInterrupt) and "
+             "progress(done, total) is called on the calling thread")
         .def("filter", &Model::filter, py::arg("points"));
+    mod.attr("DEFAULT_MAX_NEIGHBOURS") = DPC_DEFAULT_MAX_NEIGHBOURS;
+    mod.attr("MAX_POINTS") = DPC_MAX_POINTS;
     py::class_<Sampler>(mod, "Sampler")
         .def(py::init<const std::vector<const Model *> &, uint32_t, uint32_t, uint64_t>(), py::arg("models"),
              py::arg("spp"), py::arg("dims"), py::arg("seed"))
         .def("get", &Sampler::get, py::arg("x"), py::arg("y"), py::arg("index"), py::arg("dim"), py::arg("width"))
         .def("table", &Sampler::table, py::arg("t"));
     mod.def("sampler_mask", &sampler_mask);
-    mod.def("uniform", &uniform, py::arg("seed"), py::arg("m"), py::arg("n"));
-    mod.def("stratified", &stratified, py::arg("seed"), py::arg("m"), py::arg("n"));
+    mod.def("uniform", [](uint64_t seed, size_t m, size_t n, double max_bytes) {
+        return input_points(seed, m, n, max_bytes, false);
+    }, py::arg("seed"), py::arg("m"), py::arg("n"), py::arg("max_bytes"));
+    mod.def("stratified", [](uint64_t seed, size_t m, size_t n, double max_bytes) {
+        return input_points(seed, m, n, max_bytes, true);
+    }, py::arg("seed"), py::arg("m"), py::arg("n"), py::arg("max_bytes"));
     register_layer_training(mod);
 }

@@ -8,9 +8,11 @@
 Arrays follow scipy.stats.qmc: C-contiguous ``(m, n)`` points in [0, 1), batches ``(sets, m, n)``.
 """
 
-from .errors import (DpcError, InternalError, InvalidArgumentError, LimitError, ModelFormatError,
-                     ModelIOError, ModelNotFoundError, OutOfMemoryError, UnsupportedError)
-from ._model import Model, available_models, load, model_path, stratified, uniform
+from .errors import (CancelledError, DpcError, InternalError, InvalidArgumentError, LimitError,
+                     ModelFormatError, ModelIOError, ModelNotFoundError, OutOfMemoryError,
+                     UnsupportedError)
+from ._model import (DEFAULT_MAX_NEIGHBOURS, DEFAULT_MAX_OUTPUT_BYTES, MAX_POINTS, Model,
+                     available_models, load, model_path, stratified, uniform)
 from ._sampler import Sampler
 from ._core import __version__  # noqa: F401  (version of the linked libdpc)
 from . import masks  # noqa: E402  (blue-noise threshold masks, docs/masks.md)
@@ -19,5 +21,6 @@ from .masks import mask  # noqa: E402
 __all__ = [
     "Model", "load", "uniform", "stratified", "available_models", "model_path", "Sampler",
     "DpcError", "InvalidArgumentError", "ModelIOError", "ModelFormatError", "UnsupportedError",
-    "OutOfMemoryError", "LimitError", "InternalError", "ModelNotFoundError",
+    "OutOfMemoryError", "LimitError", "InternalError", "ModelNotFoundError", "CancelledError",
+    "MAX_POINTS", "DEFAULT_MAX_NEIGHBOURS", "DEFAULT_MAX_OUTPUT_BYTES",
 ]

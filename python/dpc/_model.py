@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+import numbers
 import os
 from importlib import resources
 from pathlib import Path
@@ -9,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from . import _core
-from .errors import InvalidArgumentError, ModelNotFoundError
+from .errors import InvalidArgumentError, LimitError, ModelNotFoundError
 
 _ISA = {"auto": 0, "scalar": 1, "avx2": 2, "avx512": 3}
 _ISA_NAME = {v: k for k, v in _ISA.items()}
@@ -17,6 +19,71 @@ _BACKEND = {"auto": 0, "cpu": 1, "vulkan": 2}
 _BACKEND_NAME = {v: k for k, v in _BACKEND.items()}
 _INPUT = {"auto": 0, "uniform": 1, "stratified": 2}
 _INPUT_NAME = {v: k for k, v in _INPUT.items()}
+
+#: Largest point count of one set (libdpc's DPC_MAX_POINTS).
+MAX_POINTS = int(_core.MAX_POINTS)
+#: Default bound on the neighbours per point a model may ask for (``dpc.load(max_neighbours=)``).
+DEFAULT_MAX_NEIGHBOURS = float(_core.DEFAULT_MAX_NEIGHBOURS)
+#: Default limit on the bytes one call may return (4 GiB); ``max_bytes=`` or the environment
+#: variable DPC_MAX_OUTPUT_BYTES raise it.
+DEFAULT_MAX_OUTPUT_BYTES = 4 << 30
+
+
+def _max_bytes(max_bytes) -> float:
+    """The byte limit of one call: the argument, else $DPC_MAX_OUTPUT_BYTES, else 4 GiB."""
+    if max_bytes is None:
+        env = os.environ.get("DPC_MAX_OUTPUT_BYTES", "").strip()
+        if not env:
+            return float(DEFAULT_MAX_OUTPUT_BYTES)
+        try:
+            return float(parse_size(env))
+        except InvalidArgumentError as e:
+            raise InvalidArgumentError(f"DPC_MAX_OUTPUT_BYTES: {e}") from None
+    if isinstance(max_bytes, bool) or not isinstance(max_bytes, numbers.Real) or not max_bytes > 0:
+        raise InvalidArgumentError(f"max_bytes must be a positive number, got {max_bytes!r}")
+    return float(max_bytes)
+
+
+def parse_size(text) -> int:
+    """Bytes from "4096", "512M", "16G", "1.5T" (powers of 1024)."""
+    t = str(text).strip().upper().removesuffix("B").removesuffix("I")
+    scale = {"K": 1 << 10, "M": 1 << 20, "G": 1 << 30, "T": 1 << 40}.get(t[-1:], 1)
+    num = t[:-1] if t[-1:] in "KMGT" and t else t
+    try:
+        v = float(num) * scale
+    except ValueError:
+        raise InvalidArgumentError(f"not a size: {text!r} (e.g. 512M, 16G)") from None
+    if not (math.isfinite(v) and v > 0):
+        raise InvalidArgumentError(f"a size must be positive: {text!r}")
+    return int(v)
+
+
+def _integer(value, name: str, low: int, high: int | None = None, *, limit: bool = False) -> int:
+    """An int in [low, high]: bools, floats (integral or not), strings are refused with
+    InvalidArgumentError; beyond ``high`` a LimitError (a subclass) when ``limit``."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise InvalidArgumentError(f"{name} must be an integer, got {value!r}")
+    v = int(value)
+    if v < low:
+        raise InvalidArgumentError(f"{name} must be >= {low}, got {v}")
+    if high is not None and v > high:
+        cls = LimitError if limit else InvalidArgumentError
+        raise cls(f"{name} must be at most {high}, got {v}")
+    return v
+
+
+def _seed(seed) -> int:
+    """A seed: an integer in 0 .. 2^64 - 1 (negative seeds are refused, as in the CLI)."""
+    return _integer(seed, "seed", 0, (1 << 64) - 1)
+
+
+def _check_path(path) -> str:
+    s = os.fspath(path)
+    if isinstance(s, bytes):
+        s = os.fsdecode(s)
+    if "\x00" in s:
+        raise InvalidArgumentError(f"path {s!r} contains a NUL character")
+    return s
 
 
 def _bundled_dirs() -> list[Path]:
@@ -40,7 +107,7 @@ def available_models() -> list[str]:
 
 def model_path(name_or_path) -> Path:
     """Resolve a file path or a bundled model name to a file path."""
-    p = Path(name_or_path)
+    p = Path(_check_path(name_or_path))
     if p.suffix == ".onnx" or p.exists():
         return p
     for d in _bundled_dirs():
@@ -55,31 +122,38 @@ def model_path(name_or_path) -> Path:
 def uniform(seed: int, m: int, n: int) -> np.ndarray:
     """The input points libdpc filters for ``seed``: (m, n) float32, bit-exact with C's
     ``dpc_uniform`` (docs/model-format.md, "Input points")."""
-    return _core.uniform(int(seed) % (1 << 64), int(m), int(n))
+    return _core.uniform(_seed(seed), _integer(m, "m", 1, limit=True), _integer(n, "n", 1, limit=True),
+                         _max_bytes(None))
 
 
 def stratified(seed: int, m: int, n: int) -> np.ndarray:
     """The stratified input points for ``seed`` (``input="stratified"``): the same uniform numbers
     placed one point per cell of a g^n grid, g^n <= m, in random order; (m, n) float32, bit-exact
     with C's ``dpc_stratified`` (docs/model-format.md, "Input points")."""
-    return _core.stratified(int(seed) % (1 << 64), int(m), int(n))
+    return _core.stratified(_seed(seed), _integer(m, "m", 1, MAX_POINTS, limit=True),
+                            _integer(n, "n", 1, limit=True), _max_bytes(None))
 
 
 class Model:
     """A loaded dpc model. Create with :func:`load`."""
 
     def __init__(self, path, *, isa: str = "auto", threads: int = 0, backend: str = "auto",
-                 input: str = "auto"):  # noqa: A002  (the C option's name)
+                 input: str = "auto", max_neighbours: float | None = None):  # noqa: A002
         if isa not in _ISA:
             raise InvalidArgumentError(f"isa must be one of {sorted(_ISA)}, got {isa!r}")
         if backend not in _BACKEND:
             raise InvalidArgumentError(f"backend must be one of {sorted(_BACKEND)}, got {backend!r}")
         if input not in _INPUT:
             raise InvalidArgumentError(f"input must be one of {sorted(_INPUT)}, got {input!r}")
-        if int(threads) < 0:
-            raise InvalidArgumentError("threads must be >= 0 (0 = one per CPU)")
-        self.path = Path(path)
-        self._h = _core.Model(os.fspath(self.path), _ISA[isa], int(threads), _BACKEND[backend], _INPUT[input])
+        threads = _integer(threads, "threads", 0, 0xFFFFFFFF)
+        if max_neighbours is None:
+            max_neighbours = DEFAULT_MAX_NEIGHBOURS
+        if (isinstance(max_neighbours, bool) or not isinstance(max_neighbours, numbers.Real)
+                or not max_neighbours > 0):
+            raise InvalidArgumentError(f"max_neighbours must be > 0 (math.inf: no bound), got {max_neighbours!r}")
+        self.path = Path(_check_path(path))
+        self._h = _core.Model(os.fspath(self.path), _ISA[isa], threads, _BACKEND[backend], _INPUT[input],
+                              float(max_neighbours))
         info = self._h.info()
         self.dims: int = info["dims"]
         self.n_points: int = info["n_points"]
@@ -91,6 +165,7 @@ class Model:
         self.backend: str = _BACKEND_NAME[info["backend"]]  # "cpu" or "vulkan": what runs the cascade
         self.device: str = info["device"]  # "cpu", or the Vulkan device's name
         self.input: str = _INPUT_NAME[info["input"]]  # "uniform" or "stratified": what generate() filters
+        self.neighbours: float = info["neighbours"]  # neighbours per point it asks for (max_neighbours)
         self.metadata: dict[str, str] = dict(self._h.metadata())
         self.name: str = self.metadata.get("dpc.name", self.path.stem)
 
@@ -102,20 +177,30 @@ class Model:
     def _count(n_points) -> int:
         if n_points is None:
             return 0
-        n = int(n_points)
-        if n <= 0:
-            raise InvalidArgumentError(f"n_points must be positive, got {n_points}")
-        return n
+        return _integer(n_points, "n_points", 1, MAX_POINTS, limit=True)
 
-    def generate(self, seed: int = 0, n_points: int | None = None) -> np.ndarray:
-        """One point set: (n_points or the trained count, dims) float32 in [0, 1)."""
-        return self._h.generate(int(seed) % (1 << 64), self._count(n_points))
+    def generate(self, seed: int = 0, n_points: int | None = None, *, max_bytes: float | None = None,
+                 progress=None) -> np.ndarray:
+        """One point set: (n_points or the trained count, dims) float32 in [0, 1).
 
-    def generate_batch(self, count: int, seed: int = 0, n_points: int | None = None) -> np.ndarray:
-        """``count`` sets, set c from seed ``seed + c``: (count, m, dims) float32."""
-        if int(count) <= 0:
-            raise InvalidArgumentError(f"count must be positive, got {count}")
-        return self._h.generate_batch(int(seed) % (1 << 64), int(count), self._count(n_points))
+        ``seed``: an integer in 0 .. 2^64 - 1. ``n_points``: a positive integer up to
+        :data:`MAX_POINTS` (floats, strings and bools are refused: :class:`InvalidArgumentError`;
+        too large: :class:`LimitError`, a subclass). ``max_bytes``: the largest output allowed
+        (default 4 GiB or $DPC_MAX_OUTPUT_BYTES), checked before anything is allocated.
+        ``progress(done, total)``: called on this thread while libdpc works (units: layers of
+        sets). A large request runs off the calling thread, so Ctrl-C stops it with
+        KeyboardInterrupt and no partial result."""
+        return self._h.generate(_seed(seed), 1, self._count(n_points), False, _max_bytes(max_bytes),
+                                progress)
+
+    def generate_batch(self, count: int, seed: int = 0, n_points: int | None = None, *,
+                       max_bytes: float | None = None, progress=None) -> np.ndarray:
+        """``count`` sets, set c from seed ``(seed + c) mod 2^64``: (count, m, dims) float32.
+        The total, count x m x dims floats, is checked against ``max_bytes`` before allocation
+        (see :meth:`generate`)."""
+        count = _integer(count, "count", 1, (1 << 63) - 1, limit=True)
+        return self._h.generate(_seed(seed), count, self._count(n_points), True, _max_bytes(max_bytes),
+                                progress)
 
     def filter(self, points) -> np.ndarray:
         """Run the cascade on your own (m, dims) points; returns a new float32 array."""
@@ -127,7 +212,7 @@ class Model:
 
 
 def load(path_or_name, *, isa: str = "auto", threads: int = 0, backend: str = "auto",
-         input: str = "auto") -> Model:  # noqa: A002
+         input: str = "auto", max_neighbours: float | None = None) -> Model:  # noqa: A002
     """Load a model file, or a bundled model by name (see :func:`available_models`).
 
     ``isa``: "auto" (best the CPU supports), "scalar", "avx2" or "avx512". ``threads``: worker threads per
@@ -136,10 +221,20 @@ def load(path_or_name, *, isa: str = "auto", threads: int = 0, backend: str = "a
     hardware GPU, else the CPU), "cpu", or "vulkan" (any Vulkan device, software drivers included;
     :class:`UnsupportedError` saying why when there is none or the package was built without
     Vulkan). ``model.backend`` tells which one runs, ``model.device`` on what.
-    ``input``: "auto" (default: what the model was trained on, its metadata ``dpc.input``;
-    uniform for the bundled models), "uniform", or "stratified" (one point per grid cell, see
+    ``input``: "auto" (default: what the model was trained on, its metadata ``dpc.input``, uniform
+    without it; of the bundled models bnot-2d-stratified says stratified, the others uniform),
+    "uniform", or "stratified" (one point per grid cell, see
     :func:`stratified`): for blue-noise models it keeps the lowest frequencies quiet at large
     point counts, where a local cascade cannot fix uniform input's large-scale density
     fluctuations; patterns that want low-frequency power (pink, green) lose it. ``model.input``
-    tells which one runs."""
-    return Model(model_path(path_or_name), isa=isa, threads=threads, backend=backend, input=input)
+    tells which one runs.
+    ``max_neighbours``: bound on the work the file may ask for, the expected neighbours per point
+    of any layer (default 4096, :data:`DEFAULT_MAX_NEIGHBOURS`: every bundled model passes;
+    ``math.inf``: no bound); a request beyond it raises :class:`LimitError`. For files you do
+    not trust. ``model.neighbours`` is the model's own figure.
+
+    Names are looked up in the folders of ``$DPC_MODEL_PATH`` (separated by ``os.pathsep``),
+    then among the bundled models; a path ending in ``.onnx`` or naming a file is loaded as it
+    is."""
+    return Model(model_path(path_or_name), isa=isa, threads=threads, backend=backend, input=input,
+                 max_neighbours=max_neighbours)

@@ -1,8 +1,11 @@
 """The ``dpc`` command line: list, generate, analyze, compare, mask, dither.
 
 UTK-style short flags: -m model, -n points, -d dims, -s seed, -c sets, -i input, -o output.
-Errors print one line ``dpc: error: ...`` and exit with 2 (bad usage) or 1 (anything else);
-set DPC_DEBUG=1 to get the traceback instead.
+Models are bundled names (``dpc list``; more in the folders of $DPC_MODEL_PATH) or ``.onnx``
+paths, in every command. Errors print one line ``dpc: error: ...`` and exit with 2 (bad usage)
+or 1 (anything else); set DPC_DEBUG=1 to get the traceback instead. Ctrl-C stops any command
+at once (exit 130). Every file is written atomically and a command that fails or is
+interrupted leaves no output behind and every existing file as it was (``dpc._atomic``).
 """
 
 from __future__ import annotations
@@ -11,19 +14,24 @@ import json
 import os
 import re
 import sys
+import textwrap
 from pathlib import Path
 
 import click
 import numpy as np
 
-from . import baselines, pointio
+from . import _atomic, baselines, pointio
 from .errors import DpcError, InvalidArgumentError, ModelNotFoundError
 
-_POINT_EXTS = (".npy", ".txt", ".dat", ".pts", ".csv", ".bin")
+_POINT_EXTS = pointio.EXTENSIONS
+_MODEL_HELP = ("a bundled model name (see 'dpc list'; the folders of $DPC_MODEL_PATH are searched "
+               "first) or a .onnx file")
+_PLOT_FORMATS = ("png", "pdf", "svg")
 # = dpc.analysis.DISCREPANCY_METHODS (not imported here: scipy makes start-up slow)
 _DISC_DEFAULT = "CD,WD,MD,L2-star,GL2,UL2"
 _NO_ARGS_HELP = getattr(click.exceptions, "NoArgsIsHelpError", ())
-_FORMAT_CHOICE = click.Choice(["npy", "txt", "utk", "text", "bin"], case_sensitive=False)
+_FORMAT_CHOICE = click.Choice(list(pointio.FORMAT_NAMES), case_sensitive=False)
+_SEED = click.IntRange(min=0, max=(1 << 64) - 1)
 
 
 # ---------------------------------------------------------------- helpers
@@ -41,6 +49,8 @@ def _load_model(name: str, threads: int = 0, isa: str = "auto", backend: str = "
 
 def _is_model(spec: str) -> bool:
     import dpc
+    if Path(spec).suffix.lower() == ".onnx":
+        return True  # a model path; a missing file is reported by dpc.load
     try:
         path = dpc.model_path(spec)
     except ModelNotFoundError:
@@ -48,12 +58,28 @@ def _is_model(spec: str) -> bool:
     return Path(path).is_file()
 
 
+def _max_output_option(f):
+    return click.option(
+        "--max-output", "max_output", default=None, metavar="SIZE",
+        help="Largest output one model call may allocate (sets x points x dims floats), e.g. "
+             "16G; default 4G or $DPC_MAX_OUTPUT_BYTES. Bigger requests stop with an error "
+             "before allocating.")(f)
+
+
+def _max_bytes(text: str | None) -> float | None:
+    if text is None:
+        return None
+    from ._model import parse_size
+    return float(parse_size(text))
+
+
 def _generate(spec: str, n_points: int | None, dims: int | None, count: int, seed: int,
               threads: int = 0, isa: str = "auto", backend: str = "auto",
-              input: str = "auto") -> tuple[np.ndarray, str, object]:  # noqa: A002
+              input: str = "auto", max_bytes: float | None = None,  # noqa: A002
+              ) -> tuple[np.ndarray, str, object]:
     """Sets from a dpc model (bundled name or .onnx path) or a baseline name, with a progress
-    bar over chunks of sets (set c always comes from seed + c); returns (sets, name, the loaded
-    model or None for a baseline). ``input`` applies to models only."""
+    bar (set c always comes from seed + c, modulo 2^64); returns (sets, name, the loaded model
+    or None for a baseline). ``input`` applies to models only. Model sets stay float32."""
     if spec in baselines.BASELINES:
         base = baselines.get(spec)
         if n_points is None and not isinstance(base, baselines.ReferenceBaseline):
@@ -72,12 +98,16 @@ def _generate(spec: str, n_points: int | None, dims: int | None, count: int, see
     model = _load_model(spec, threads, isa, backend, input)
     if dims is not None and dims != model.dims:
         raise InvalidArgumentError(f"model {model.name} makes {model.dims}-D points, not {dims}-D")
-    chunk = max(1, count // 20)
-    parts = []
-    for start in _progress(range(0, count, chunk), f"{model.name}"):
-        parts.append(model.generate_batch(min(chunk, count - start), seed=seed + start,
-                                          n_points=n_points))
-    return np.concatenate(parts).astype(np.float64), model.name, model
+    from tqdm import tqdm
+    # One call (the size limit applies to the whole request, before anything is allocated);
+    # libdpc reports layers of sets, shown once the run has taken a second.
+    with tqdm(total=count * model.layers, desc=model.name, unit="layer", delay=1.0, leave=False,
+              dynamic_ncols=True, file=sys.stderr) as bar:
+        def progress(done, total):
+            bar.update(done - bar.n)
+        sets = model.generate_batch(count, seed=seed, n_points=n_points, max_bytes=max_bytes,
+                                    progress=progress)
+    return sets, model.name, model
 
 
 def _ran_on(model) -> str:
@@ -90,25 +120,29 @@ _stratified_option = click.option(
     "--stratified/--uniform", default=None,
     help="Input points of models: stratified (one per grid cell, docs/model-format.md §5; "
          "blue-noise models stay blue at the largest scales for large -n) or uniform. Default: "
-         "what each model was trained on (its metadata dpc.input; uniform for the bundled ones).")
+         "what each model was trained on (its metadata dpc.input, uniform without it; of the "
+         "bundled models bnot-2d-stratified says stratified).")
 
 
 def _input_kind(stratified: bool | None) -> str:
     return "auto" if stratified is None else ("stratified" if stratified else "uniform")
 
 
-def _read_inputs(specs, n_points, dims, count, seed, bin_dtype,
-                 stratified: bool | None = None) -> list[tuple[str, np.ndarray]]:
-    """Each input: a point file, or a model/baseline name to generate from (a model from
-    stratified input points is labelled "NAME (stratified)")."""
+def _read_inputs(specs, n_points, dims, count, seed, bin_dtype, stratified: bool | None = None,
+                 max_bytes: float | None = None) -> list[tuple[str, np.ndarray, object]]:
+    """Each input: a point file, or a model (bundled name or .onnx file) or baseline to generate
+    from (a model from stratified input points is labelled "NAME (stratified)"). Returns
+    (label, sets, the model or None)."""
     out = []
     for spec in specs:
-        if Path(spec).is_file():
+        if Path(spec).is_file() and Path(spec).suffix.lower() != ".onnx":
             out.append((Path(spec).stem, pointio.read_points(spec, dims=dims, bin_dtype=bin_dtype,
-                                                             progress_bar=True)))
+                                                             progress_bar=True), None))
         else:
-            sets, name, model = _generate(spec, n_points, dims, count, seed, input=_input_kind(stratified))
-            out.append((name + (" (stratified)" if model and model.input == "stratified" else ""), sets))
+            sets, name, model = _generate(spec, n_points, dims, count, seed,
+                                          input=_input_kind(stratified), max_bytes=max_bytes)
+            label = name + (" (stratified)" if model and model.input == "stratified" else "")
+            out.append((label, sets.astype(np.float64), model))
     return out
 
 
@@ -128,7 +162,7 @@ def _dump_json(doc, path: Path) -> None:
     # Keep arrays of numbers on one line: readable metrics, small files.
     text = re.sub(r"\[\s+([-+0-9.eE,\s]|null)+?\s*\]",
                   lambda mt: "[" + " ".join(mt.group(0)[1:-1].split()) + "]", text)
-    path.write_text(text + "\n", encoding="utf-8")
+    _atomic.write_text(path, text + "\n")
 
 
 def _fmt(v) -> str:
@@ -169,10 +203,15 @@ def _analysis_options(f):
                      help="Dimension of generated inputs; hint for UTK .bin files."),
         click.option("-c", "--sets", "count", type=click.IntRange(min=1), default=16,
                      show_default=True, help="Sets for generated inputs."),
-        click.option("-s", "--seed", type=click.IntRange(min=0), default=0, show_default=True,
-                     help="Seed of generated inputs (set c from seed + c)."),
+        click.option("-s", "--seed", type=_SEED, default=0, show_default=True,
+                     help="Seed of generated inputs, 0 .. 2^64-1 (set c from seed + c mod 2^64)."),
         click.option("--bin-dtype", type=click.Choice(["float64", "float32"]), default=None,
                      help="Float type of UTK .bin inputs (default: detect)."),
+        click.option("--plot-format", "plot_formats", default="png,pdf", show_default=True,
+                     help="Formats of the plots, comma-separated: png, pdf, svg."),
+        click.option("--max-output", "max_output", default=None, metavar="SIZE",
+                     help="Largest output one model call may allocate, e.g. 16G (default 4G or "
+                          "$DPC_MAX_OUTPUT_BYTES)."),
     ]
     for o in reversed(opts):
         f = o(f)
@@ -189,36 +228,56 @@ def _run_analysis(points, label, nu_max, max_size, subspace, disc, disc_budget, 
 
 
 def _output_dir(path: str) -> Path:
+    """The output folder, created inside the command's transaction (removed again if the
+    command fails)."""
     out = Path(path)
     if out.exists() and not out.is_dir():
         raise click.BadParameter(f"{path} exists and is not a folder", param_hint="-o")
-    out.mkdir(parents=True, exist_ok=True)
-    return out
+    return _atomic.make_dir(out)
+
+
+def _plot_formats(text: str) -> list[str]:
+    fmts = _parse_list(text, "plot formats") or []
+    bad = [f for f in fmts if f.lower() not in _PLOT_FORMATS]
+    if bad or not fmts:
+        raise click.BadParameter(f"{text!r}: choose from {', '.join(_PLOT_FORMATS)}",
+                                 param_hint="--plot-format")
+    return list(dict.fromkeys(f.lower() for f in fmts))
 
 
 # ---------------------------------------------------------------- commands
 @click.group(context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
-@click.version_option(package_name="dpc", prog_name="dpc")
+@click.version_option(version=None, package_name="deep-point-correlation", prog_name="dpc")
 def cli():
     """dpc: point patterns from Deep Point Correlation Design (Leimkuehler et al. 2019)."""
 
 
 @cli.command("list")
 def list_cmd():
-    """List the bundled models and the baselines."""
+    """List the models (bundled, and those in the folders of $DPC_MODEL_PATH, which come first)
+    with their whole descriptions and input kinds, and the baselines."""
+    import shutil
+
     import dpc
-    click.echo("models:")
+    width = max(60, min(shutil.get_terminal_size((100, 24)).columns, 120))
+    click.echo("models:" + (f" (DPC_MODEL_PATH={os.environ['DPC_MODEL_PATH']})"
+                            if os.environ.get("DPC_MODEL_PATH") else ""))
     names = dpc.available_models()
     if not names:
         click.echo("  (none bundled; set DPC_MODEL_PATH or pass a .onnx file)")
     for name in names:
         try:
             m = dpc.load(name)
-            desc = m.metadata.get("dpc.description", "").split(". ")[0]
-            click.echo(f"  {name:22s} {m.dims}-D, trained m={m.n_points}, {m.layers} layers"
-                       + (f"  {desc}" if desc else ""))
         except DpcError as e:
-            click.echo(f"  {name:22s} (cannot load: {e})")
+            click.echo(f"  {name:22s} (cannot load: {_one_line(e)})")
+            continue
+        click.echo(f"  {name:22s} {m.dims}-D, trained m={m.n_points}, {m.layers} layers, "
+                   f"{m.input} input" + (f", grid {'x'.join(map(str, m.grid_shape))}"
+                                         if m.grid_shape else ""))
+        desc = " ".join(m.metadata.get("dpc.description", "").split())
+        if desc:
+            click.echo(textwrap.fill(desc, width=width, initial_indent=" " * 4,
+                                     subsequent_indent=" " * 4, break_on_hyphens=False))
     click.echo("baselines:")
     for name, b in baselines.BASELINES.items():
         extra = ""
@@ -229,19 +288,21 @@ def list_cmd():
 
 @cli.command("generate")
 @click.option("-m", "--model", required=True,
-              help="Bundled model name, .onnx file, or baseline name (see 'dpc list').")
+              help="Model: " + _MODEL_HELP + "; or a baseline name (see 'dpc list').")
 @click.option("-n", "--points", "n_points", type=click.IntRange(min=1), default=None,
               help="Points per set (default: the model's trained count).")
 @click.option("-d", "--dims", type=click.IntRange(min=1), default=None,
               help="Dimension (baselines; default 2; must match a model).")
-@click.option("-s", "--seed", type=click.IntRange(min=0), default=0, show_default=True,
-              help="Seed; set c comes from seed + c.")
+@click.option("-s", "--seed", type=_SEED, default=0, show_default=True,
+              help="Seed, 0 .. 2^64-1; set c comes from seed + c (mod 2^64).")
 @click.option("-c", "--sets", "count", type=click.IntRange(min=1), default=1, show_default=True,
               help="Number of sets.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False, writable=True), default=None,
-              help="Output file (.npy, .txt/.dat, .bin); default: text on stdout.")
+              help="Output file: " + pointio.describe_extensions() + "; default: text on stdout. "
+                   "Written atomically (an existing file stays as it was if anything fails).")
 @click.option("-f", "--format", "fmt", type=_FORMAT_CHOICE, default=None,
-              help="File format (default: from the extension).")
+              help="File format (default: from the extension): npy; dat (UTK's text format; "
+                   "txt, text: the same); csv (commas); bin (UTK's binary format).")
 @click.option("--bin-dtype", type=click.Choice(["float64", "float32"]), default="float64",
               show_default=True, help="Float type of UTK .bin output.")
 @click.option("-t", "--threads", type=click.IntRange(min=0), default=0, show_default=True,
@@ -255,22 +316,26 @@ def list_cmd():
               help="What runs a model: auto (a Vulkan GPU if there is one, else the CPU), cpu, "
                    "or vulkan (an error where no Vulkan device is usable).")
 @_stratified_option
+@_max_output_option
 def generate_cmd(model, n_points, dims, seed, count, output, fmt, bin_dtype, threads, isa, backend,
-                 stratified):
-    """Generate point sets from a model or a baseline."""
+                 stratified, max_output):
+    """Generate point sets from a model or a baseline. A model's sets are float32 (kept so in
+    .npy and float32 .bin files; text has 17 significant digits)."""
     if output is not None:
         pointio.resolve_format(output, fmt)  # fail on a bad name before the work
     if stratified is not None and model in baselines.BASELINES:
         raise click.UsageError("--stratified/--uniform apply to models, not to baselines")
     sets, name, loaded = _generate(model, n_points, dims, count, seed, threads, isa, backend,
-                                   _input_kind(stratified))
+                                   _input_kind(stratified), _max_bytes(max_output))
     if output is None:
-        if fmt not in (None, "txt", "utk", "text"):
-            raise click.UsageError("stdout output is text; give -o FILE for other formats")
+        kind = pointio.resolve_format("-.dat", fmt)
+        if kind not in ("dat", "csv"):
+            raise click.UsageError("stdout output is text (dat or csv); give -o FILE for other formats")
+        sep = "," if kind == "csv" else " "
         for s in range(sets.shape[0]):
             if s:
                 click.echo("#")
-            click.echo("\n".join(" ".join(f"{v:.17g}" for v in row) for row in sets[s]))
+            click.echo("\n".join(sep.join(f"{float(v):.17g}" for v in row) for row in sets[s]))
         return
     pointio.write_points(output, sets, fmt, bin_dtype=bin_dtype, progress_bar=True)
     click.echo(f"wrote {sets.shape[0]} set(s) of {sets.shape[1]} {sets.shape[2]}-D points "
@@ -279,38 +344,49 @@ def generate_cmd(model, n_points, dims, seed, count, output, fmt, bin_dtype, thr
 
 @cli.command("analyze")
 @click.option("-i", "--input", "inputs", multiple=True,
-              help="Point file(s) (.npy, text, UTK .bin), or a model/baseline name; more may "
-                   "follow as arguments. All inputs form one batch of sets.")
+              help="Point file(s) (" + pointio.describe_extensions() + "), or a model (" + _MODEL_HELP
+                   + ") or baseline to generate from; more may follow as arguments. All inputs "
+                   "form one batch of sets.")
 @click.argument("more", nargs=-1)
 @click.option("-o", "--output", required=True, type=click.Path(file_okay=False),
-              help="Folder for metrics.json and the PNG plots.")
+              help="Folder for metrics.json and the plots (PNG and PDF by default, see "
+                   "--plot-format); a model's design target is drawn dashed where its metadata "
+                   "has one.")
 @click.option("--label", default=None, help="Name used in titles (default: first input).")
 @click.option("--no-plots", is_flag=True, help="Only write metrics.json.")
 @_analysis_options
 @_stratified_option
 def analyze_cmd(inputs, more, output, label, no_plots, nu_max, max_size, subspace, disc,
-                disc_budget, n_points, dims, count, seed, bin_dtype, stratified):
+                disc_budget, n_points, dims, count, seed, bin_dtype, plot_formats, max_output,
+                stratified):
     """Measure point sets: spectra, anisotropy, PCF, minimum distance, discrepancy."""
     specs = list(inputs) + list(more)
     if not specs:
         raise click.UsageError("give at least one input with -i")
-    out = _output_dir(output)
-    loaded = _read_inputs(specs, n_points, dims, count, seed, bin_dtype, stratified)
-    shapes = {a.shape[1:] for _, a in loaded}
-    if len(shapes) > 1:
-        raise click.ClickException(
-            "inputs differ in points or dimension: "
-            + ", ".join(f"{n}: {a.shape[1]}x{a.shape[2]}" for n, a in loaded)
-            + " (use 'dpc compare' for different inputs)")
-    sets = np.concatenate([a for _, a in loaded])
-    name = label or loaded[0][0]
-    res = _run_analysis(sets, name, nu_max, max_size, subspace, disc, disc_budget, seed)
-    doc = res.to_json()
-    doc["input"]["sources"] = specs
-    _dump_json(doc, out / "metrics.json")
-    written = ["metrics.json"]
-    if not no_plots:
-        written += _analysis_plots(res, sets, out, nu_max)
+    formats = _plot_formats(plot_formats)
+    with _atomic.transaction():  # all outputs, or (on any failure) none and no new folder
+        out = _output_dir(output)
+        loaded = _read_inputs(specs, n_points, dims, count, seed, bin_dtype, stratified,
+                              _max_bytes(max_output))
+        shapes = {a.shape[1:] for _, a, _ in loaded}
+        if len(shapes) > 1:
+            raise click.ClickException(
+                "inputs differ in points or dimension: "
+                + ", ".join(f"{n}: {a.shape[1]}x{a.shape[2]}" for n, a, _ in loaded)
+                + " (use 'dpc compare' for different inputs)")
+        sets = np.concatenate([a for _, a, _ in loaded])
+        name = label or loaded[0][0]
+        res = _run_analysis(sets, name, nu_max, max_size, subspace, disc, disc_budget, seed)
+        doc = res.to_json()
+        doc["input"]["sources"] = specs
+        models = list(dict.fromkeys(m for _, _, m in loaded if m is not None))
+        targets = _targets(models)
+        if targets:
+            doc["targets"] = [{"label": t.label, "dims": t.dims} for t in targets]
+        _dump_json(doc, out / "metrics.json")
+        written = ["metrics.json"]
+        if not no_plots:
+            written += _analysis_plots(res, sets, out, nu_max, formats, targets)
     s = res.summary()
     click.echo(f"{name}: {res.n_sets} sets of {res.n_points} {res.dims}-D points")
     for key in ("E_low<0.5", "E_low<0.75", "peak", "peak_nu", "delta_min",
@@ -322,76 +398,104 @@ def analyze_cmd(inputs, more, output, label, no_plots, nu_max, max_size, subspac
     click.echo(f"wrote {', '.join(written)} to {out}")
 
 
-def _analysis_plots(res, sets, out: Path, nu_max: float) -> list[str]:
+def _targets(models) -> list:
+    """The design targets of the models (metadata; dpc.analysis.targets), one per distinct one."""
+    from .analysis.targets import model_target
+    out, seen = [], set()
+    for m in models:
+        t = model_target(m)
+        if t is not None and t.label not in seen:
+            seen.add(t.label)
+            out.append(t)
+    return out
+
+
+def _refs(targets, dims: int, sub: tuple) -> list:
+    """References for a radial plot of a ``dims``-D spectrum: 2-D targets belong to the
+    subspace (0, 1) the models were trained on; n-D ones to the n-D radial spectrum."""
+    return [t.as_reference() for t in targets
+            if t.dims == dims and (dims != 2 or tuple(sub) in ((0, 1), (1, 0)))]
+
+
+def _analysis_plots(res, sets, out: Path, nu_max: float, formats=("png",),
+                    targets=()) -> list[str]:
     from .analysis import plots
     title = f"{res.label}: m={res.n_points}, {res.n_sets} sets"
     sub = tuple(res.spectrum.dims) if res.spectrum is not None else (0,)
-    plots.save_points(out / "points.png", sets[0], dims=sub,
-                      title=f"{res.label}: set 0 of {res.n_sets}, m={res.n_points}")
-    names = ["points.png"]
+    names: list[str] = []
+
+    def save(fn, name, *args, **kw):
+        fn(out / name, *args, formats=formats, **kw)
+        names.extend(plots.written(out / name, formats))
+
+    save(plots.save_points, "points.png", sets[0], dims=sub,
+         title=f"{res.label}: set 0 of {res.n_sets}, m={res.n_points}")
     if res.spectrum is not None:
-        plots.save_spectrum2d(out / "spectrum.png", res.spectrum, title=title)
-        names.append("spectrum.png")
+        save(plots.save_spectrum2d, "spectrum.png", res.spectrum, title=title)
     curves = [(f"{res.label} (axes {sub[0]},{sub[1]})" if res.dims > 2 else res.label, res.radial)]
-    plots.save_radial(out / "radial.png", curves, title=f"radial mean and anisotropy, {title}",
-                      nu_max=nu_max)
-    names.append("radial.png")
+    save(plots.save_radial, "radial.png", curves, title=f"radial mean and anisotropy, {title}",
+         nu_max=nu_max, reference=_refs(targets, len(sub) if res.spectrum is not None else 1, sub)
+         or None)
     if res.radial_nd is not None:
-        plots.save_radial(out / "radial_nd.png", [(f"{res.label} ({res.dims}-D, MC)",
-                                                  res.radial_nd)],
-                          title=f"{res.dims}-D radial mean (Monte Carlo), {title}", nu_max=nu_max)
-        names.append("radial_nd.png")
+        save(plots.save_radial, "radial_nd.png", [(f"{res.label} ({res.dims}-D, MC)", res.radial_nd)],
+             title=f"{res.dims}-D radial mean (Monte Carlo), {title}", nu_max=nu_max,
+             reference=_refs(targets, res.dims, sub) or None)
     if res.pcf is not None:
-        plots.save_pcf(out / "pcf.png", [(res.label, res.pcf)], title=f"PCF, {title}")
-        names.append("pcf.png")
+        save(plots.save_pcf, "pcf.png", [(res.label, res.pcf)], title=f"PCF, {title}")
     if res.projections:
-        plots.save_projections(out / "projections.png",
-                               [(f"axis {p.dim}", p) for p in res.projections],
-                               title=f"1-D projections, {title}", nu_max=nu_max)
-        names.append("projections.png")
+        save(plots.save_projections, "projections.png",
+             [(f"axis {p.dim}", p) for p in res.projections],
+             title=f"1-D projections, {title}", nu_max=nu_max)
     return names
 
 
 @cli.command("compare")
 @click.option("-i", "--input", "inputs", multiple=True,
-              help="A point file, or a model/baseline name generated with -n/-c/-s; repeat, "
-                   "or list more as arguments.")
+              help="A point file (" + pointio.describe_extensions() + "), or a model (" + _MODEL_HELP
+                   + ") or baseline generated with -n/-c/-s; repeat, or list more as arguments.")
 @click.argument("more", nargs=-1)
 @click.option("-o", "--output", required=True, type=click.Path(file_okay=False),
-              help="Folder for compare.json, compare.md and the plots.")
+              help="Folder for compare.json, compare.md and the plots (PNG and PDF by default); "
+                   "the models' design targets are drawn dashed where their metadata has them.")
 @click.option("--integration/--no-integration", default=True, show_default=True,
               help="Relative variance of MC integration over each input's sets.")
 @_analysis_options
 @_stratified_option
 def compare_cmd(inputs, more, output, integration, nu_max, max_size, subspace, disc,
-                disc_budget, n_points, dims, count, seed, bin_dtype, stratified):
+                disc_budget, n_points, dims, count, seed, bin_dtype, plot_formats, max_output,
+                stratified):
     """Compare several inputs (files, models, baselines) in one table and plots."""
     specs = list(inputs) + list(more)
     if len(specs) < 1:
         raise click.UsageError("give inputs with -i")
-    out = _output_dir(output)
-    loaded = _read_inputs(specs, n_points, dims, count, seed, bin_dtype, stratified)
-    labels, seen = [], {}
-    for name, _ in loaded:  # unique labels
-        seen[name] = seen.get(name, 0) + 1
-        labels.append(name if seen[name] == 1 else f"{name}#{seen[name]}")
-    results, rows = [], []
-    for (name, sets), label in zip(loaded, labels):
-        res = _run_analysis(sets, label, nu_max, max_size, subspace, disc, disc_budget, seed)
-        row = res.summary()
-        if integration:
-            row.update(_integration_row(sets, res, seed))
-        results.append((res, sets))
-        rows.append(row)
-    cols = list(dict.fromkeys(k for r in rows for k in r))
-    table = _table(rows, cols)
-    click.echo(table)
-    (out / "compare.md").write_text(table + "\n", encoding="utf-8")
-    doc = {"dpc_compare": 1, "inputs": specs, "rows": rows,
-           "analyses": [r.to_json() for r, _ in results]}
-    _dump_json(doc, out / "compare.json")
-    _compare_plots(results, out, nu_max)
-    click.echo(f"wrote compare.md, compare.json, radial.png, pcf.png, points.png to {out}")
+    formats = _plot_formats(plot_formats)
+    with _atomic.transaction():  # all outputs, or (on any failure) none and no new folder
+        out = _output_dir(output)
+        loaded = _read_inputs(specs, n_points, dims, count, seed, bin_dtype, stratified,
+                              _max_bytes(max_output))
+        labels, seen = [], {}
+        for name, _, _ in loaded:  # unique labels
+            seen[name] = seen.get(name, 0) + 1
+            labels.append(name if seen[name] == 1 else f"{name}#{seen[name]}")
+        results, rows = [], []
+        for (name, sets, _), label in zip(loaded, labels):
+            res = _run_analysis(sets, label, nu_max, max_size, subspace, disc, disc_budget, seed)
+            row = res.summary()
+            if integration:
+                row.update(_integration_row(sets, res, seed))
+            results.append((res, sets))
+            rows.append(row)
+        cols = list(dict.fromkeys(k for r in rows for k in r))
+        table = _table(rows, cols)
+        click.echo(table)
+        _atomic.write_text(out / "compare.md", table + "\n")
+        targets = _targets(list(dict.fromkeys(m for _, _, m in loaded if m is not None)))
+        doc = {"dpc_compare": 1, "inputs": specs, "rows": rows,
+               "analyses": [r.to_json() for r, _ in results],
+               "targets": [{"label": t.label, "dims": t.dims} for t in targets]}
+        _dump_json(doc, out / "compare.json")
+        names = _compare_plots(results, out, nu_max, formats, targets)
+    click.echo(f"wrote compare.md, compare.json, {', '.join(names)} to {out}")
 
 
 def _integration_row(sets: np.ndarray, res, seed: int) -> dict:
@@ -406,15 +510,21 @@ def _integration_row(sets: np.ndarray, res, seed: int) -> dict:
     return row
 
 
-def _compare_plots(results, out: Path, nu_max: float) -> None:
+def _compare_plots(results, out: Path, nu_max: float, formats=("png",), targets=()) -> list[str]:
     from matplotlib.figure import Figure
     from .analysis import plots
+    names: list[str] = []
     radial = [(r.label, r.radial) for r, _ in results if r.radial is not None]
+    r0 = results[0][0]
+    sub = tuple(r0.spectrum.dims) if r0.spectrum is not None else (0,)
     plots.save_radial(out / "radial.png", radial, title="radial mean power", anisotropy=False,
-                      nu_max=nu_max)
+                      nu_max=nu_max, formats=formats,
+                      reference=_refs(targets, len(sub) if r0.spectrum is not None else 1, sub) or None)
+    names += plots.written(out / "radial.png", formats)
     pcfs = [(r.label, r.pcf) for r, _ in results if r.pcf is not None]
     if pcfs:
-        plots.save_pcf(out / "pcf.png", pcfs, title="pair correlation")
+        plots.save_pcf(out / "pcf.png", pcfs, title="pair correlation", formats=formats)
+        names += plots.written(out / "pcf.png", formats)
     k = len(results)
     fig = Figure(figsize=(3.2 * k, 3.4))
     axes = np.atleast_1d(fig.subplots(1, k))
@@ -429,10 +539,17 @@ def _compare_plots(results, out: Path, nu_max: float) -> None:
         else:
             ax.eventplot(pts[:, 0], colors="k", linewidths=0.5)
         ax.set_xlim(0, 1)
-        ax.set_xticks([])
-        ax.set_yticks([])
+        ax.set_xticks([0, 1])
+        ax.set_yticks([0, 1] if pts.shape[1] >= 2 else [])
+        d = r.spectrum.dims if r.spectrum is not None else (0, 1)
+        ax.set_xlabel(f"x{d[0]}", fontsize=8)
+        if pts.shape[1] >= 2:
+            ax.set_ylabel(f"x{d[1]}", fontsize=8)
         ax.set_title(f"{r.label} (m={r.n_points})", fontsize=9)
-    fig.savefig(out / "points.png", dpi=110, bbox_inches="tight")
+    for fmt in formats:
+        _atomic.save_figure(fig, out / f"points.{fmt}", dpi=110, bbox_inches="tight", format=fmt)
+    names += plots.written(out / "points.png", formats)
+    return names
 
 
 @cli.command("mask")

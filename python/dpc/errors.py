@@ -25,12 +25,17 @@ class OutOfMemoryError(DpcError, MemoryError):
     """An allocation inside libdpc failed (DPC_ERROR_OUT_OF_MEMORY)."""
 
 
-class LimitError(DpcError, ValueError):
-    """A request beyond a documented limit, e.g. too many points (DPC_ERROR_LIMIT)."""
+class LimitError(InvalidArgumentError):
+    """A request beyond a documented limit, e.g. too many points or more output than max_bytes
+    (DPC_ERROR_LIMIT). An InvalidArgumentError too: an oversize count is a bad argument."""
 
 
 class InternalError(DpcError, RuntimeError):
     """A bug in libdpc (DPC_ERROR_INTERNAL): please report it."""
+
+
+class CancelledError(DpcError):
+    """A generate call stopped by its progress callback (DPC_ERROR_CANCELLED)."""
 
 
 class ModelNotFoundError(DpcError, LookupError):
@@ -46,4 +51,5 @@ BY_STATUS = {
     5: OutOfMemoryError,
     6: LimitError,
     7: InternalError,
+    8: CancelledError,
 }

@@ -1,17 +1,23 @@
-"""Point-set files: NumPy ``.npy``, plain / UTK text and UTK binary ``.bin``.
+"""Point-set files: NumPy ``.npy``, text (UTK's ``.dat``, ``.txt``, ``.pts``, comma-separated
+``.csv``) and UTK's binary ``.bin``.
 
-Formats (chosen from the file extension unless given):
+Formats (chosen from the file extension unless given; the names match UTK's extensions):
 
 * ``npy`` (``.npy``): an array (m, n) for one set or (sets, m, n); (m,) reads as m 1-D points.
-* ``text`` (``.txt``, ``.dat``, ``.pts``, ``.csv``; names ``txt``/``utk`` too): one point per
-  line, coordinates separated by blanks or commas. Several sets are separated by a line starting
-  with ``#`` (UTK's text format); a file holding one set is plain text. Written with enough
-  digits to read back the same binary values.
+  Written in the array's own float type: float32 from dpc models stays float32.
+* ``dat`` (``.dat``, UTK's text format; also ``.txt``, ``.pts``; names ``txt``/``text``): one
+  point per line, coordinates separated by spaces. Several sets are separated by a line ``#``
+  (UTK's separator); a file holding one set is plain text.
+* ``csv`` (``.csv``): the same with commas between coordinates (and ``#`` lines between sets).
 * ``bin`` (``.bin``): UTK's binary format, no header: per set a little-endian uint32 point count
   followed by count x n coordinates (float64 by default, float32 possible). The file does not
   say n or the float type; the reader tries every n in 1..64 for both types and accepts the
   single reading whose counts tile the file exactly and whose values all lie in [0, 1]
   (pass ``dims``/``bin_dtype`` where that is ambiguous).
+
+Text is written with enough digits (17 significant) to read back the same binary values. Text
+readers accept blanks or commas. Every file is written atomically (``dpc._atomic``): a failed
+write leaves an existing file untouched.
 
 Every reader returns float64 ``(sets, m, n)``; all sets of one file must have the same shape.
 """
@@ -25,13 +31,22 @@ from pathlib import Path
 
 import numpy as np
 
+from . import _atomic
 from .errors import InvalidArgumentError
 
-FORMATS = ("npy", "text", "bin")
-_ALIASES = {"npy": "npy", "text": "text", "txt": "text", "utk": "text", "dat": "text",
-            "bin": "bin"}
-_EXTENSIONS = {".npy": "npy", ".bin": "bin", ".txt": "text", ".dat": "text", ".pts": "text",
-               ".csv": "text"}
+FORMATS = ("npy", "dat", "csv", "bin")
+_ALIASES = {"npy": "npy", "dat": "dat", "text": "dat", "txt": "dat", "csv": "csv", "bin": "bin"}
+_EXTENSIONS = {".npy": "npy", ".bin": "bin", ".dat": "dat", ".txt": "dat", ".pts": "dat",
+               ".csv": "csv"}
+#: Every extension a point file may have, for help texts.
+EXTENSIONS = tuple(_EXTENSIONS)
+#: Every -f/--format name.
+FORMAT_NAMES = tuple(_ALIASES)
+
+
+def describe_extensions() -> str:
+    """'.npy, .dat/.txt/.pts (text), .csv, .bin (UTK binary)' for help texts."""
+    return ".npy, .dat/.txt/.pts (text, UTK's .dat), .csv (comma-separated), .bin (UTK binary)"
 _BIN_DTYPES = {"float64": "<f8", "float32": "<f4"}
 _MAX_GUESS_DIMS = 64
 _SEPARATOR = re.compile(r"^[ \t]*#[^\n]*(?:\n|$)", re.MULTILINE)
@@ -45,6 +60,9 @@ def resolve_format(path, fmt: str | None = None) -> str:
     """The canonical format name for ``path``: ``fmt`` if given, else from the extension."""
     if fmt is not None:
         key = str(fmt).lower()
+        if key == "utk":
+            raise PointFileError("format 'utk' is ambiguous: UTK's text format is 'dat', its binary "
+                                 "format 'bin'")
         if key not in _ALIASES:
             raise PointFileError(
                 f"unknown point format {fmt!r}; choose from {', '.join(sorted(_ALIASES))}")
@@ -53,7 +71,7 @@ def resolve_format(path, fmt: str | None = None) -> str:
     if ext not in _EXTENSIONS:
         raise PointFileError(
             f"cannot tell the format of {os.fspath(path)!r} from its extension; use one of "
-            f"{', '.join(sorted(_EXTENSIONS))} or give the format")
+            f"{', '.join(EXTENSIONS)} or give the format")
     return _EXTENSIONS[ext]
 
 
@@ -81,30 +99,37 @@ def _bar(iterable, enabled: bool, desc: str, total: int | None = None):
 def write_points(path, points, fmt: str | None = None, *, bin_dtype: str = "float64",
                  progress_bar: bool = False) -> Path:
     """Write one set (m, n) or several (sets, m, n) to ``path`` in ``fmt`` (default: from the
-    extension). Returns the path."""
-    p = Path(path)
+    extension), atomically: into a temporary file beside it, renamed over ``path`` only when
+    complete (an existing file survives any failure). ``.npy`` keeps the array's float type.
+    Returns the path."""
+    p = Path(os.fspath(path))
+    if "\x00" in str(p):
+        raise PointFileError(f"path {str(p)!r} contains a NUL character")
     kind = resolve_format(p, fmt)
     a = _as_3d(points)
-    if kind == "npy":
-        arr = a[0] if a.shape[0] == 1 else a
-        with open(p, "wb") as fh:  # np.save would append .npy to other names
-            np.save(fh, np.ascontiguousarray(arr), allow_pickle=False)
-    elif kind == "text":
-        with open(p, "w", encoding="ascii") as fh:
-            for s in _bar(range(a.shape[0]), progress_bar, f"writing {p.name}"):
-                if s:
-                    fh.write("#\n")
-                # 17 significant digits read back as the same float64 (float32 values too);
-                # one %-format over the whole set is ~4x faster than np.savetxt's row loop.
-                row = " ".join(["%.17g"] * a.shape[2]) + "\n"
-                fh.write((row * a.shape[1]) % tuple(np.asarray(a[s], np.float64).ravel().tolist()))
-    else:
+    if kind == "bin":
         if bin_dtype not in _BIN_DTYPES:
             raise PointFileError(f"bin_dtype must be float64 or float32, got {bin_dtype!r}")
-        dt = np.dtype(_BIN_DTYPES[bin_dtype])
         if a.shape[1] >= 2 ** 32:
             raise PointFileError("UTK .bin stores the point count as uint32")
-        with open(p, "wb") as fh:
+    with _atomic.atomic_file(p, "wb") as fh:
+        if kind == "npy":
+            arr = a[0] if a.shape[0] == 1 else a
+            if arr.dtype.kind != "f":
+                arr = arr.astype(np.float64)
+            np.save(fh, np.ascontiguousarray(arr), allow_pickle=False)
+        elif kind in ("dat", "csv"):
+            sep = "," if kind == "csv" else " "
+            # 17 significant digits read back as the same float64 (float32 values too);
+            # one %-format over the whole set is ~4x faster than np.savetxt's row loop.
+            row = sep.join(["%.17g"] * a.shape[2]) + "\n"
+            for s in _bar(range(a.shape[0]), progress_bar, f"writing {p.name}"):
+                if s:
+                    fh.write(b"#\n")
+                vals = tuple(np.asarray(a[s], np.float64).ravel().tolist())
+                fh.write(((row * a.shape[1]) % vals).encode("ascii"))
+        else:
+            dt = np.dtype(_BIN_DTYPES[bin_dtype])
             for s in range(a.shape[0]):
                 fh.write(int(a.shape[1]).to_bytes(4, "little"))
                 fh.write(np.ascontiguousarray(a[s], dtype=dt).tobytes())
@@ -227,7 +252,7 @@ def read_points(path, fmt: str | None = None, *, dims: int | None = None,
         raise PointFileError(f"{p}: no such file")
     if kind == "npy":
         out = _read_npy(p)
-    elif kind == "text":
+    elif kind in ("dat", "csv"):
         out = _read_text(p, progress_bar)
     else:
         out = _read_bin(p, dims, bin_dtype)

@@ -66,9 +66,13 @@ def test_same_seed_same_bits_and_seeds_differ():
     m = dpc.load(M2D)
     assert np.array_equal(m.generate(9), m.generate(9))
     assert not np.array_equal(m.generate(9), m.generate(10))
-    # seeds are taken modulo 2^64
-    assert np.array_equal(m.generate(-1), m.generate(2**64 - 1))
-    assert np.array_equal(dpc.uniform(2**64 + 3, 5, 2), dpc.uniform(3, 5, 2))
+    # seeds are 0 .. 2^64 - 1, as in the CLI: nothing wraps silently (issue 16)
+    assert not np.array_equal(m.generate(2**64 - 1), m.generate(0))
+    for bad in (-1, 2**64, 2**64 + 3):
+        with pytest.raises(dpc.InvalidArgumentError):
+            m.generate(bad)
+        with pytest.raises(dpc.InvalidArgumentError):
+            dpc.uniform(bad, 5, 2)
 
 
 @pytest.mark.parametrize("path,n", [(M2D, None), (M2D, 300), (GRID, None), (M10, 200)])

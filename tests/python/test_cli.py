@@ -48,7 +48,7 @@ def test_generate_baseline_in_every_format(tmp_path, capsys, ext):
 
 def test_generate_utk_text_format_option_and_float32_bin(tmp_path, capsys):
     f = tmp_path / "w.dat"
-    assert run(capsys, "generate", "-m", "white", "-n", 16, "-c", 2, "-f", "utk", "-o", f)[0] == 0
+    assert run(capsys, "generate", "-m", "white", "-n", 16, "-c", 2, "-f", "dat", "-o", f)[0] == 0
     assert f.read_text().count("#\n") == 1
     g = tmp_path / "w.bin"
     rc = run(capsys, "generate", "-m", "white", "-n", 64, "-o", g, "--bin-dtype", "float32")[0]

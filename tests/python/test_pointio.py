@@ -79,9 +79,14 @@ def test_bin_layout_is_utk_v1(tmp_path):
 
 def test_format_names_and_extensions(tmp_path):
     assert pointio.resolve_format("a.NPY") == "npy"
-    assert pointio.resolve_format("a.anything", "utk") == "text"
-    assert pointio.resolve_format("a.x", "txt") == "text"
-    write_points(tmp_path / "x.data", np.zeros((2, 2)), "utk")
+    # the names are UTK's: dat (its text format), bin (its binary format); 'utk' is ambiguous
+    assert pointio.resolve_format("a.anything", "dat") == "dat"
+    assert pointio.resolve_format("a.x", "txt") == "dat"
+    assert pointio.resolve_format("a.x", "text") == "dat"
+    assert pointio.resolve_format("a.CSV") == "csv"
+    with pytest.raises(PointFileError, match="'dat'.*'bin'"):
+        pointio.resolve_format("a.x", "utk")
+    write_points(tmp_path / "x.data", np.zeros((2, 2)), "dat")
     assert read_points(tmp_path / "x.data", "text").shape == (1, 2, 2)
     with pytest.raises(PointFileError, match="extension"):
         pointio.resolve_format("a.xyz")

@@ -268,12 +268,13 @@ DPC_API dpc_status dpc_generate_size(const dpc_model *model, size_t count, size_
                                      size_t *out_floats);
 
 /* Progress and cancellation of a long call. libdpc calls progress(user, done, total) as work
- * finishes: total = count * layers units, one per layer of each set. It is called at least
- * after every set, and after every layer where the backend reports layers; calls never overlap
- * (libdpc serialises them), but they may come from libdpc's worker threads. Returning nonzero
- * asks libdpc to stop: the call returns DPC_ERROR_CANCELLED as soon as the running layer (or
- * set, or Vulkan batch) ends, and the contents of out are unspecified. The callback must not
- * call libdpc on the same model. */
+ * goes on: total = count * layers units, one per layer of each set. It is called before and
+ * after every set, after every layer where the backend reports layers, and possibly again with
+ * the same `done` inside long work (a poll); calls never overlap (libdpc serialises them), but
+ * they may come from libdpc's worker threads. Returning nonzero asks libdpc to stop: the call
+ * returns DPC_ERROR_CANCELLED at the next such call site (on the CPU backend: within a set, or
+ * a layer where the engine polls inside layers; on Vulkan: after the batch), and the contents
+ * of out are unspecified. The callback must be cheap and must not call libdpc on that model. */
 typedef int (*dpc_progress_fn)(void *user, uint64_t done, uint64_t total);
 
 typedef struct dpc_generate_options {

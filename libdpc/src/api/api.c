@@ -535,11 +535,12 @@ typedef struct progress {
     pthread_mutex_t lock;
 } progress;
 
-/* Count `units` more as done and tell the callback; DPC_ERROR_CANCELLED once it asked to stop. */
+/* Count `units` more as done (0: a poll inside long work) and tell the callback;
+ * DPC_ERROR_CANCELLED once it asked to stop. */
 static dpc_status progress_add(progress *p, uint64_t units) {
     if (!p || !p->fn) return DPC_OK;
     pthread_mutex_lock(&p->lock);
-    if (!p->cancelled && units) {
+    if (!p->cancelled) {
         p->done += units;
         if (p->fn(p->user, p->done, p->total) != 0) p->cancelled = 1;
     }
@@ -549,8 +550,11 @@ static dpc_status progress_add(progress *p, uint64_t units) {
 }
 
 #if defined(DPC_CPU_HAS_LAYER_HOOK)
-/* The engine's hook after each layer (cpu_cascade.h): one unit of progress. */
-static dpc_status after_layer(void *ctx) { return progress_add((progress *)ctx, 1); }
+/* The engine's hook (cpu_cascade.h): after each layer (one unit of progress), and between
+ * chunks of points inside a long layer (a poll, so that a cancel is seen within a layer). */
+static dpc_status engine_hook(void *ctx, int layer_done) {
+    return progress_add((progress *)ctx, layer_done ? 1u : 0u);
+}
 #endif
 
 static dpc_status generate_one(const dpc_model *model, const dpc_cpu_engine *engine, uint64_t seed,
@@ -559,7 +563,7 @@ static dpc_status generate_one(const dpc_model *model, const dpc_cpu_engine *eng
     fill_input(model, seed, m, out);
     if (!p || !p->fn) return dpc_cpu_filter(&model->cascade, engine, m, out);
 #if defined(DPC_CPU_HAS_LAYER_HOOK)
-    return dpc_cpu_filter_hooked(&model->cascade, engine, m, out, after_layer, p);
+    return dpc_cpu_filter_hooked(&model->cascade, engine, m, out, engine_hook, p);
 #else
     /* this engine reports no layers: the whole set at once */
     const dpc_status st = dpc_cpu_filter(&model->cascade, engine, m, out);

@@ -1,5 +1,7 @@
-"""PNG plots of the analysis results. Uses matplotlib's object API with the Agg canvas (no
-pyplot, so importing this module never changes the user's backend)."""
+"""Plots of the analysis results: PNG, PDF or SVG (from the file's extension, plus any other
+``formats`` asked for), every axis labelled, a legend wherever a curve needs a name. Uses
+matplotlib's object API with the Agg canvas (no pyplot, so importing this module never changes
+the user's backend). Every file is written atomically (``dpc._atomic``)."""
 
 from __future__ import annotations
 
@@ -9,20 +11,44 @@ from typing import Sequence
 import numpy as np
 from matplotlib.figure import Figure
 
+from .. import _atomic
+from ..errors import InvalidArgumentError
 from .integration import IntegrationStudy
 from .pcf import PCF
 from .spectrum import RadialSpectrum, Spectrum1D, Spectrum2D
 
 _DPI = 110
+#: The formats a plot may be written in.
+FORMATS = ("png", "pdf", "svg")
+
+#: A reference curve: (label, nu, power), drawn dashed.
+Reference = tuple[str, np.ndarray, np.ndarray]
 
 
-def _save(fig: Figure, path) -> Path:
+def _save(fig: Figure, path, formats: Sequence[str] | None = None) -> Path:
+    """Write ``path`` (format from its extension) and the same plot in every other format of
+    ``formats`` beside it (same stem); returns ``path``."""
     p = Path(path)
-    fig.savefig(p, dpi=_DPI)  # layout="tight" figures: one draw, not two
+    first = p.suffix.lstrip(".").lower() or "png"
+    todo = [first] + [f for f in (formats or ()) if f != first]
+    for fmt in todo:
+        if fmt not in FORMATS:
+            raise InvalidArgumentError(f"plot format {fmt!r}: choose from {', '.join(FORMATS)}")
+        # layout="tight" figures: one draw, not two; SVG/PDF keep text as text
+        _atomic.save_figure(fig, p.with_suffix("." + fmt), dpi=_DPI, format=fmt,
+                            metadata={"Creator": "dpc"} if fmt in ("pdf", "svg") else None)
     return p
 
 
-def save_points(path, points: np.ndarray, *, dims=(0, 1), title: str = "") -> Path:
+def written(path, formats: Sequence[str] | None = None) -> list[str]:
+    """The file names a save_* call with these arguments writes (for messages)."""
+    p = Path(path)
+    first = p.suffix.lstrip(".").lower() or "png"
+    return [p.with_suffix("." + f).name for f in [first] + [f for f in (formats or ()) if f != first]]
+
+
+def save_points(path, points: np.ndarray, *, dims=(0, 1), title: str = "",
+                formats: Sequence[str] | None = None) -> Path:
     """Scatter plot of one set (m, n) in the subspace ``dims`` (a strip plot for 1-D)."""
     pts = np.asarray(points)
     fig = Figure(figsize=(4.4, 4.6) if pts.shape[1] >= 2 else (6.0, 1.6), layout="tight")
@@ -40,10 +66,11 @@ def save_points(path, points: np.ndarray, *, dims=(0, 1), title: str = "") -> Pa
         ax.set_xlabel("x0")
     ax.set_xlim(0, 1)
     ax.set_title(title or f"{len(pts)} points", fontsize=10)
-    return _save(fig, path)
+    return _save(fig, path, formats)
 
 
-def save_spectrum2d(path, spec: Spectrum2D, *, title: str = "") -> Path:
+def save_spectrum2d(path, spec: Spectrum2D, *, title: str = "",
+                    formats: Sequence[str] | None = None) -> Path:
     """Greyscale image of the mean 2-D power spectrum, axes in normalised frequency."""
     fig = Figure(figsize=(4.8, 4.4), layout="tight")
     ax = fig.subplots()
@@ -52,50 +79,63 @@ def save_spectrum2d(path, spec: Spectrum2D, *, title: str = "") -> Path:
     vmax = float(np.clip(np.percentile(p, 99.5), 2.0, 4.0))
     im = ax.imshow(p.T, origin="lower", cmap="gray", vmin=0.0, vmax=vmax,
                    extent=(-ext, ext, -ext, ext), interpolation="nearest")
-    fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04, label="P")
+    fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04, label="power P (white noise = 1)")
     ax.set_xlabel(r"$\nu_{%d}$" % spec.dims[0])
     ax.set_ylabel(r"$\nu_{%d}$" % spec.dims[1])
     ax.set_title(title or f"power spectrum, m={spec.n_points}, {spec.n_sets} sets", fontsize=10)
-    return _save(fig, path)
+    return _save(fig, path, formats)
 
 
 def save_radial(path, curves: Sequence[tuple[str, RadialSpectrum]], *, title: str = "",
                 anisotropy: bool = True,
-                reference: tuple[str, np.ndarray, np.ndarray] | None = None,
-                nu_max: float = 4.0) -> Path:
-    """Radial mean power (left axis) and, for a single curve, its anisotropy in dB (right axis,
-    grey). ``reference`` = (label, nu, power) is drawn dashed."""
-    fig = Figure(figsize=(6.4, 3.8), layout="tight")
-    ax = fig.subplots()
+                reference: Reference | Sequence[Reference] | None = None,
+                nu_max: float = 4.0, formats: Sequence[str] | None = None) -> Path:
+    """Radial mean power of each curve, with a legend; ``reference`` (one (label, nu, power)
+    or a list of them: e.g. a model's target) is drawn dashed. With ``anisotropy`` the
+    anisotropy of the curves (dB) goes in a second panel below, on its own labelled axis."""
+    refs: list = []
+    if reference is not None:
+        refs = [reference] if isinstance(reference[0], str) else list(reference)
+    aniso = anisotropy and any(np.any(np.isfinite(r.anisotropy_db)) for _, r in curves)
+    fig = Figure(figsize=(6.4, 5.4 if aniso else 3.8), layout="tight")
+    if aniso:
+        ax, ax2 = fig.subplots(2, 1, sharex=True, height_ratios=[2.2, 1])
+    else:
+        ax, ax2 = fig.subplots(), None
     top = 2.0
     for label, r in curves:
         ax.plot(r.nu, r.mean, lw=1.2, label=label)
         sel = r.nu <= nu_max
         if np.any(sel):
             top = max(top, float(np.nanmax(r.mean[sel])) * 1.08)
-    if reference is not None:
-        ax.plot(reference[1], reference[2], "--", color="k", lw=1.0, label=reference[0])
-    ax.axhline(1.0, color="0.6", lw=0.6)
+    for k, (label, nu, power) in enumerate(refs):
+        ax.plot(nu, power, "--", color="k" if k == 0 else f"C{len(curves) + k}", lw=1.0, label=label)
+    ax.axhline(1.0, color="0.6", lw=0.6, label="white noise (P = 1)")
     ax.set_xlim(0, nu_max)
     ax.set_ylim(0, min(top, 8.0))
-    ax.set_xlabel(r"normalised frequency $\nu = |q| / m^{1/n}$")
     ax.set_ylabel("radial mean power")
-    if anisotropy and len(curves) == 1 and np.any(np.isfinite(curves[0][1].anisotropy_db)):
-        ax2 = ax.twinx()
-        r = curves[0][1]
-        ax2.plot(r.nu, r.anisotropy_db, color="0.55", lw=0.8, label="anisotropy")
-        ax2.set_ylabel("anisotropy [dB]", color="0.4")
-        finite = r.anisotropy_db[np.isfinite(r.anisotropy_db)]
-        lo = float(np.percentile(finite, 1)) if finite.size else -30.0
-        ax2.set_ylim(min(lo - 5.0, -25.0), 15.0)
-        ax2.tick_params(axis="y", colors="0.4")
-    if len(curves) > 1 or reference is not None:
-        ax.legend(fontsize=8, loc="upper left" if len(curves) < 5 else "best")
+    ax.legend(fontsize=8, loc="best")
     ax.set_title(title, fontsize=10)
-    return _save(fig, path)
+    xlabel = r"normalised frequency $\nu = |q| / m^{1/n}$"
+    if ax2 is None:
+        ax.set_xlabel(xlabel)
+    else:
+        lows = []
+        for label, r in curves:
+            ax2.plot(r.nu, r.anisotropy_db, lw=0.9, label=label)
+            finite = r.anisotropy_db[np.isfinite(r.anisotropy_db)]
+            if finite.size:
+                lows.append(float(np.percentile(finite, 1)))
+        ax2.axhline(0.0, color="0.6", lw=0.6)
+        ax2.set_ylim(min(min(lows, default=-30.0) - 5.0, -25.0), 15.0)
+        ax2.set_xlabel(xlabel)
+        ax2.set_ylabel("anisotropy [dB]")
+        ax2.legend(fontsize=8, loc="upper right")
+    return _save(fig, path, formats)
 
 
-def save_pcf(path, curves: Sequence[tuple[str, PCF]], *, title: str = "") -> Path:
+def save_pcf(path, curves: Sequence[tuple[str, PCF]], *, title: str = "",
+             formats: Sequence[str] | None = None) -> Path:
     """Pair correlation functions against r / d_max."""
     fig = Figure(figsize=(6.4, 3.8), layout="tight")
     ax = fig.subplots()
@@ -103,19 +143,18 @@ def save_pcf(path, curves: Sequence[tuple[str, PCF]], *, title: str = "") -> Pat
     for label, p in curves:
         ax.plot(p.r_norm, p.g, lw=1.2, label=label)
         top = max(top, float(np.nanmax(p.g)) * 1.08)
-    ax.axhline(1.0, color="0.6", lw=0.6)
+    ax.axhline(1.0, color="0.6", lw=0.6, label="Poisson (g = 1)")
     ax.set_xlim(0, max(float(p.r_norm[-1] + 0.5 * (p.r_norm[1] - p.r_norm[0])) for _, p in curves))
     ax.set_ylim(0, min(top, 6.0))
-    ax.set_xlabel(r"$r / d_{max}$")
+    ax.set_xlabel(r"distance $r / d_{max}$ (maximal packing distance)")
     ax.set_ylabel("pair correlation g(r)")
-    if len(curves) > 1:
-        ax.legend(fontsize=8)
+    ax.legend(fontsize=8)
     ax.set_title(title, fontsize=10)
-    return _save(fig, path)
+    return _save(fig, path, formats)
 
 
 def save_projections(path, curves: Sequence[tuple[str, Spectrum1D]], *, title: str = "",
-                     nu_max: float = 4.0) -> Path:
+                     nu_max: float = 4.0, formats: Sequence[str] | None = None) -> Path:
     """1-D power spectra of projections on axes, against nu = q / m."""
     fig = Figure(figsize=(6.4, 3.6), layout="tight")
     ax = fig.subplots()
@@ -131,14 +170,15 @@ def save_projections(path, curves: Sequence[tuple[str, Spectrum1D]], *, title: s
     ax.axhline(1.0, color="0.6", lw=0.6)
     ax.set_xlim(0, nu_max)
     ax.set_ylim(0, min(top, 8.0))
-    ax.set_xlabel(r"$\nu = q / m$")
+    ax.set_xlabel(r"normalised frequency $\nu = q / m$")
     ax.set_ylabel("power of the 1-D projection")
     ax.legend(fontsize=8)
     ax.set_title(title, fontsize=10)
-    return _save(fig, path)
+    return _save(fig, path, formats)
 
 
-def save_integration(path, study: IntegrationStudy, *, title: str = "") -> Path:
+def save_integration(path, study: IntegrationStudy, *, title: str = "",
+                     formats: Sequence[str] | None = None) -> Path:
     """Relative variance against point count, log-log, one panel per integrand family."""
     fams = study.families
     fig = Figure(figsize=(4.0 * len(fams), 3.8), layout="tight")
@@ -153,12 +193,12 @@ def save_integration(path, study: IntegrationStudy, *, title: str = "") -> Path:
     axes[-1].legend(fontsize=7)
     if title:
         fig.suptitle(title, fontsize=10)
-    return _save(fig, path)
+    return _save(fig, path, formats)
 
 
 def save_series(path, series: dict[str, tuple[Sequence[float], Sequence[float]]], *,
                 xlabel: str, ylabel: str, title: str = "", logx: bool = False,
-                logy: bool = False) -> Path:
+                logy: bool = False, formats: Sequence[str] | None = None) -> Path:
     """Generic line plot of named (x, y) series."""
     fig = Figure(figsize=(6.0, 3.8), layout="tight")
     ax = fig.subplots()
@@ -173,4 +213,4 @@ def save_series(path, series: dict[str, tuple[Sequence[float], Sequence[float]]]
     ax.grid(True, which="both", lw=0.3, color="0.85")
     ax.legend(fontsize=8)
     ax.set_title(title, fontsize=10)
-    return _save(fig, path)
+    return _save(fig, path, formats)
