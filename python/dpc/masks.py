@@ -126,7 +126,7 @@ def _filter_at_any_size(model, pts: np.ndarray) -> np.ndarray:
     serve a gridded model at its grid's point count only, so this runs the file's layers one by
     one through libdpc's float64 layer kernels (dpc_layer_forward, the training API; radii
     scale with the point count as in every layer, docs/model-format.md §3). Needs the onnx
-    package to read the layers (``pip install dpc[masks]``)."""
+    package to read the layers (the ``masks`` extra)."""
     from . import _core
     from .model_file import read_model
     try:
