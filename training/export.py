@@ -33,7 +33,7 @@ def main(argv=None) -> int:
     try:
         summary = export(a.checkpoint, a.output, standard_ops=a.standard_ops, name=a.name,
                          batched=a.batched)
-    except (ValueError, KeyError) as e:
+    except (ValueError, KeyError, OSError) as e:
         print(f"export.py: error: {type(e).__name__}: {e}", file=sys.stderr)
         return 2
     print(json.dumps(summary, indent=2))

@@ -33,7 +33,7 @@ def main(argv=None) -> int:
         tr = Trainer(cfg, run_dir=a.run_dir, resume=a.resume, force=a.force,
                      progress=not a.no_progress)
         summary = tr.run()
-    except (ConfigError, TrainingError, ValueError, NotImplementedError) as e:
+    except (ConfigError, TrainingError, ValueError, NotImplementedError, OSError) as e:
         print(f"train.py: error: {type(e).__name__}: {e}", file=sys.stderr)
         return 2
     print(json.dumps(summary, indent=2))

@@ -5,12 +5,15 @@
                init_amplitude, input ("uniform" or "stratified": the training inputs)
     [loss]     name + params (registered) | source (Python code) | file (Python file)
     [train]    steps, batch, lr, lr_final, seed, device, threads, impl, checkpoint_every,
-               log_every, eval_sets, run_dir
+               log_every, eval_sets, run_dir, diverge_factor, diverge_patience
+
+Every number is checked: finite, and positive where a size, rate or scale must be.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -61,6 +64,11 @@ class TrainConfig:
     log_every: int = 1
     eval_sets: int = 16        # sets used for the measured quality at the end / on export
     run_dir: str = "runs"
+    # Divergence without NaN: stop when the batch loss stays above diverge_factor x the best
+    # running mean (10 steps) for diverge_patience steps in a row (0: never), or the points
+    # collapse (more than 10% of a set's points coincide). No checkpoint is written meanwhile.
+    diverge_factor: float = 10.0
+    diverge_patience: int = 20
 
 
 @dataclass
@@ -125,8 +133,32 @@ def config_from_dict(d: dict, source_path: str = "") -> Config:
     t = cfg.train
     if t.steps < 1 or t.batch < 1 or t.checkpoint_every < 1 or t.log_every < 1:
         raise ConfigError("[train] steps, batch, checkpoint_every, log_every must be >= 1")
-    if not (t.lr > 0 and t.lr_final > 0):
-        raise ConfigError("[train] lr and lr_final must be > 0")
+    for name in ("lr", "lr_final"):
+        v = getattr(t, name)
+        if not (math.isfinite(v) and v > 0):
+            raise ConfigError(f"[train] {name} = {v!r}: must be finite and > 0")
+    if not (math.isfinite(t.diverge_factor) and t.diverge_factor >= 0):
+        raise ConfigError(f"[train] diverge_factor = {t.diverge_factor!r}: must be finite and >= 0 (0: off)")
+    if t.diverge_factor and t.diverge_factor <= 1:
+        raise ConfigError(f"[train] diverge_factor = {t.diverge_factor!r}: must be > 1 (or 0: off)")
+    if t.diverge_patience < 1:
+        raise ConfigError("[train] diverge_patience must be >= 1")
+    if t.eval_sets < 1:
+        raise ConfigError("[train] eval_sets must be >= 1")
+    if t.seed < 0:
+        raise ConfigError("[train] seed must be >= 0")
+    m = cfg.model
+    for name in ("eps", "init_sigma", "init_amplitude"):
+        v = getattr(m, name)
+        if not math.isfinite(v):
+            raise ConfigError(f"[model] {name} = {v!r}: must be finite")
+    if m.eps < 0:
+        raise ConfigError(f"[model] eps = {m.eps!r}: must be >= 0")
+    if not m.init_sigma > 0:
+        raise ConfigError(f"[model] init_sigma = {m.init_sigma!r}: must be > 0")
+    for r in m.radius:
+        if isinstance(r, bool) or not isinstance(r, (int, float)) or not (math.isfinite(r) and r > 0):
+            raise ConfigError(f"[model] radius {r!r}: every radius must be finite and > 0")
     if t.impl not in IMPLS:
         raise ConfigError(f"[train] impl must be one of {IMPLS}, got {t.impl!r}")
     if t.threads < 0:

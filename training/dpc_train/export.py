@@ -164,14 +164,25 @@ def export(checkpoint, out, standard_ops: str | None = None, name: str | None = 
         loss_fn, _ = build_loss(cfg.loss, cfg.pattern.points, cfg.pattern.dims, cfg.base_dir())
         quality = measure_quality(model, loss_fn, cfg)
     spec = model_spec_from_checkpoint(st, quality or {}, name)
+    # Both files are built in memory first, then each written atomically (temporary file in
+    # its folder, fsync, rename): a failure leaves any existing file as it was, and no half file.
+    data = model_file_module().build_onnx(spec).SerializeToString()
+    std = build_standard_onnx(spec, batched=batched).SerializeToString() if standard_ops else None
     Path(out).parent.mkdir(parents=True, exist_ok=True)
-    model_file_module().write_model(spec, out)
+    from .trainer import atomic_write_bytes
+
+    existed = Path(out).exists()
+    atomic_write_bytes(Path(out), data)
     summary = {"model": str(out), "layers": len(spec.layers), "steps": st["step"],
                "quality": quality}
-    if standard_ops:
-        import onnx
-
-        onnx.save_model(build_standard_onnx(spec, batched=batched), str(standard_ops))
+    if std is not None:
+        try:
+            Path(standard_ops).parent.mkdir(parents=True, exist_ok=True)
+            atomic_write_bytes(Path(standard_ops), std)
+        except BaseException:
+            if not existed:  # the command failed: remove what it created
+                Path(out).unlink(missing_ok=True)
+            raise
         summary["standard_ops"] = str(standard_ops)
     return summary
 

@@ -1,6 +1,9 @@
 """The training loop: Adam with exponential learning-rate decay over batches of realisations,
-tqdm progress, atomic checkpoints, resume, per-seed determinism, loss curve (CSV + PNG), and a
-NaN/inf guard."""
+tqdm progress, atomic checkpoints, resume, per-seed determinism, loss curve (CSV + PNG), and
+guards against divergence: a NaN/inf loss or gradient, an error inside torch (e.g. an overflow
+from a huge learning rate), a loss that jumps and stays up, points that collapse. On any of them
+the run stops with TrainingDivergedError, and the checkpoint on disk is the last good one (a
+checkpoint is only written while the run is healthy)."""
 
 from __future__ import annotations
 
@@ -28,7 +31,31 @@ class TrainingError(RuntimeError):
 
 
 class TrainingDivergedError(TrainingError):
-    """The loss or a gradient became NaN/inf."""
+    """The run diverged (NaN/inf, an error inside torch, a loss jump, collapsed points)."""
+
+# Temporary files of atomic_write_bytes: ".NAME.<random>.tmp" beside NAME.
+_TEMP_PREFIXES = tuple(f".{n}." for n in ("checkpoint.pt", "loss.csv", "loss.png", "config.json",
+                                          "quality.json"))
+
+
+def remove_stale_temporaries(run_dir: Path) -> list[Path]:
+    """Delete the temporary files a killed run left in run_dir (only ours: .NAME.*.tmp)."""
+    gone = []
+    if run_dir.is_dir():
+        for f in run_dir.iterdir():
+            if f.name.endswith(".tmp") and f.name.startswith(_TEMP_PREFIXES) and f.is_file():
+                f.unlink()
+                gone.append(f)
+    return gone
+
+
+def collapsed(y: torch.Tensor, share: float = 0.1) -> bool:
+    """Whether more than `share` of the points of set 0 coincide with another point of it at
+    float32 resolution (delta_min = 0 for a large part of the set)."""
+    s = y[0].detach().double().cpu()
+    q = torch.round(s * (1 << 24)).to(torch.int64)
+    distinct = torch.unique(q, dim=0).shape[0]
+    return distinct < (1.0 - share) * s.shape[0]
 
 
 class RunExistsError(TrainingError):
@@ -127,6 +154,7 @@ class Trainer:
         self.step = 0
         self.wall = 0.0
         self.history: list[tuple[int, float, float, float]] = []
+        self.removed_temporaries = remove_stale_temporaries(self.run_dir)
         if self.ckpt_path.exists():
             if resume:
                 self._restore(load_checkpoint(self.ckpt_path))
@@ -205,23 +233,73 @@ class Trainer:
         x = self.model.input_points(t.batch, g, device=self.device)
         torch.manual_seed((t.seed * 7_919 + self.step) % (1 << 63))  # Monte Carlo in the loss
         self.opt.zero_grad(set_to_none=True)
-        y = self.model(x, impl=t.impl)
-        loss = self.loss_fn(y)
-        val = float(loss.detach())
+        try:
+            y = self.model(x, impl=t.impl)
+            loss = self.loss_fn(y)
+            val = float(loss.detach())
+        except RuntimeError as e:  # e.g. an overflow inside torch from kernels blown up by a huge lr
+            raise TrainingDivergedError(f"torch failed at step {self.step} ({e}); stopping. "
+                                        f"{self._last_good()}") from e
+        self._last_y = y.detach()
         if not math.isfinite(val):
             raise TrainingDivergedError(
-                f"loss is {val} at step {self.step}; stopping. The last good checkpoint is "
-                f"{self.ckpt_path} (step {self._last_ckpt}). Lower [train] lr, check the loss "
-                f"program, or resume from the checkpoint.")
-        loss.backward()
+                f"loss is {val} at step {self.step}; stopping. {self._last_good()} Lower [train] "
+                f"lr, check the loss program, or resume from the checkpoint.")
+        try:
+            loss.backward()
+        except RuntimeError as e:
+            raise TrainingDivergedError(f"torch failed in the backward pass at step {self.step} "
+                                        f"({e}); stopping. {self._last_good()}") from e
         grad = self.model.theta.grad
         if grad is not None and not torch.isfinite(grad).all():
             raise TrainingDivergedError(
-                f"non-finite kernel gradient at step {self.step} (loss {val}); stopping. The last "
-                f"good checkpoint is {self.ckpt_path} (step {self._last_ckpt}).")
-        self.opt.step()
+                f"non-finite kernel gradient at step {self.step} (loss {val}); stopping. "
+                f"{self._last_good()}")
+        try:
+            self.opt.step()
+        except RuntimeError as e:
+            raise TrainingDivergedError(f"the optimiser failed at step {self.step} ({e}); "
+                                        f"stopping. {self._last_good()}") from e
         self.sched.step()
         return val
+
+    # -- divergence ---------------------------------------------------------------------
+    def _last_good(self) -> str:
+        """Names the checkpoint on disk, which is the last good one (or says there is none)."""
+        if self.ckpt_path.exists() and self._last_ckpt is not None:
+            return f"The last good checkpoint is {self.ckpt_path} (step {self._last_ckpt})."
+        return f"No checkpoint was written (none is at {self.ckpt_path})."
+
+    def _watch(self, val: float) -> str | None:
+        """Track the loss; a reason to stop (sustained jump), or None. Sets self._suspect while
+        the loss is above the jump threshold, so that no checkpoint is written then."""
+        t = self.cfg.train
+        self._recent.append(val)
+        if len(self._recent) > 10:
+            self._recent.pop(0)
+        if len(self._recent) == 10:
+            mean = sum(self._recent) / 10
+            if self._best_mean is None or mean < self._best_mean:
+                self._best_mean = mean
+        self._suspect = False
+        if t.diverge_factor and self._best_mean is not None and val > t.diverge_factor * self._best_mean:
+            self._suspect = True
+            self._above += 1
+            if self._above >= t.diverge_patience:
+                return (f"the loss jumped: {val:.4g} at step {self.step}, above {t.diverge_factor:g} x "
+                        f"the best running mean {self._best_mean:.4g} for {self._above} steps")
+        else:
+            self._above = 0
+        return None
+
+    def _healthy_for_checkpoint(self) -> str | None:
+        """A reason not to write a checkpoint now (the model may be degenerate), or None."""
+        if self._suspect:
+            return "loss above the jump threshold"
+        y = getattr(self, "_last_y", None)
+        if y is not None and collapsed(y):
+            return "points collapsed"
+        return None
 
     def run(self) -> dict:
         from tqdm import tqdm
@@ -230,7 +308,13 @@ class Trainer:
         self.run_dir.mkdir(parents=True, exist_ok=True)
         atomic_write_bytes(self.run_dir / "config.json",
                            json.dumps(self.cfg.to_dict(), indent=2).encode())
-        self._last_ckpt = self.step
+        # the checkpoint on disk (a resumed run's), whose step is the last good one
+        self._last_ckpt = self.step if self.ckpt_path.exists() else None
+        self._recent: list[float] = [h[1] for h in self.history[-10:]]
+        self._best_mean = None
+        self._above = 0
+        self._suspect = False
+        pending = False  # a checkpoint is due but was held back while the run looked unhealthy
         bar = tqdm(total=t.steps, initial=self.step, disable=not self.progress, unit="step",
                    dynamic_ncols=True, desc=self.cfg.pattern.name)
         try:
@@ -244,9 +328,23 @@ class Trainer:
                     self.history.append((self.step, val, lr, round(self.wall, 3)))
                 bar.update(1)
                 bar.set_postfix(loss=f"{val:.4g}", lr=f"{lr:.2g}")
-                if self.step % t.checkpoint_every == 0 or self.step == t.steps:
-                    self.checkpoint(final=self.step == t.steps)
-                    self._last_ckpt = self.step
+                why = self._watch(val)
+                if why:
+                    self.write_curve()  # the curve shows what happened; the checkpoint stays
+                    raise TrainingDivergedError(f"{why}; stopping. {self._last_good()}")
+                if self.step % t.checkpoint_every == 0 or self.step == t.steps or pending:
+                    hold = self._healthy_for_checkpoint()
+                    if hold == "points collapsed" or (hold and self.step == t.steps):
+                        self.write_curve()
+                        raise TrainingDivergedError(
+                            f"{hold} at step {self.step} (collapsed: more than 10% of a set's "
+                            f"points coincide); stopping. {self._last_good()}"
+                            if hold == "points collapsed" else
+                            f"{hold} at the last step {self.step}; stopping. {self._last_good()}")
+                    pending = bool(hold)
+                    if not hold:
+                        self.checkpoint(final=self.step == t.steps)
+                        self._last_ckpt = self.step
         finally:
             bar.close()
         quality = measure_quality(self.model, self.loss_fn, self.cfg, self.device)
