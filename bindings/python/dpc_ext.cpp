@@ -96,7 +96,7 @@ bool job_wait(Job &j, int ms) {
 // worker finish on its own (it owns the buffer and the model reference).
 void job_abandon(const std::shared_ptr<Job> &j, std::thread &t) {
     j->cancel.store(true);
-    if (job_wait(*j, 300)) t.join();
+    if (job_wait(*j, 100)) t.join();
     else t.detach();
 }
 

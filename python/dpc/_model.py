@@ -122,16 +122,28 @@ def model_path(name_or_path) -> Path:
 def uniform(seed: int, m: int, n: int) -> np.ndarray:
     """The input points libdpc filters for ``seed``: (m, n) float32, bit-exact with C's
     ``dpc_uniform`` (docs/model-format.md, "Input points")."""
-    return _core.uniform(_seed(seed), _integer(m, "m", 1, limit=True), _integer(n, "n", 1, limit=True),
-                         _max_bytes(None))
+    m, n, limit = _input_size(m, n, MAX_POINTS * 64)
+    return _core.uniform(_seed(seed), m, n, limit)
+
+
+def _input_size(m, n, most: int) -> tuple[int, int, float]:
+    """Checked (m, n) of an input-point request and the byte limit (LimitError beyond it)."""
+    m = _integer(m, "m", 1, most, limit=True)
+    n = _integer(n, "n", 1, most, limit=True)
+    limit = _max_bytes(None)
+    if m * n * 4 > limit:
+        raise LimitError(f"{m} x {n} floats would take {m * n * 4 / 2**30:.3g} GiB, more than the "
+                         f"limit of {limit / 2**30:.3g} GiB (DPC_MAX_OUTPUT_BYTES raises it)")
+    return m, n, limit
 
 
 def stratified(seed: int, m: int, n: int) -> np.ndarray:
     """The stratified input points for ``seed`` (``input="stratified"``): the same uniform numbers
     placed one point per cell of a g^n grid, g^n <= m, in random order; (m, n) float32, bit-exact
     with C's ``dpc_stratified`` (docs/model-format.md, "Input points")."""
-    return _core.stratified(_seed(seed), _integer(m, "m", 1, MAX_POINTS, limit=True),
-                            _integer(n, "n", 1, limit=True), _max_bytes(None))
+    _integer(m, "m", 1, MAX_POINTS, limit=True)
+    m, n, limit = _input_size(m, n, MAX_POINTS)
+    return _core.stratified(_seed(seed), m, n, limit)
 
 
 class Model:

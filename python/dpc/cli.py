@@ -700,7 +700,10 @@ def main(argv=None) -> int:
     except (DpcError, OSError, ValueError, MemoryError) as e:
         if debug:
             raise
-        click.echo(f"dpc: error: {_one_line(e) or type(e).__name__}", err=True)
+        msg = str(e)
+        if isinstance(e, OSError) and not isinstance(e, DpcError) and e.strerror:
+            msg = e.strerror + (f": {e.filename}" if e.filename else "")  # no "[Errno 28]"
+        click.echo(f"dpc: error: {_one_line(msg) or type(e).__name__}", err=True)
         return 1
     return rv if isinstance(rv, int) else 0
 

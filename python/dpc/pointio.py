@@ -112,6 +112,15 @@ def write_points(path, points, fmt: str | None = None, *, bin_dtype: str = "floa
             raise PointFileError(f"bin_dtype must be float64 or float32, got {bin_dtype!r}")
         if a.shape[1] >= 2 ** 32:
             raise PointFileError("UTK .bin stores the point count as uint32")
+    try:
+        _write(p, a, kind, bin_dtype, progress_bar)
+    except OSError as e:  # a full disk, a size limit, a vanished folder: say which file
+        why = e.strerror or str(e)
+        raise OSError(e.errno, f"cannot write {p}: {why}") from e
+    return p
+
+
+def _write(p: Path, a: np.ndarray, kind: str, bin_dtype: str, progress_bar: bool) -> None:
     with _atomic.atomic_file(p, "wb") as fh:
         if kind == "npy":
             arr = a[0] if a.shape[0] == 1 else a
@@ -133,7 +142,6 @@ def write_points(path, points, fmt: str | None = None, *, bin_dtype: str = "floa
             for s in range(a.shape[0]):
                 fh.write(int(a.shape[1]).to_bytes(4, "little"))
                 fh.write(np.ascontiguousarray(a[s], dtype=dt).tobytes())
-    return p
 
 
 def _stack(sets: list[np.ndarray], where: str) -> np.ndarray:
