@@ -19,6 +19,8 @@ step "system packages"
 # mesa-vulkan-drivers (lavapipe), libvulkan-dev (headers, loader), glslc, vulkan-validationlayers:
 # the Vulkan backend's tests.
 APT_PKGS="libgtest-dev clang libclang-rt-14-dev cmake ninja-build mesa-vulkan-drivers libvulkan-dev glslc vulkan-validationlayers"
+# pkg-config, python3-venv: libdpc as a dependency of another project, the wheel in a clean venv.
+APT_PKGS="$APT_PKGS pkg-config python3-venv unzip"
 missing=$(for p in $APT_PKGS; do dpkg -s "$p" >/dev/null 2>&1 || echo "$p"; done)
 if [ -n "$missing" ]; then
   SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
@@ -87,6 +89,30 @@ cmake -S . -B build/fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DDPC_BUILD_
       -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ >/dev/null
 cmake --build build/fuzz -j "$JOBS"
 bash tests/fuzz/run_fuzzer.sh build/fuzz "$FUZZ_SECONDS"
+
+step "libdpc as a dependency: C-only build, cmake --install, find_package, pkg-config, add_subdirectory"
+bash tests/downstream/run.sh
+
+step "the wheel in a clean virtual environment (models inside; the train extra with the CPU torch)"
+rm -rf build/wheel build/wheel-venv
+python3 -m pip wheel -q --disable-pip-version-check --no-deps --no-build-isolation -w build/wheel "$ROOT"
+WHEEL=$(ls build/wheel/deep_point_correlation-*.whl)
+n_models=$(unzip -l "$WHEEL" | grep -c 'dpc/models/.*\.onnx$')
+echo "$WHEEL: $n_models bundled models"
+[ "$n_models" -ge 10 ] || { echo "the wheel lacks the bundled models"; exit 1; }
+python3 -m venv build/wheel-venv
+build/wheel-venv/bin/python -m pip install -q --disable-pip-version-check "$WHEEL"
+(cd /tmp && "$ROOT/build/wheel-venv/bin/dpc" generate -m bnot-2d-stratified -n 512 -o "$ROOT/build/wheel-points.npy" \
+   && "$ROOT/build/wheel-venv/bin/python" -c "
+import numpy, dpc, sys
+a = numpy.load(sys.argv[1])
+assert a.shape == (512, 2) and a.dtype == numpy.float32, (a.shape, a.dtype)
+assert 'bnot-2d' in dpc.available_models() and dpc.__file__.startswith(sys.prefix), dpc.__file__
+print('clean venv:', dpc.__version__, len(dpc.available_models()), 'models,', a.shape, a.dtype)" "$ROOT/build/wheel-points.npy")
+# the train extra, with torch pinned to the CPU build first (README, docs/training.md)
+build/wheel-venv/bin/python -m pip install -q --disable-pip-version-check torch==2.13.0
+build/wheel-venv/bin/python -m pip install -q --disable-pip-version-check "$WHEEL[train]"
+build/wheel-venv/bin/python -c "import torch, onnx; assert torch.version.cuda is None, torch.version.cuda; print('train extra: torch', torch.__version__, 'onnx', onnx.__version__)"
 
 step "Python tests (installed package)"
 set +e

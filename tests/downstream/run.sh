@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Builds libdpc C-only (the C++ compiler is set to a path that does not exist, so configuring
-# fails if anything needs C++), installs it into a fresh prefix, then builds and runs a separate
-# downstream project against it: with find_package(dpc CONFIG) (dpc::dpc and dpc::dpc_static),
-# with pkg-config (shared, and static), and with add_subdirectory of the checkout; last, the
-# build line written in libdpc/examples/generate.c, exactly as written there.
+# fails if anything needs C++), installs it into a fresh prefix, then builds and runs a
+# separate downstream project against it:
+# with find_package(dpc CONFIG) (dpc::dpc and dpc::dpc_static), with pkg-config (shared, and
+# static), again after moving the whole prefix elsewhere, and with add_subdirectory of the
+# checkout; last, the build line written in libdpc/examples/generate.c, exactly as written.
 #   bash tests/downstream/run.sh            # about a minute on 2 cores
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
@@ -59,6 +60,15 @@ cc -std=c11 "$ROOT/tests/downstream/main.c" $(pkg-config --cflags dpc) -L"$(pkg-
 check "bnot-2d-stratified: 1024 points in 2-D" "$WORK/pc_static" bnot-2d-stratified
 ldd "$WORK/pc_static" | grep -q libdpc && { echo "pc_static links libdpc.so"; exit 1; }
 DPC_MODEL_PATH="$ROOT/tests/data" check "points in 3-D" "$WORK/pc_shared" model_3d_proj
+
+step "the whole prefix moved elsewhere: pkg-config and (shared library) dpc_model_dir() follow it"
+mv "$WORK/prefix" "$WORK/moved"
+export PKG_CONFIG_PATH="$WORK/moved/${LIBDIR#"$WORK/prefix/"}/pkgconfig"
+# shellcheck disable=SC2046
+cc -std=c11 "$ROOT/tests/downstream/main.c" $(pkg-config --cflags --libs dpc) \
+   -Wl,-rpath,"$(pkg-config --variable=libdir dpc)" -o "$WORK/pc_moved"
+check "models in $(cd "$WORK/moved/share/dpc/models" && pwd -P)" "$WORK/pc_moved" bnot-2d
+mv "$WORK/moved" "$WORK/prefix"
 
 step "downstream project, add_subdirectory(dpc checkout)"
 quiet cmake -S "$ROOT/tests/downstream" -B "$WORK/sub" "${GEN[@]}" -DDPC_DOWNSTREAM_MODE=add_subdirectory \

@@ -13,11 +13,12 @@
  * - Handles are opaque. dpc_model_free(NULL) is a no-op. Output buffers belong to the caller.
  * - A loaded model is immutable: any number of threads may call any function on the same model
  *   at the same time. Results are a pure function of (model file, input kind, seed, point
- *   count) and are bit-identical across runs and thread counts for one build and one ISA path
- *   (on the Vulkan backend: for one build, device and driver). Other ISA paths and the Vulkan
- *   backend round differently; a deep trained cascade amplifies that, so they return point sets
- *   of the same quality, not the same points: pin the ISA where every machine must give the same
- *   points.
+ *   count), the same bits across runs, thread counts, batch splits, ISA paths (scalar, AVX2,
+ *   AVX-512) and machines: every CPU path evaluates one canonical order of float32 operations
+ *   (docs/model-format.md §3, "Evaluation order"). The Vulkan backend evaluates the same formula
+ *   in the GPU's order and rounding: the same bits run to run on one device and driver, and,
+ *   since a deep trained cascade amplifies rounding, other points of the same quality than the
+ *   CPU; use the CPU backend where every machine must give the same points.
  * - The header is C99 and C++ clean.
  */
 #ifndef DPC_DPC_H
@@ -158,7 +159,7 @@ typedef struct dpc_load_options {
      * spacings, m the requested point count), must not exceed it, else a generate or filter call
      * fails with DPC_ERROR_LIMIT before any work (a file with radius 1e6 would otherwise make
      * every layer all pairs, O(m^2)). Default DPC_DEFAULT_MAX_NEIGHBOURS, which every bundled
-     * model passes at every count (their largest: 400, mask-vector-64; bnot-2d: 50); INFINITY
+     * model passes at every count (their largest: 201, bnot-2d-wide; bnot-2d: 50); INFINITY
      * removes the bound. Must be > 0 (NaN is refused). dpc_model_neighbours() tells a model's
      * value. Added after `input`: a struct_size of offsetof(dpc_load_options, max_neighbours)
      * is still accepted, with the default. */
@@ -187,9 +188,11 @@ DPC_API void dpc_model_free(dpc_model *model);
  * DPC_ERROR_IO with the folders searched when no file is found. */
 DPC_API dpc_status dpc_model_load_named(const char *name, const dpc_load_options *options,
                                         dpc_model **out_model);
-/* The folder `cmake --install` put the bundled models in (<prefix>/share/dpc/models, fixed when
- * libdpc was configured), or "" for a build that installs none (the Python package's copy:
- * dpc.load finds its own). Static string. */
+/* The folder `cmake --install` put the bundled models in: <prefix>/share/dpc/models found
+ * beside the shared library (so a prefix given at install time, or a moved install, still
+ * works), else the folder configured at build time (CMAKE_INSTALL_PREFIX: all a static libdpc
+ * knows); "" for a build that installs none (the Python package's copy: dpc.load finds its
+ * own). Canonical path; static string. DPC_MODEL_PATH serves any other place. */
 DPC_API const char *dpc_model_dir(void);
 
 /* ---------------------------------------------------------------------------------------------
@@ -311,8 +314,8 @@ DPC_API dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, f
  * Sampler: values for (pixel, sample index, dimension), for a renderer
  *
  * A sampler holds, for each of its D dimension slots, a dpc point set of spp points (spp =
- * samples per pixel), generated once when it is created, on the scalar path with one thread, so
- * the tables are the same on every machine. A lookup for pixel (x, y), sample index i and
+ * samples per pixel), generated once when it is created on the CPU backend (whose ISA paths all
+ * give the same bits), so the tables are the same on every machine. A lookup for pixel (x, y), sample index i and
  * dimension d reads table d mod D at point (i mod spp) rotated by a per-pixel offset, and shifts
  * it toroidally by the pixel's entry of a 32 x 32 screen-space mask (moved and rotated per
  * dimension): each pixel gets the model's blue-noise set, and neighbouring pixels get shifts

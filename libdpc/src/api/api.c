@@ -1,5 +1,7 @@
 /* The only file on the ABI boundary: checks every argument, turns every failure into a status
  * with a message, and hands valid requests to the model and the backend. */
+#define _GNU_SOURCE /* dladdr: where this library lies, for dpc_model_dir() */
+#include <dlfcn.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <float.h>
@@ -20,9 +22,13 @@
 
 #define MAX_FLOATS_PER_SET (1ull << 28) /* n_points * dims: 1 GiB of floats */
 
-/* Where `cmake --install` puts the bundled models (CMake defines it for this file). */
+/* Where `cmake --install` puts the bundled models (CMake defines both for this file): the
+ * configured absolute folder, and the same folder relative to the library's own folder. */
 #ifndef DPC_MODEL_DIR
 #define DPC_MODEL_DIR ""
+#endif
+#ifndef DPC_MODEL_DIR_FROM_LIB
+#define DPC_MODEL_DIR_FROM_LIB ""
 #endif
 
 #define M_PI_VALUE 3.14159265358979323846
@@ -244,7 +250,37 @@ dpc_status dpc_model_load_file(const char *path, const dpc_load_options *options
     return DPC_OK;
 }
 
-const char *dpc_model_dir(void) { return DPC_MODEL_DIR; }
+static char model_dir[4096];
+static pthread_once_t model_dir_once = PTHREAD_ONCE_INIT;
+
+static int is_dir(const char *path) {
+    struct stat info;
+    return stat(path, &info) == 0 && S_ISDIR(info.st_mode);
+}
+
+/* The models beside this library (<libdir>/../share/dpc/models: an install moved, or made with
+ * `cmake --install --prefix`), else the configured folder; canonical (realpath). */
+static void find_model_dir(void) {
+    char buf[4096] = "";
+    Dl_info info;
+    if (DPC_MODEL_DIR_FROM_LIB[0] && dladdr((void *)&find_model_dir, &info) && info.dli_fname) {
+        const char *slash = strrchr(info.dli_fname, '/');
+        if (slash) {
+            const int n = snprintf(buf, sizeof buf, "%.*s/%s", (int)(slash - info.dli_fname), info.dli_fname,
+                                   DPC_MODEL_DIR_FROM_LIB);
+            if (n < 0 || (size_t)n >= sizeof buf || !is_dir(buf)) buf[0] = '\0';
+        }
+    }
+    if (!buf[0] && DPC_MODEL_DIR[0] && strlen(DPC_MODEL_DIR) < sizeof buf) snprintf(buf, sizeof buf, "%s", DPC_MODEL_DIR);
+    char *real = buf[0] ? realpath(buf, NULL) : NULL;
+    snprintf(model_dir, sizeof model_dir, "%s", real && strlen(real) < sizeof model_dir ? real : buf);
+    free(real);
+}
+
+const char *dpc_model_dir(void) {
+    pthread_once(&model_dir_once, find_model_dir);
+    return model_dir;
+}
 
 /* Whether dir/name.onnx is a regular file; its path in buf. */
 static int named_file(const char *dir, size_t dir_len, const char *name, char *buf, size_t cap) {
@@ -571,9 +607,9 @@ static dpc_status generate_one(const dpc_model *model, const dpc_cpu_engine *eng
 #endif
 }
 
-dpc_status dpc_model_generate_pinned(const dpc_model *model, uint64_t seed, size_t m, float *out) {
+dpc_status dpc_model_generate_cpu(const dpc_model *model, uint64_t seed, size_t m, float *out) {
     dpc_cpu_engine scalar;
-    dpc_status st = dpc_cpu_engine_init(&scalar, DPC_ISA_SCALAR, 1);
+    dpc_status st = dpc_cpu_engine_init(&scalar, model->engine.isa, 1); /* every ISA: the same bits */
     if (st != DPC_OK) return st;
     if ((st = check_count(model, &m)) != DPC_OK) return st;
     return generate_one(model, &scalar, seed, m, out, NULL);
