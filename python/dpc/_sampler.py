@@ -42,7 +42,7 @@ class Sampler:
     """Sample values for a renderer: dimension slot ``d`` of pixel ``(x, y)``, sample ``index``.
 
     Each of the ``dimensions`` slots holds one dpc point set of ``samples_per_pixel`` points
-    (made once, on libdpc's scalar path, so every machine gets the same values); each pixel
+    (made once on libdpc's CPU backend, so every machine gets the same values); each pixel
     reads it rotated and toroidally shifted by its entry of a 32 x 32 screen-space mask, so
     neighbouring pixels' errors cancel at low screen frequencies. docs/rendering.md defines
     every step. Values are float32 in [0, 1); the same C object backs the C API, the Mitsuba

@@ -309,8 +309,8 @@ def list_cmd():
               help="Worker threads for models (0 = one per CPU).")
 @click.option("--isa", type=click.Choice(["auto", "scalar", "avx2", "avx512"]), default="auto",
               show_default=True,
-              help="CPU code path for models. Each path gives other points of the same quality "
-                   "for a seed: pin one where every machine must give the same points.")
+              help="CPU code path for models. Every path gives the same bits (a canonical "
+                   "order of float operations); only speed differs.")
 @click.option("--backend", type=click.Choice(["auto", "cpu", "vulkan"]), default="auto",
               show_default=True,
               help="What runs a model: auto (a Vulkan GPU if there is one, else the CPU), cpu, "

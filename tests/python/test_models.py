@@ -77,38 +77,57 @@ def test_dither_mask_beats_white_noise():
     assert np.mean(levels) < 0.25, levels  # white-noise masks: 1.0 (docs/models.md)
 
 
-def _paths():
-    """(label, model) for every CPU ISA path this machine runs, and Vulkan where it exists."""
+def _cpu_isas() -> list[str]:
     out = []
     for isa in ("scalar", "avx2", "avx512"):
         try:
-            out.append((isa, dpc.load("bnot-2d", isa=isa, backend="cpu")))
+            dpc.load("repulsion-2d", isa=isa, backend="cpu")
+            out.append(isa)
         except dpc.UnsupportedError:
             pass  # this CPU lacks the instructions
-    try:
-        out.append(("vulkan", dpc.load("bnot-2d", backend="vulkan")))
-    except dpc.UnsupportedError:
-        pass  # no device (tests/python/test_vulkan.py reports that)
     return out
 
 
-def test_every_backend_gives_the_same_quality_not_the_same_points():
+@pytest.mark.parametrize("name", sorted(dpc.available_models()))
+def test_every_cpu_path_gives_the_same_bits_on_every_bundled_model(name):
+    """dpc.h: the CPU ISA paths evaluate one canonical order (docs/model-format.md §3), so every
+    bundled model gives the same bits on each, at the trained count and others, for 1 or 3
+    threads."""
+    isas = _cpu_isas()
+    if len(isas) < 2:
+        pytest.skip("this CPU runs only the scalar path: nothing to compare")
+    ref = dpc.load(name, isa="scalar", backend="cpu", threads=1)
+    counts = [None] if ref.grid_axes else [None, 200, 3000]
+    want = {n: ref.generate(seed=11, n_points=n) for n in counts}
+    for isa in isas[1:]:
+        for threads in (1, 3):
+            model = dpc.load(name, isa=isa, backend="cpu", threads=threads)
+            for n in counts:
+                got = model.generate(seed=11, n_points=n)
+                assert np.array_equal(got, want[n]), (name, isa, threads, n)
+
+
+def test_vulkan_gives_the_same_quality_not_the_same_points():
     """The trained 40-layer cascade amplifies float32 rounding (docs/training.md, "Precision
-    sensitivity"): ISA paths and the Vulkan backend return other points for one seed (each path is
-    bit-identical with itself), but point sets of the same quality. Prints the numbers with -s."""
+    sensitivity"): the Vulkan backend rounds in the GPU's order, so it returns other points for
+    one seed than the CPU, but point sets of the same quality. Prints the numbers with -s."""
     from dpc import analysis
 
+    try:
+        gpu = dpc.load("bnot-2d", backend="vulkan")
+    except dpc.UnsupportedError as e:
+        pytest.skip(f"no Vulkan device: {e}")
     rows = {}
-    for label, model in _paths():
+    for label, model in [("cpu", dpc.load("bnot-2d", backend="cpu")), ("vulkan", gpu)]:
         sets = model.generate_batch(16, seed=0)
         elow = np.array([analysis.radial_spectrum(s[None], nu_max=4.0).low_frequency_energy(0.5) for s in sets])
         rows[label] = (sets, elow, analysis.min_distance(sets).ratios)
-    ref_sets, ref_elow, ref_dmin = rows["scalar"]
+    ref_sets, ref_elow, ref_dmin = rows["cpu"]
     for label, (sets, elow, dmin) in rows.items():
         d = np.abs(sets.astype(np.float64) - ref_sets)
         d = np.minimum(d, 1.0 - d)
         print(f"[ info ] bnot-2d {label}: E_low(0.5) {elow.mean():.5f}, delta_min {dmin.mean():.4f}, "
-              f"vs scalar max |diff| {d.max():.3g}, median {np.median(d):.3g}")
+              f"vs cpu max |diff| {d.max():.3g}, median {np.median(d):.3g}")
         se = lambda a, b: 4.0 * np.hypot(a.std(ddof=1), b.std(ddof=1)) / np.sqrt(len(a))  # noqa: E731
         assert abs(elow.mean() - ref_elow.mean()) <= se(elow, ref_elow), (label, elow.mean(), ref_elow.mean())
         assert abs(dmin.mean() - ref_dmin.mean()) <= se(dmin, ref_dmin), (label, dmin.mean(), ref_dmin.mean())

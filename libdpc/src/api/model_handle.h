@@ -20,8 +20,9 @@ struct dpc_model {
 #endif
 };
 
-/* dpc_generate_n of the model's cascade and input kind, always on the scalar path with one
- * thread, whatever the handle's ISA, threads and backend: the points every machine gives. */
-dpc_status dpc_model_generate_pinned(const dpc_model *model, uint64_t seed, size_t m, float *out);
+/* dpc_generate_n of the model's cascade and input kind on the CPU backend with one thread,
+ * whatever the handle's threads and backend: the points every machine gives (every CPU ISA path
+ * gives the same bits; the Vulkan backend does not). */
+dpc_status dpc_model_generate_cpu(const dpc_model *model, uint64_t seed, size_t m, float *out);
 
 #endif

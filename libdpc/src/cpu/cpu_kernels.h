@@ -38,6 +38,9 @@ typedef void (*dpc_block_fn)(const dpc_sub_job *job, const float *xs, unsigned c
 
 void dpc_block_scalar(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
                       unsigned n_ranges, float *acc, float *scratch);
+/* The AVX-512 path's 16-lane arrangement with portable primitives: for the kernel tests only. */
+void dpc_block_packed16(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
+                        unsigned n_ranges, float *acc, float *scratch);
 #if defined(DPC_HAVE_AVX2)
 void dpc_block_avx2(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
                     unsigned n_ranges, float *acc, float *scratch);

@@ -56,7 +56,7 @@ dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
     for (uint64_t k = 0; t < D; k++) {
         const dpc_model *m = o->models[k % o->n_models];
         const uint32_t dims = m->cascade.dims;
-        if ((st = dpc_model_generate_pinned(m, set_seed(s->base, k), n, set)) != DPC_OK) goto done;
+        if ((st = dpc_model_generate_cpu(m, set_seed(s->base, k), n, set)) != DPC_OK) goto done;
         for (uint32_t a = 0; a + 1 < dims && t < D; a += 2, t++) {
             float *table = s->tables + (size_t)t * n * 2;
             for (uint32_t i = 0; i < n; i++) {

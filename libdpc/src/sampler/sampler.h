@@ -1,5 +1,5 @@
 /* The renderer-facing sampler (dpc_sampler_*): per dimension slot, a dpc point set of spp points
- * generated once on the pinned scalar path; per pixel, a toroidal shift from a screen-space mask
+ * generated once on the CPU backend; per pixel, a toroidal shift from a screen-space mask
  * and a rotation of the sample index. A lookup is a few integer hashes, two table reads and two
  * float additions: no allocation, no lock, the same bits on every machine.
  * The definition is written out in docs/rendering.md ("Definition"); tests/python/

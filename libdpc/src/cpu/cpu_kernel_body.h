@@ -1,0 +1,298 @@
+/* The hot loop of a filter layer, written once for every ISA path: the canonical evaluation
+ * order of docs/model-format.md §3 ("Evaluation order") in GCC vector arithmetic. Every step is
+ * an IEEE-754 float operation (or an exact integer one) in a fixed order, so every path that
+ * includes this file gives the same bits.
+ *
+ * Canonical order: a query point's candidates form one run (its index ranges concatenated in
+ * order); candidate c goes to lane c mod 8; each lane sums its terms in candidate order with
+ * FMAs; the 8 lane sums are added in a fixed tree. A vector holds VW = 8 or 16 lanes: with 16,
+ * lanes 0-7 belong to one query point and lanes 8-15 to the next, both over the same 8
+ * candidates, so each lane still sees exactly the canonical operations.
+ *
+ * Included by cpu_kernel_scalar.c, cpu_kernel_avx2.c and cpu_kernel_avx512.c, which first define:
+ *   KERNEL              the name of the entry point to define (a dpc_block_fn)
+ *   VW                  8 or 16, and the types vf (VW floats) and vi (VW int32s)
+ *   FMA(a, b, c)        a * b + c rounded once, lane by lane
+ *   table_regs          a kernel table prepared for LOOKUP
+ *   LOAD_TABLE(T, w, n) prepare the n-entry table w into T
+ *   LOOKUP(T, b)        the entries w[b[l]] (vf); every b[l] is in [0, n - 1]
+ * and optionally VANY(m) (whether any lane of a mask is set). */
+#ifndef KERNEL
+#error "define KERNEL, VW, vf, vi, FMA, table_regs, LOAD_TABLE and LOOKUP before including cpu_kernel_body.h"
+#endif
+
+#include <string.h>
+
+#define CANON 8 /* canonical lanes per query */
+
+static inline vf vsplat(float a) { return (vf){0} + a; }
+static inline vi visplat(int32_t a) { return (vi){0} + a; }
+static inline vf vselect(vi mask, vf a, vf b) { return (vf)(((vi)a & mask) | ((vi)b & ~mask)); }
+
+/* The 8 candidates at p, in each query half. */
+static inline vf vload8(const float *p) {
+    vf v;
+#if VW == 8
+    memcpy(&v, p, sizeof v);
+#else
+    memcpy(&v, p, 8 * sizeof(float));
+    memcpy((float *)&v + 8, p, 8 * sizeof(float));
+#endif
+    return v;
+}
+/* Query A's value in lanes 0-7 (and query B's in lanes 8-15). */
+static inline vf vpair(float a, float b) {
+    vf v = vsplat(a);
+#if VW == 16
+    for (int l = 8; l < 16; l++) v[l] = b;
+#else
+    (void)b;
+#endif
+    return v;
+}
+/* Lanes whose candidate exists: lane mod 8 < left. */
+static inline vi vlanes_below(uint32_t left) {
+#if VW == 8
+    const vi lane = {0, 1, 2, 3, 4, 5, 6, 7};
+#else
+    const vi lane = {0, 1, 2, 3, 4, 5, 6, 7, 0, 1, 2, 3, 4, 5, 6, 7};
+#endif
+    return lane < visplat((int32_t)(left < CANON ? left : CANON));
+}
+#ifndef VMIN /* lane-wise minimum of finite floats / of ints; an ISA may give one instruction */
+#define VMIN(a, b) vselect((a) < (b), (a), (b))
+#define VIMIN(a, b) ((vi)vselect((a) < (b), (vf)(a), (vf)(b)))
+#endif
+#ifndef VANY
+static inline int vany(vi m) {
+    int32_t r = 0;
+    for (int l = 0; l < VW; l++) r |= m[l];
+    return r != 0;
+}
+#define VANY(m) vany(m)
+#endif
+
+/* Minimum-image difference: t - rint(t) for |t| < 2^22, rint rounding half to even; by default
+ * as two float additions (which the compiler may not fold without -ffast-math), or an ISA's
+ * round-to-nearest-even instruction, the same value. */
+#ifndef VRINT
+static inline vf vrint(vf t) {
+    const vf big = vsplat(12582912.0f); /* 1.5 * 2^23 */
+    return (t + big) - big;
+}
+#define VRINT(t) vrint(t)
+#endif
+static inline vf vwrap(vf t) { return t - VRINT(t); }
+
+/* 1 / sqrt(x) for x >= 0, relative error about 1e-6: the magic-constant guess and corrected
+ * Newton step of Moroz et al. (2018), then one plain Newton step. Only float multiplications and
+ * FMAs, so every path agrees bit for bit; x = 0 gives a large finite y (and then d = x y = 0). */
+static inline vf vrsqrt(vf x) {
+    vf y = (vf)(visplat(0x5F1FFFF9) - ((vi)x >> 1));
+    vf e = FMA(-(x * y), y, vsplat(2.38924456f));
+    y = (vsplat(0.703952253f) * y) * e;
+    e = FMA(-(vsplat(0.5f) * x * y), y, vsplat(1.5f));
+    return y * e;
+}
+
+/* sqrt(x) from y ~ 1 / sqrt(x): d = x y, then one Newton step on d, which makes it correctly
+ * rounded but for 5e-6 of an ulp (u = d (b - 1) / r passes d's error on to the bin position). */
+static inline vf vsqrt(vf x, vf y) {
+    const vf d = x * y;
+    return FMA(vsplat(0.5f) * y, FMA(-d, d, x), d);
+}
+
+/* The 8 lane sums of query half h added in the canonical tree: (l, l + 4), (l, l + 2), (0, 1). */
+static inline float vreduce(vf v, int h) {
+    float a[CANON];
+    for (int l = 0; l < CANON; l++) a[l] = v[h * CANON + l];
+    for (int w = 4; w >= 1; w /= 2)
+        for (int l = 0; l < w; l++) a[l] = a[l] + a[l + w];
+    return a[0];
+}
+
+/* The candidate run of a block of query points: its index ranges concatenated in order. A run
+ * of one range is read in place; longer ones are copied into scratch in chunks of
+ * DPC_GATHER_CAP candidates (a multiple of 8, so every candidate keeps its lane). */
+typedef struct run {
+    const uint32_t *ranges;
+    unsigned n_ranges, r; /* the next range, and the position inside it */
+    uint32_t at;
+} run;
+
+static inline uint32_t next_chunk(run *rn, const dpc_sub_job *job, unsigned k, float *scratch, const float **cols,
+                                  uint32_t *first) {
+    if (rn->r >= rn->n_ranges) return 0;
+    if (rn->n_ranges == 1) {
+        rn->r++;
+        for (unsigned q = 0; q < k; q++) cols[q] = job->coord[q];
+        *first = rn->ranges[0];
+        return rn->ranges[1] - rn->ranges[0];
+    }
+    uint32_t got = 0; /* several ranges: the grid, which always passes scratch (k <= 4) */
+    while (rn->r < rn->n_ranges && got < DPC_GATHER_CAP) {
+        const uint32_t a = rn->ranges[2 * rn->r] + rn->at, b = rn->ranges[2 * rn->r + 1];
+        uint32_t len = b - a;
+        if (len > DPC_GATHER_CAP - got) len = DPC_GATHER_CAP - got;
+        for (unsigned q = 0; q < k; q++) { /* whole 8-float copies: columns are readable 16 floats past
+                                                * any range end and scratch has room for the overrun */
+            float *dst = scratch + q * DPC_GATHER_STRIDE + got;
+            const float *src = job->coord[q] + a;
+            for (uint32_t o = 0; o < len; o += 8) memcpy(dst + o, src + o, 8 * sizeof(float));
+        }
+        got += len;
+        if (a + len == b) rn->r++, rn->at = 0;
+        else rn->at += len;
+    }
+    for (unsigned q = 0; q < k; q++) {
+        memset(scratch + q * DPC_GATHER_STRIDE + got, 0, CANON * sizeof(float)); /* the last vector's tail */
+        cols[q] = scratch + q * DPC_GATHER_STRIDE;
+    }
+    *first = 0;
+    return got;
+}
+
+#define SETUP                                                                                          \
+    const vf cut2 = vsplat(job->cutoff * job->cutoff), rad2 = vsplat(job->radius * job->radius);      \
+    const vf scale = vsplat(job->scale), umax = vsplat(job->umax);                                     \
+    const vi qmax = visplat(job->qmax);                                                                \
+    table_regs w_t, dw_t;                                                                              \
+    LOAD_TABLE(&w_t, job->w, job->qmax + 2);                                                           \
+    LOAD_TABLE(&dw_t, job->dw, job->qmax + 2);
+
+/* The terms of one vector of candidates for the query lanes of suffix S, from d2 = |delta|^2:
+ * the window eps < d < r tested on squares (cut2 < d2 < rad2, both squared in float), then
+ * coef = g(d) / d and a += coef * delta for every dimension (ACC). A vector with no lane in the
+ * window is skipped: it would add +0 to every sum, which leaves the sums' bits as they are. */
+#define TERM_ACC(S, ACC)                                                                               \
+    {                                                                                                  \
+        const vi in##S = load & (d2##S > cut2) & (d2##S < rad2);                                       \
+        if (VANY(in##S)) {                                                                             \
+            const vf y##S = vrsqrt(d2##S);                                                             \
+            const vf u##S = VMIN(vsqrt(d2##S, y##S) * scale, umax);                                    \
+            const vi b##S = VIMIN(__builtin_convertvector(u##S, vi), qmax);                            \
+            const vf f##S = u##S - __builtin_convertvector(b##S, vf);                                  \
+            const vf g##S = FMA(f##S, LOOKUP(&dw_t, b##S), LOOKUP(&w_t, b##S));                        \
+            const vf coef##S = vselect(in##S, g##S * y##S, vsplat(0.0f));                              \
+            ACC                                                                                        \
+        }                                                                                              \
+    }
+
+/* Small subspaces (K <= 4): every per-dimension value its own variable. Each vector of lanes
+ * (suffix A, and B when two vectors run side by side) carries VW / 8 query points; a lone last
+ * point fills both halves of a 16-lane vector and keeps one. */
+#define DIMS_1(X) X(0)
+#define DIMS_2(X) X(0) X(1)
+#define DIMS_3(X) X(0) X(1) X(2)
+#define DIMS_4(X) X(0) X(1) X(2) X(3)
+#define LOADC(q) const vf c##q = vload8(cols[q] + j);
+#define DIFF(S, q)                                                                                     \
+    const vf t##S##q = vwrap(c##q - x##S##q);                                                          \
+    d2##S = FMA(t##S##q, t##S##q, d2##S);
+#define ACC(S, q) a##S##q = FMA(coef##S, t##S##q, a##S##q);
+#define DIFF_A(q) DIFF(A, q)
+#define DIFF_B(q) DIFF(B, q)
+#define ACC_A(q) ACC(A, q)
+#define ACC_B(q) ACC(B, q)
+#define STEP(S, DIMS)                                                                                  \
+    {                                                                                                  \
+        vf d2##S = vsplat(0.0f);                                                                       \
+        DIMS(DIFF_##S)                                                                                 \
+        TERM_ACC(S, DIMS(ACC_##S))                                                                     \
+    }
+#define LOOP(DIMS, STEPS)                                                                              \
+    {                                                                                                  \
+        run rn = {ranges, n_ranges, 0, 0};                                                             \
+        const float *cols[4];                                                                          \
+        uint32_t first, len;                                                                           \
+        while ((len = next_chunk(&rn, job, kdim, scratch, cols, &first)) != 0) {                       \
+            for (uint32_t o = 0; o < len; o += CANON) {                                                \
+                const uint32_t j = first + o;                                                          \
+                const vi load = vlanes_below(len - o);                                                 \
+                DIMS(LOADC)                                                                            \
+                STEPS                                                                                  \
+            }                                                                                          \
+        }                                                                                              \
+    }
+#define QPV (VW / CANON) /* query points per vector */
+#ifndef PAIRS /* run two vectors of query points side by side (more work in flight, more registers) */
+#define PAIRS 1
+#endif
+#define DECL(S, q, P) const vf x##S##q = vpair(xs[(P) * kdim + q], xs[((P) + QPV - 1) * kdim + q]); vf a##S##q = vsplat(0.0f);
+#define DECL_A2(q) DECL(A, q, p)
+#define DECL_B2(q) DECL(B, q, p + QPV)
+#define DECL_A1(q) DECL(A, q, p)
+#define FIN(S, q, P, HALVES) for (int h = 0; h < (HALVES); h++) accs[((P) + h) * kdim + q] = vreduce(a##S##q, h);
+#define FIN_A2(q) FIN(A, q, p, QPV)
+#define FIN_B2(q) FIN(B, q, p + QPV, QPV)
+
+#define SMALL_KERNEL(NAME, K, DIMS)                                                                    \
+    static void NAME(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,  \
+                     unsigned n_ranges, float *accs, float *scratch) {                                 \
+        SETUP                                                                                          \
+        const unsigned kdim = K;                                                                       \
+        unsigned p = 0;                                                                                \
+        for (; PAIRS && p + 2 * QPV <= count; p += 2 * QPV) { /* two vectors side by side */           \
+            DIMS(DECL_A2) DIMS(DECL_B2)                                                                \
+            LOOP(DIMS, STEP(A, DIMS) STEP(B, DIMS))                                                    \
+            DIMS(FIN_A2) DIMS(FIN_B2)                                                                  \
+        }                                                                                              \
+        for (; p < count; p += QPV) { /* the rest, one vector at a time */                             \
+            const unsigned here = count - p < QPV ? count - p : QPV;                                   \
+            DIMS(DECL_LAST)                                                                            \
+            LOOP(DIMS, STEP(A, DIMS))                                                                  \
+            DIMS(FIN_LAST)                                                                             \
+        }                                                                                              \
+    }
+#define DECL_LAST(q)                                                                                   \
+    const vf xA##q = vpair(xs[p * kdim + q], xs[(p + here - 1) * kdim + q]);                           \
+    vf aA##q = vsplat(0.0f);
+#define FIN_LAST(q) for (unsigned h = 0; h < here; h++) accs[(p + h) * kdim + q] = vreduce(aA##q, (int)h);
+
+SMALL_KERNEL(kernel_1, 1, DIMS_1)
+SMALL_KERNEL(kernel_2, 2, DIMS_2)
+SMALL_KERNEL(kernel_3, 3, DIMS_3)
+SMALL_KERNEL(kernel_4, 4, DIMS_4)
+
+/* Any subspace size: per-dimension values in arrays. Large subspaces run all pairs (one range,
+ * read in place), so there is nothing to concatenate. */
+static void kernel_n(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
+                     unsigned n_ranges, float *accs, float *scratch) {
+    SETUP
+    const unsigned k = job->k;
+    vf x[DPC_MAX_DIMS], a[DPC_MAX_DIMS], t[DPC_MAX_DIMS];
+    for (unsigned p = 0; p < count; p += QPV) {
+        const unsigned here = count - p < QPV ? count - p : QPV;
+        for (unsigned q = 0; q < k; q++) {
+            x[q] = vpair(xs[p * k + q], xs[(p + here - 1) * k + q]);
+            a[q] = vsplat(0.0f);
+        }
+        run rn = {ranges, n_ranges, 0, 0};
+        const float *cols[DPC_MAX_DIMS];
+        uint32_t first, len;
+        while ((len = next_chunk(&rn, job, k, scratch, cols, &first)) != 0) {
+            for (uint32_t o = 0; o < len; o += CANON) {
+                const vi load = vlanes_below(len - o);
+                vf d2A = vsplat(0.0f);
+                for (unsigned q = 0; q < k; q++) {
+                    t[q] = vwrap(vload8(cols[q] + first + o) - x[q]);
+                    d2A = FMA(t[q], t[q], d2A);
+                }
+                TERM_ACC(A, for (unsigned q = 0; q < k; q++) a[q] = FMA(coefA, t[q], a[q]);)
+            }
+        }
+        for (unsigned q = 0; q < k; q++)
+            for (unsigned h = 0; h < here; h++) accs[(p + h) * k + q] = vreduce(a[q], (int)h);
+    }
+}
+
+void KERNEL(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges, unsigned n_ranges,
+            float *accs, float *scratch) {
+    switch (job->k) {
+    case 1: kernel_1(job, xs, count, ranges, n_ranges, accs, scratch); break;
+    case 2: kernel_2(job, xs, count, ranges, n_ranges, accs, scratch); break;
+    case 3: kernel_3(job, xs, count, ranges, n_ranges, accs, scratch); break;
+    case 4: kernel_4(job, xs, count, ranges, n_ranges, accs, scratch); break;
+    default: kernel_n(job, xs, count, ranges, n_ranges, accs, scratch); break;
+    }
+}
