@@ -2,7 +2,7 @@
 
 40 identical layers of a Gaussian repulsion kernel g(d) = -A exp(-d^2 / (2 sigma^2)), with d and g
 in units of the mean point spacing (A = 0.3, sigma = 0.85, radius rho = 3.2 spacings, about 32
-neighbours per point), trained count m = 1,024. DESIGN.md §9 found such a fixed local repulsion
+neighbours per point), trained count m = 1,024. The study in docs/architecture.md found such a fixed local repulsion
 cascade already has less low-frequency energy than BNOT; it is the demo and benchmark model
 until trained models ship, and the natural initialisation for training blue noise.
 

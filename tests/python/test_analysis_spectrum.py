@@ -160,7 +160,7 @@ def test_bnot_sets_match_the_bnot_radial_target():
 
 
 def test_bnot_256_low_frequency_energy_and_peak():
-    # DESIGN.md §9 measured these for the authors' 20 BNOT sets at m = 256.
+    # docs/architecture.md ("A quick study") measured these for the authors' 20 BNOT sets at m = 256.
     sets = np.concatenate([baselines.generate("ref-bnot", 256, dims=2, count=20)])
     s = analysis.power_spectrum_2d(sets)
     assert s.low_frequency_energy(0.5) == pytest.approx(0.0024, rel=0.05)

@@ -1,4 +1,4 @@
-"""Analysis of point sets on the unit torus, by the conventions of DESIGN.md §8 (see
+"""Analysis of point sets on the unit torus, by the conventions of docs/architecture.md ("Analysis conventions") (see
 docs/analysis.md): power spectra (2-D grid, 1-D projections, 2-D subspaces, n-D Monte Carlo
 radial mean), anisotropy, pair correlation, minimum-distance ratio, discrepancies and a Monte
 Carlo integration study. Every function takes one set (m, n) or a batch (sets, m, n) and

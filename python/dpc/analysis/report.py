@@ -151,7 +151,7 @@ def analyze(points, *, label: str = "points", nu_max: float = 4.0, max_size: int
             dims=(0, 1), directions: int = 128, pcf_r_max: float = 2.5, pcf_bins: int = 100,
             discrepancies=METHODS, discrepancy_budget: float = 2.0 ** 26,
             projections: bool = True, seed: int = 0, progress_bar: bool = False) -> Analysis:
-    """Measure a batch of point sets by DESIGN.md §8.
+    """Measure a batch of point sets by the conventions of docs/architecture.md ("Analysis conventions").
 
     2-D spectrum of the subspace ``dims`` (n >= 2), its radial mean and anisotropy; for n >= 3
     also the n-D Monte Carlo radial spectrum; 1-D spectra of every axis; PCF and minimum-distance

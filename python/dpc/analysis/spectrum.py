@@ -1,4 +1,4 @@
-"""Power spectra of point sets on the unit torus (DESIGN.md §8, paper Sec. 4.3 and 4.5).
+"""Power spectra of point sets on the unit torus (docs/architecture.md, "Analysis conventions"; paper Sec. 4.3 and 4.5).
 
 Conventions: P(q) = |sum_k exp(2 pi i <q, x_k>)|^2 / m at integer frequencies q (white noise = 1),
 DC (q = 0) removed, averaged over the realisations (sets) given. Normalised frequency
