@@ -65,7 +65,8 @@ class TrainConfig:
     eval_sets: int = 16        # sets used for the measured quality at the end / on export
     run_dir: str = "runs"
     # Divergence without NaN: stop when the batch loss stays above diverge_factor x the best
-    # running mean (10 steps) for diverge_patience steps in a row (0: never), or the points
+    # running mean (10 steps; for a negative best: more than (diverge_factor - 1) x its
+    # magnitude above it) for diverge_patience steps in a row (0: never), or the points
     # collapse (more than 10% of a set's points coincide). No checkpoint is written meanwhile.
     diverge_factor: float = 10.0
     diverge_patience: int = 20

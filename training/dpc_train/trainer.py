@@ -215,7 +215,7 @@ class Trainer:
                        for i in range(len(vals))]
                 ax.plot(steps, run, lw=1.2, label=f"running mean ({win})")
                 ax.legend(fontsize=8)
-            ax.set_yscale("log")
+            ax.set_yscale("log" if min(vals) > 0 else "symlog")  # mask losses go below zero
             ax.set_xlabel("step")
             ax.set_ylabel("loss")
             ax.set_title(self.cfg.pattern.name)
@@ -282,7 +282,10 @@ class Trainer:
             if self._best_mean is None or mean < self._best_mean:
                 self._best_mean = mean
         self._suspect = False
-        if t.diverge_factor and self._best_mean is not None and val > t.diverge_factor * self._best_mean:
+        # "factor x the best" for positive losses; in general a rise above the best running mean
+        # by (factor - 1) x its magnitude, so that losses below zero (mask losses) work too
+        best = self._best_mean
+        if t.diverge_factor and best and val > best + (t.diverge_factor - 1.0) * abs(best):
             self._suspect = True
             self._above += 1
             if self._above >= t.diverge_patience:

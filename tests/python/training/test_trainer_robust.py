@@ -128,3 +128,19 @@ def test_resume_removes_stale_temporaries_and_keeps_other_files(tmp_path):
     assert mine.exists()
     tr.run()
     assert TR.load_checkpoint(tmp_path / TR.CHECKPOINT)["step"] == 12
+
+
+def test_negative_losses_do_not_look_like_a_jump(tmp_path):
+    """Mask losses are below zero: a steady run must not be stopped as diverged."""
+    cfg = cfg_with({"steps": 40, "checkpoint_every": 5, "diverge_patience": 3})
+    tr = TR.Trainer(cfg, tmp_path, progress=False)
+    base_loss = tr.loss_fn
+    tr.loss_fn = lambda y: base_loss(y) - 5.0  # same gradients, loss around -4.6
+    tr.run()
+    assert TR.load_checkpoint(tmp_path / TR.CHECKPOINT)["step"] == 40
+    tr2 = TR.Trainer(cfg_with({"steps": 60, "checkpoint_every": 5, "diverge_patience": 3}), tmp_path,
+                     resume=True, progress=False)
+    tr2.loss_fn = lambda y: base_loss(y) - 5.0 + (100.0 if tr2.step >= 45 else 0.0)
+    with pytest.raises(TR.TrainingDivergedError, match="the loss jumped"):
+        tr2.run()
+    assert TR.load_checkpoint(tmp_path / TR.CHECKPOINT)["step"] == 45
