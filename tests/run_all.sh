@@ -5,8 +5,11 @@
 # Suites: C tests (GoogleTest via ctest) under ASan+UBSan, the same with the Vulkan backend on
 # lavapipe (Mesa's CPU Vulkan driver), its Vulkan tests under the Khronos validation layer
 # (synchronization validation), the thread tests under TSan, a Release build's ctest (every
-# ISA path the CPU has), the reader fuzzer (libFuzzer), and pytest against the pip-installed
-# package (built with the Vulkan backend). Any failure, or a suite that runs no test, fails the script.
+# ISA path the CPU has), the reader fuzzer (libFuzzer), libdpc as another project's dependency
+# (tests/downstream/run.sh: install, find_package, pkg-config, add_subdirectory), the wheel in a
+# clean virtual environment, and pytest against the pip-installed package (built with the Vulkan
+# backend; it also runs the README's and docs' marked command blocks). Any failure, or a suite
+# that runs no test, fails the script.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$(pwd)
