@@ -12,6 +12,12 @@ Builds libdpc and bench/bench_generate.c in build/bench (Release), then measures
 4. the trained 2-D blue-noise models bnot-2d (rho = 4) and bnot-2d-wide (rho = 8) at m = 1,024
    and 65,536 on the fastest ISA.
 Medians over repeated runs; ratios are taken within this one run.
+
+    python bench/bench_generate.py --against REV
+
+also builds the benchmark from git revision REV (e.g. the commit before a kernel change) and
+times both builds alternately, three rounds, on every vector ISA the CPU has (repulsion-2d and
+bnot-2d at 1,024 / 16,384 / 262,144 points): the section "Against REV" of docs/performance.md.
 """
 
 from __future__ import annotations
@@ -36,6 +42,52 @@ def build() -> Path:
     subprocess.run(["cmake", "--build", str(BUILD), "--target", "dpc_bench_generate"], check=True,
                    stdout=subprocess.DEVNULL)
     return BUILD / "bench" / "dpc_bench_generate"
+
+
+def build_revision(rev: str) -> Path:
+    """The benchmark program of git revision rev, built in build/bench-REV."""
+    import tarfile
+    import tempfile
+
+    sha = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", rev], check=True, capture_output=True,
+                         text=True).stdout.strip()
+    src, out = ROOT / "build" / f"src-{sha}", ROOT / "build" / f"bench-{sha}"
+    if not (src / "CMakeLists.txt").is_file():
+        with tempfile.TemporaryFile() as f:
+            subprocess.run(["git", "-C", str(ROOT), "archive", sha], check=True, stdout=f)
+            f.seek(0)
+            with tarfile.open(fileobj=f) as t:
+                t.extractall(src, filter="data")
+    subprocess.run(["cmake", "-S", str(src), "-B", str(out), "-G", "Ninja", "-DCMAKE_BUILD_TYPE=Release",
+                    "-DDPC_BUILD_BENCH=ON"], check=True, stdout=subprocess.DEVNULL)
+    subprocess.run(["cmake", "--build", str(out), "--target", "dpc_bench_generate"], check=True,
+                   stdout=subprocess.DEVNULL)
+    return out / "bench" / "dpc_bench_generate"
+
+
+def against(rev: str, exe: Path, isas: list[str]) -> list[str]:
+    """Both builds alternated, three rounds; the per-round medians' median of each."""
+    old = build_revision(rev)
+    counts = [1024, 16384, 262144]
+    lines = ["", f"## Against {rev}", "",
+             f"`python bench/bench_generate.py --against {rev}`: this tree and revision {rev} built alike and "
+             "timed alternately (three rounds; medians of thread CPU time, which a busy machine disturbs less "
+             "than wall time).", "",
+             f"| model | ISA | points | {rev} | this tree | ratio |", "|---|---|---:|---:|---:|---:|"]
+    for name in ("repulsion-2d", "bnot-2d"):
+        model = ROOT / "models" / f"{name}.onnx"
+        for isa in isas:
+            a = {m: [] for m in counts}
+            b = {m: [] for m in counts}
+            for _ in range(3):
+                for r in run(old, model, isa, counts):
+                    a[r["m"]].append(r["cpu_median_s"])
+                for r in run(exe, model, isa, counts):
+                    b[r["m"]].append(r["cpu_median_s"])
+            for m in counts:
+                ta, tb = float(np.median(a[m])), float(np.median(b[m]))
+                lines.append(f"| `{name}` | {isa} | {m:,} | {ta * 1e3:.2f} ms | {tb * 1e3:.2f} ms | {tb / ta:.2f}x |")
+    return lines
 
 
 def all_pairs_model() -> Path:
@@ -64,26 +116,17 @@ def cpu_name() -> str:
     return platform.processor() or "unknown CPU"
 
 
-def cpu_flags() -> set[str]:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("flags"):
-                return set(line.split(":", 1)[1].split())
-    except OSError:
-        pass
-    return set()
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="skip the 1,048,576-point runs")
     ap.add_argument("--out", default=str(ROOT / "docs" / "performance.md"))
+    ap.add_argument("--against", metavar="REV", help="also time git revision REV's build, alternately")
     args = ap.parse_args()
     exe = build()
     counts = [1024, 16384, 262144] + ([] if args.quick else [1048576])
-    flags = cpu_flags()
-    isas = ["scalar"] + (["avx2"] if {"avx2", "fma"} <= flags else [])
-    isas += ["avx512"] if {"avx2", "fma", "avx512f"} <= flags else []
+    import dpc  # noqa: PLC0415  (the installed package, for dpc.isa_supported)
+
+    isas = [isa for isa in ("scalar", "avx2", "avx512") if dpc.isa_supported(isa)]
     model = ROOT / "models" / "repulsion-2d.onnx"
     rows = {isa: run(exe, model, isa, counts) for isa in isas}
     ap_model = all_pairs_model()
@@ -141,15 +184,22 @@ def main() -> None:
     lines += ["", "## Against the targets of issue 2", "", "| target | measured | met |", "|---|---:|---|"]
     lines += [f"| {name} | {value} | {'yes' if ok else '**no**'} |" for name, value, ok in checks]
     lines += ["", "Wall-clock medians; thread CPU time in parentheses (it differs from wall time only "
-              "when the machine is busy). `auto` picks the last column's ISA on this CPU.", ""]
+              "when the machine is busy). `auto` picks the last column's ISA on this CPU."]
+    out = Path(args.out)
+    previous = out.read_text() if out.exists() else ""
+    if args.against:
+        lines += against(args.against, exe, isas[1:] or ["scalar"])
+    elif "\n## Against " in previous:  # keep the last comparison until the next one
+        start = previous.index("\n## Against ")
+        end = previous.find("\n## ", start + 1)
+        lines += previous[start:end if end >= 0 else None].rstrip("\n").split("\n")
+    lines.append("")
     text = "\n".join(lines)
     print(text)
-    out = Path(args.out)
-    if out.exists():  # keep other sections (e.g. training speed) written by other benchmarks
-        old = out.read_text()
+    if previous:  # keep other sections (e.g. training speed) written by other benchmarks
         marker = "\n## Training"
-        if marker in old:
-            text += old[old.index(marker):]
+        if marker in previous:
+            text += previous[previous.index(marker):]
     out.write_text(text)
     print(f"\nwrote {out}")
 

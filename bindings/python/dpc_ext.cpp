@@ -441,6 +441,7 @@ PYBIND11_MODULE(_core, mod) {
         .def("get", &Sampler::get, py::arg("x"), py::arg("y"), py::arg("index"), py::arg("dim"), py::arg("width"))
         .def("table", &Sampler::table, py::arg("t"));
     mod.def("sampler_mask", &sampler_mask);
+    mod.def("isa_supported", [](int isa) { return dpc_isa_supported(static_cast<dpc_isa>(isa)) != 0; }, py::arg("isa"));
     mod.def("uniform", [](uint64_t seed, size_t m, size_t n, double max_bytes) {
         return input_points(seed, m, n, max_bytes, false);
     }, py::arg("seed"), py::arg("m"), py::arg("n"), py::arg("max_bytes"));

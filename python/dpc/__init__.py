@@ -13,13 +13,14 @@ from .errors import (CancelledError, DpcError, InternalError, InvalidArgumentErr
                      UnsupportedError)
 from ._model import (DEFAULT_MAX_NEIGHBOURS, DEFAULT_MAX_OUTPUT_BYTES, MAX_POINTS, Model,
                      available_models, load, model_path, stratified, uniform)
+from ._model import isa_supported
 from ._sampler import Sampler
 from ._core import __version__  # noqa: F401  (version of the linked libdpc)
 from . import masks  # noqa: E402  (blue-noise threshold masks, docs/masks.md)
 from .masks import mask  # noqa: E402
 
 __all__ = [
-    "Model", "load", "uniform", "stratified", "available_models", "model_path", "Sampler",
+    "Model", "load", "uniform", "stratified", "available_models", "model_path", "Sampler", "isa_supported",
     "DpcError", "InvalidArgumentError", "ModelIOError", "ModelFormatError", "UnsupportedError",
     "OutOfMemoryError", "LimitError", "InternalError", "ModelNotFoundError", "CancelledError",
     "MAX_POINTS", "DEFAULT_MAX_NEIGHBOURS", "DEFAULT_MAX_OUTPUT_BYTES",

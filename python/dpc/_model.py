@@ -95,6 +95,14 @@ def _bundled_dirs() -> list[Path]:
     return dirs
 
 
+def isa_supported(isa: str) -> bool:
+    """Whether this build and CPU run ``isa``'s path ("auto", "scalar", "avx2", "avx512"). Every
+    path gives the same bits; they differ in speed only."""
+    if isa not in _ISA:
+        raise InvalidArgumentError(f"isa must be one of {sorted(_ISA)}, got {isa!r}")
+    return _core.isa_supported(_ISA[isa])
+
+
 def available_models() -> list[str]:
     """Names of the bundled models (files ``NAME.onnx`` in the package's models folder and in
     the folders of ``$DPC_MODEL_PATH``)."""

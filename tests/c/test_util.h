@@ -104,23 +104,8 @@ inline double max_torus_diff(const std::vector<float> &a, const std::vector<floa
     return worst;
 }
 
-inline bool cpu_has_avx2_fma() {
-#if defined(__x86_64__) || defined(__i386__)
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-#else
-    return false;
-#endif
-}
-
-inline bool cpu_has_avx512() {
-#if defined(__x86_64__) || defined(__i386__)
-    __builtin_cpu_init();
-    return cpu_has_avx2_fma() && __builtin_cpu_supports("avx512f");
-#else
-    return false;
-#endif
-}
+inline bool cpu_has_avx2_fma() { return dpc_isa_supported(DPC_ISA_AVX2) != 0; }
+inline bool cpu_has_avx512() { return dpc_isa_supported(DPC_ISA_AVX512) != 0; }
 
 // The ISA paths to compare against scalar: every one this CPU supports.
 inline std::vector<dpc_isa> vector_isas() {

@@ -100,6 +100,10 @@ typedef enum dpc_isa {
     DPC_ISA_AVX512 = 3  /* x86-64 AVX-512F */
 } dpc_isa;
 
+/* 1 if this build and this CPU can run isa's path (DPC_ISA_AUTO and DPC_ISA_SCALAR: always),
+ * else 0. Every path gives the same bits; they differ in speed only. */
+DPC_API int dpc_isa_supported(dpc_isa isa);
+
 /* What runs the cascade.
  * - AUTO: a GPU through Vulkan when this libdpc was built with the Vulkan backend (CMake option
  *   DPC_VULKAN) and the machine has a hardware GPU with a Vulkan driver (looked up once per

@@ -57,6 +57,8 @@ const char *dpc_status_string(dpc_status status) {
     return "DPC_ERROR_UNKNOWN";
 }
 
+int dpc_isa_supported(dpc_isa isa) { return dpc_cpu_isa_available(isa); }
+
 void dpc_load_options_init(dpc_load_options *options) {
     if (!options) return;
     memset(options, 0, sizeof *options);

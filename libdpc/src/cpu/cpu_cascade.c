@@ -9,6 +9,7 @@
 
 #include <math.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -35,7 +36,23 @@ typedef struct workspace {
     float *x, *x_tmp;
     uint32_t *order, *order_tmp, *cell_tmp;
     float *gather; /* per worker: 4 columns of DPC_GATHER_STRIDE floats (kernel scratch) */
+    dpc_cpu_hook hook; /* NULL: never stopped */
+    void *hook_ctx;
+    _Atomic int stop;  /* the status a hook returned (DPC_OK: go on); read by every worker */
 } workspace;
+
+/* Ask the hook (inside a layer: layer_done = 0); whether to stop. */
+static int poll_stop(workspace *ws, int layer_done) {
+    if (!ws->hook) return 0;
+    if (atomic_load_explicit(&ws->stop, memory_order_relaxed) != DPC_OK) return 1;
+    const dpc_status st = ws->hook(ws->hook_ctx, layer_done);
+    if (st != DPC_OK) {
+        int expected = DPC_OK;
+        atomic_compare_exchange_strong(&ws->stop, &expected, (int)st);
+        return 1;
+    }
+    return 0;
+}
 
 static void workspace_free(workspace *w) {
     free(w->delta);
@@ -202,7 +219,12 @@ static void sub_pass_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
     unsigned n_ranges = 1;
     ranges[0] = 0;
     ranges[1] = (uint32_t)m; /* all pairs */
+    size_t next_poll = lo + DPC_CPU_POLL_POINTS;
     for (size_t s = lo; s < hi;) {
+        if (s >= next_poll) {
+            if (poll_stop(ws, 0)) return;
+            next_poll = s + DPC_CPU_POLL_POINTS;
+        }
         /* A block: consecutive sorted points of one cell (they share candidate ranges). */
         size_t e = s + 1;
         if (p->grid) {
@@ -307,6 +329,7 @@ static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws
         fill_soa(&p, ws->x);
         parallel_for(e->threads, m, sub_pass_range, &p);
         accumulated = 1;
+        if (ws->hook && atomic_load(&ws->stop) != DPC_OK) return;
     }
     a.x = ws->x;
     a.delta = ws->delta;
@@ -315,13 +338,28 @@ static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws
 }
 
 dpc_status dpc_cpu_filter(const dpc_cascade *c, const dpc_cpu_engine *e, size_t m, float *x) {
+    return dpc_cpu_filter_hooked(c, e, m, x, NULL, NULL);
+}
+
+dpc_status dpc_cpu_filter_hooked(const dpc_cascade *c, const dpc_cpu_engine *e, size_t m, float *x,
+                                 dpc_cpu_hook hook, void *ctx) {
     workspace ws;
     dpc_status st = workspace_init(&ws, m, c->dims, e->threads);
     if (st != DPC_OK) return st;
+    ws.hook = hook;
+    ws.hook_ctx = ctx;
+    atomic_init(&ws.stop, DPC_OK);
     const size_t n = c->dims;
     memcpy(ws.x, x, m * n * sizeof(float));
     for (size_t i = 0; i < m; i++) ws.order[i] = (uint32_t)i;
-    for (uint32_t l = 0; l < c->n_layers; l++) run_layer(&c->layers[l], e, &ws);
+    for (uint32_t l = 0; l < c->n_layers; l++) {
+        run_layer(&c->layers[l], e, &ws);
+        if (hook && (atomic_load(&ws.stop) != DPC_OK || poll_stop(&ws, 1))) {
+            st = (dpc_status)atomic_load(&ws.stop);
+            workspace_free(&ws);
+            return st;
+        }
+    }
     for (size_t i = 0; i < m; i++) memcpy(x + (size_t)ws.order[i] * n, ws.x + i * n, n * sizeof(float));
     workspace_free(&ws);
     return DPC_OK;

@@ -25,6 +25,16 @@ static int cpu_has_avx2_fma(void) {
 #endif
 }
 
+int dpc_cpu_isa_available(dpc_isa isa) {
+    switch (isa) {
+    case DPC_ISA_AUTO:
+    case DPC_ISA_SCALAR: return 1;
+    case DPC_ISA_AVX2: return cpu_has_avx2_fma();
+    case DPC_ISA_AVX512: return cpu_has_avx512();
+    }
+    return 0;
+}
+
 dpc_status dpc_cpu_engine_init(dpc_cpu_engine *e, dpc_isa isa, unsigned threads) {
     if (isa == DPC_ISA_AUTO) {
         const char *env = getenv("DPC_ISA");
