@@ -123,6 +123,7 @@ TEST(Kernels, EveryArrangementGivesTheScalarBits) {
     std::mt19937 rng(12345);
     std::vector<std::pair<const char *, dpc_block_fn>> paths = {{"packed16", dpc_block_packed16}};
 #if defined(DPC_HAVE_AVX2)
+    if (has_avx2()) paths.push_back({"scalar with fma", dpc_block_scalar_fma});
     if (has_avx2()) paths.push_back({"avx2", dpc_block_avx2});
     if (has_avx512()) paths.push_back({"avx512", dpc_block_avx512});
 #endif

@@ -1,10 +1,11 @@
 /* Run-time ISA choice: the library is compiled for a generic CPU and only the per-ISA kernel
- * files get ISA flags, so one binary runs everywhere and uses AVX2 where cpuid reports it. */
+ * files get ISA flags, so one binary runs everywhere and uses AVX2 + FMA or AVX-512F where
+ * cpuid reports them (the inference kernels and the training kernels alike). */
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "common/error.h"
+#include "common/threads.h"
 #include "cpu/cpu_cascade.h"
 
 static int cpu_has_avx512(void) {
@@ -35,7 +36,7 @@ int dpc_cpu_isa_available(dpc_isa isa) {
     return 0;
 }
 
-dpc_status dpc_cpu_engine_init(dpc_cpu_engine *e, dpc_isa isa, unsigned threads) {
+dpc_status dpc_cpu_resolve_isa(dpc_isa isa, dpc_isa *out) {
     if (isa == DPC_ISA_AUTO) {
         const char *env = getenv("DPC_ISA");
         if (env && *env && strcmp(env, "auto") != 0) {
@@ -49,14 +50,11 @@ dpc_status dpc_cpu_engine_init(dpc_cpu_engine *e, dpc_isa isa, unsigned threads)
         }
     }
     switch (isa) {
-    case DPC_ISA_SCALAR:
-        e->block = dpc_block_scalar;
-        break;
+    case DPC_ISA_SCALAR: break;
     case DPC_ISA_AVX2:
 #if defined(DPC_HAVE_AVX2)
         if (!cpu_has_avx2_fma())
             return dpc_fail(DPC_ERROR_UNSUPPORTED, "the AVX2 path needs a CPU with AVX2 and FMA");
-        e->block = dpc_block_avx2;
         break;
 #else
         return dpc_fail(DPC_ERROR_UNSUPPORTED, "this libdpc was built without the AVX2 path");
@@ -65,7 +63,6 @@ dpc_status dpc_cpu_engine_init(dpc_cpu_engine *e, dpc_isa isa, unsigned threads)
 #if defined(DPC_HAVE_AVX2)
         if (!cpu_has_avx512())
             return dpc_fail(DPC_ERROR_UNSUPPORTED, "the AVX-512 path needs a CPU with AVX-512F");
-        e->block = dpc_block_avx512;
         break;
 #else
         return dpc_fail(DPC_ERROR_UNSUPPORTED, "this libdpc was built without the AVX-512 path");
@@ -73,11 +70,19 @@ dpc_status dpc_cpu_engine_init(dpc_cpu_engine *e, dpc_isa isa, unsigned threads)
     default:
         return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "unknown ISA %d", (int)isa);
     }
+    *out = isa;
+    return DPC_OK;
+}
+
+dpc_status dpc_cpu_engine_init(dpc_cpu_engine *e, dpc_isa isa, unsigned threads) {
+    const dpc_status st = dpc_cpu_resolve_isa(isa, &isa);
+    if (st != DPC_OK) return st;
+    e->block = dpc_block_scalar;
+#if defined(DPC_HAVE_AVX2)
+    if (isa == DPC_ISA_AVX2) e->block = dpc_block_avx2;
+    if (isa == DPC_ISA_AVX512) e->block = dpc_block_avx512;
+#endif
     e->isa = isa;
-    if (threads == 0) {
-        long n = sysconf(_SC_NPROCESSORS_ONLN);
-        threads = n > 0 ? (unsigned)n : 1;
-    }
-    e->threads = threads > 64 ? 64 : threads;
+    e->threads = dpc_threads_resolve(threads);
     return DPC_OK;
 }

@@ -1,6 +1,9 @@
 /* Portable path: the canonical kernel (cpu_kernel_body.h) on 8-lane GCC vectors, which the
  * compiler lowers to whatever the target has (SSE2 on a generic x86-64 build); FMAs and table
- * lookups lane by lane. */
+ * lookups lane by lane. On x86-64 this file is compiled twice: generic (dpc_block_scalar), and
+ * with -mfma as cpu_kernel_scalar_fma.c (dpc_block_scalar_fma), which the scalar path runs on
+ * CPUs with FMA so that fmaf is one instruction instead of a library call. Same source, same
+ * bits. */
 #include <math.h>
 
 #include "cpu/cpu_kernels.h"
@@ -30,7 +33,9 @@ static inline vf lookup8(const table_regs *t, vi b) {
     return r;
 }
 
+#ifndef KERNEL
 #define KERNEL dpc_block_scalar
+#endif
 #define FMA(a, b, c) fma8(a, b, c)
 #define LOAD_TABLE(T, src, n) ((T)->w = (src), (void)(n))
 #define LOOKUP(T, b) lookup8(T, b)

@@ -1,7 +1,8 @@
-/* The hot loop of a filter layer, one implementation per ISA, chosen at load time.
- * A kernel accumulates, for one point x_i, sum_j g(d_ij) * delta_ij / d_ij over candidate
- * neighbours given as index ranges into structure-of-arrays coordinates (docs/model-format.md §3,
- * without the final factor h_t). Every ISA computes the same formula; only rounding differs. */
+/* The hot loop of a filter layer, compiled once per ISA from cpu_kernel_body.h and chosen at
+ * load time. A kernel accumulates, for one point x_i, sum_j g(d_ij) * delta_ij / d_ij over
+ * candidate neighbours given as index ranges into structure-of-arrays coordinates
+ * (docs/model-format.md §3, without the final factor h_t). Every ISA path evaluates the canonical
+ * order of float32 operations (format §3, "Evaluation order"), so all give the same bits. */
 #ifndef DPC_CPU_KERNELS_H
 #define DPC_CPU_KERNELS_H
 
@@ -42,6 +43,8 @@ void dpc_block_scalar(const dpc_sub_job *job, const float *xs, unsigned count, c
 void dpc_block_packed16(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
                         unsigned n_ranges, float *acc, float *scratch);
 #if defined(DPC_HAVE_AVX2)
+void dpc_block_scalar_fma(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
+                          unsigned n_ranges, float *acc, float *scratch);
 void dpc_block_avx2(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
                     unsigned n_ranges, float *acc, float *scratch);
 void dpc_block_avx512(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,

@@ -1,0 +1,3 @@
+/* The scalar path compiled with -mfma (cpu_kernel_scalar.c explains why). */
+#define KERNEL dpc_block_scalar_fma
+#include "cpu_kernel_scalar.c"
