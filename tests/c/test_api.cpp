@@ -31,6 +31,12 @@ TEST(Version, RuntimeMatchesHeader) {
     EXPECT_EQ(DPC_FORMAT_VERSION, 1);
 }
 
+// CMake's project version is read from dpc.h (CMakeLists.txt): the build that made this library
+// must agree with the library (tests/python/test_version.py checks pyproject and Python).
+TEST(Version, MatchesTheCMakeProject) {
+    EXPECT_STREQ(DPC_TEST_PROJECT_VERSION, dpc_version_string());
+}
+
 TEST(Status, PinnedValuesAndNames) {
     // The numeric values are part of the ABI (dpc.h: "Values are pinned").
     EXPECT_EQ((int)DPC_OK, 0);

@@ -418,3 +418,65 @@ TEST(LayerTrain, IsaSelection) {
         setenv("DPC_ISA", "", 1);
     }
 }
+
+// The ISA as an argument (dpc_layer_options.isa): the same bits as DPC_ISA naming that path,
+// whatever DPC_ISA says meanwhile; AUTO follows DPC_ISA; a path the CPU lacks, an unknown
+// value and a wrong struct_size are refused; dpc_layer_forward is _ex with {threads, AUTO}.
+TEST(LayerTrain, IsaAsArgument) {
+    const Layer L(3, {7, 3}, {2.0, 3.0}, 16, 1e-4, 4);
+    const dpc_layer_desc d = L.desc();
+    const size_t m = 900, count = 2, total = count * m * 3;
+    const std::vector<double> w = uniform(32, 31, -0.05, 0.05), x = uniform(total, 32), g = uniform(total, 33, -1, 1);
+    dpc_layer_options defaults;
+    dpc_layer_options_init(&defaults);
+    EXPECT_EQ(defaults.struct_size, sizeof(dpc_layer_options));
+    EXPECT_EQ(defaults.threads, 1u);
+    EXPECT_EQ(defaults.isa, DPC_ISA_AUTO);
+    dpc_load_options load;
+    dpc_load_options_init(&load);
+    EXPECT_EQ(defaults.threads, load.threads) << "one default for threads";
+    for (dpc_isa isa : all_isas()) {
+        std::vector<double> y_env(total), gx_env(total), gk_env(16 * 2);
+        {
+            const IsaScope scope(isa);
+            ASSERT_EQ(dpc_layer_forward(&d, w.data(), count, m, x.data(), y_env.data(), 2), DPC_OK);
+            ASSERT_EQ(dpc_layer_backward(&d, w.data(), count, m, x.data(), g.data(), gx_env.data(), gk_env.data(), 2),
+                      DPC_OK);
+        }
+        for (dpc_isa other : all_isas()) { /* the argument wins over DPC_ISA */
+            const IsaScope scope(other);
+            dpc_layer_options o;
+            dpc_layer_options_init(&o);
+            o.isa = isa;
+            o.threads = 3;
+            std::vector<double> y(total), gx(total), gk(16 * 2);
+            ASSERT_EQ(dpc_layer_forward_ex(&d, w.data(), count, m, x.data(), y.data(), &o), DPC_OK);
+            ASSERT_EQ(dpc_layer_backward_ex(&d, w.data(), count, m, x.data(), g.data(), gx.data(), gk.data(), &o),
+                      DPC_OK);
+            EXPECT_EQ(0, std::memcmp(y.data(), y_env.data(), total * sizeof(double))) << dpct::isa_name(isa);
+            EXPECT_EQ(0, std::memcmp(gx.data(), gx_env.data(), total * sizeof(double))) << dpct::isa_name(isa);
+            EXPECT_EQ(0, std::memcmp(gk.data(), gk_env.data(), gk.size() * sizeof(double))) << dpct::isa_name(isa);
+        }
+    }
+    std::vector<double> y(total), y1(total);
+    ASSERT_EQ(dpc_layer_forward_ex(&d, w.data(), count, m, x.data(), y.data(), nullptr), DPC_OK); /* defaults */
+    ASSERT_EQ(dpc_layer_forward(&d, w.data(), count, m, x.data(), y1.data(), 1), DPC_OK);
+    EXPECT_EQ(0, std::memcmp(y.data(), y1.data(), total * sizeof(double)));
+    dpc_layer_options o;
+    dpc_layer_options_init(&o);
+    if (!dpct::cpu_has_avx512()) {
+        o.isa = DPC_ISA_AVX512;
+        expect_failure(dpc_layer_forward_ex(&d, w.data(), count, m, x.data(), y.data(), &o), DPC_ERROR_UNSUPPORTED,
+                       "AVX-512");
+    }
+    o.isa = static_cast<dpc_isa>(9);
+    expect_failure(dpc_layer_forward_ex(&d, w.data(), count, m, x.data(), y.data(), &o), DPC_ERROR_INVALID_ARGUMENT,
+                   "options.isa");
+    dpc_layer_options_init(&o);
+    o.struct_size = 4;
+    expect_failure(dpc_layer_forward_ex(&d, w.data(), count, m, x.data(), y.data(), &o), DPC_ERROR_INVALID_ARGUMENT,
+                   "struct_size");
+    std::vector<double> gx(total), gk(32);
+    expect_failure(dpc_layer_backward_ex(&d, w.data(), count, m, x.data(), g.data(), gx.data(), gk.data(), &o),
+                   DPC_ERROR_INVALID_ARGUMENT, "struct_size");
+}

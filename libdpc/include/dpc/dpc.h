@@ -395,9 +395,11 @@ DPC_API const float *dpc_sampler_mask(void);
  * reference of the format to rounding, not the float32 cascade of dpc_generate bit for bit.
  * Work is O(m * neighbours) per set (toroidal cell grid, or all pairs where a grid does not
  * pay), memory O(m * n + cells); never O(m^2). Outputs are bit-identical for every thread count.
- * The kernels run on the ISA path the inference engine would pick for DPC_ISA_AUTO (environment
- * variable DPC_ISA, else the best the CPU has; a bad value fails the call the same way); paths
- * differ by rounding only.
+ * The kernels run on the ISA path of dpc_layer_options.isa (DPC_ISA_AUTO, the default and what
+ * dpc_layer_forward / _backward use: the path the inference engine would pick, i.e. the
+ * environment variable DPC_ISA, else the best the CPU has; a bad DPC_ISA or a path the CPU lacks
+ * fails the call the same way); paths differ by rounding only. Each path on its own gives the
+ * same bits on every machine that has it.
  *
  * Backward, per set, with G = dL/dy (m x n). The wrap y - floor(y) is treated as the identity.
  * For subspace t with dimension set D_t and an ordered pair (i, j) with e_t < d < r_t:
@@ -425,16 +427,34 @@ typedef struct dpc_layer_desc {
     uint64_t fixed;            /* dimensions the layer never moves: only bits < n */
 } dpc_layer_desc;
 
+/* How a layer call runs. Initialise with dpc_layer_options_init(). */
+typedef struct dpc_layer_options {
+    uint32_t struct_size; /* sizeof(dpc_layer_options), set by dpc_layer_options_init */
+    uint32_t threads;     /* worker threads: 1 (default), 0 = one per online CPU; bits do not depend on it */
+    dpc_isa isa;          /* the pair loop's ISA path; default DPC_ISA_AUTO (see above) */
+} dpc_layer_options;
+
+/* Fill *options with the defaults. */
+DPC_API void dpc_layer_options_init(dpc_layer_options *options);
+
 /* y = layer(x) for count sets of n_points points each: x and y hold count * n_points * dims
  * doubles (set c at offset c * n_points * dims), x finite and in [0, 1). kernels: s * b finite
  * values, row t = subspace t (in units of h_t). y may be x (in place); otherwise the buffers must
- * not overlap. threads: 0 = one per online CPU. */
-DPC_API dpc_status dpc_layer_forward(const dpc_layer_desc *layer, const double *kernels, size_t count,
-                                     size_t n_points, const double *x, double *y, uint32_t threads);
+ * not overlap. options may be NULL (defaults). */
+DPC_API dpc_status dpc_layer_forward_ex(const dpc_layer_desc *layer, const double *kernels, size_t count,
+                                        size_t n_points, const double *x, double *y,
+                                        const dpc_layer_options *options);
 
 /* Gradients of a scalar loss L given grad_y = dL/dy (same shape as x, finite): grad_x = dL/dx
  * (same shape; may be grad_y) and grad_kernels = dL/dkernels (s * b, overwritten, summed over the
- * count sets in set order). Other outputs must not overlap the inputs. */
+ * count sets in set order). Other outputs must not overlap the inputs. options may be NULL. */
+DPC_API dpc_status dpc_layer_backward_ex(const dpc_layer_desc *layer, const double *kernels, size_t count,
+                                         size_t n_points, const double *x, const double *grad_y,
+                                         double *grad_x, double *grad_kernels, const dpc_layer_options *options);
+
+/* dpc_layer_forward_ex / _backward_ex with options {threads, DPC_ISA_AUTO}. */
+DPC_API dpc_status dpc_layer_forward(const dpc_layer_desc *layer, const double *kernels, size_t count,
+                                     size_t n_points, const double *x, double *y, uint32_t threads);
 DPC_API dpc_status dpc_layer_backward(const dpc_layer_desc *layer, const double *kernels, size_t count,
                                       size_t n_points, const double *x, const double *grad_y,
                                       double *grad_x, double *grad_kernels, uint32_t threads);

@@ -1,5 +1,6 @@
-/* The only file on the ABI boundary: checks every argument, turns every failure into a status
- * with a message, and hands valid requests to the model and the backend. */
+/* The ABI boundary (with api_sampler.c): checks every argument, turns every failure into a
+ * status with a message, and hands valid requests to the model layer (model/: the reader, the
+ * input points, the plan) and to the backend the handle was loaded for (cpu/, vulkan/). */
 #define _GNU_SOURCE /* dladdr: where this library lies, for dpc_model_dir() */
 #include <dlfcn.h>
 #include <errno.h>
@@ -14,11 +15,12 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "api/model_handle.h"
 #include "common/error.h"
-#include "common/rng.h"
 #include "cpu/cpu_cascade.h"
 #include "cpu/cpu_layer_train.h"
-#include "api/model_handle.h"
+#include "model/input.h"
+#include "model/plan.h"
 
 #define MAX_FLOATS_PER_SET (1ull << 28) /* n_points * dims: 1 GiB of floats */
 
@@ -30,8 +32,6 @@
 #ifndef DPC_MODEL_DIR_FROM_LIB
 #define DPC_MODEL_DIR_FROM_LIB ""
 #endif
-
-#define M_PI_VALUE 3.14159265358979323846
 
 #define STR2(x) #x
 #define STR(x) STR2(x)
@@ -68,24 +68,6 @@ void dpc_load_options_init(dpc_load_options *options) {
     options->backend = DPC_BACKEND_AUTO;
     options->input = DPC_INPUT_AUTO;
     options->max_neighbours = DPC_DEFAULT_MAX_NEIGHBOURS;
-}
-
-/* The expected neighbours per point the model asks for: the largest V_k rho^k over every layer
- * and subspace that moves something (V_k = pi^(k/2) / Gamma(k/2 + 1), the unit k-ball). */
-static double model_neighbours(const dpc_cascade *c) {
-    double most = 0.0;
-    for (uint32_t l = 0; l < c->n_layers; l++) {
-        const dpc_layer *L = &c->layers[l];
-        for (uint32_t t = 0; t < L->n_sub; t++) {
-            if (!(L->masks[t] & ~L->fixed)) continue; /* moves nothing: the engine skips it */
-            unsigned k = 0;
-            for (uint64_t bits = L->masks[t]; bits; bits &= bits - 1) k++;
-            const double ball = pow(M_PI_VALUE, 0.5 * k) / tgamma(0.5 * k + 1.0);
-            const double n = ball * pow((double)L->radius[t], (double)k);
-            if (!(n <= most)) most = n; /* inf stays inf */
-        }
-    }
-    return most;
 }
 
 /* Resolve the input kind of a freshly parsed model: AUTO takes the file's "dpc.input". */
@@ -180,7 +162,7 @@ dpc_status dpc_model_load_memory(const void *data, size_t size, const dpc_load_o
         free(model);
         return st;
     }
-    model->neighbours = model_neighbours(&model->cascade);
+    model->neighbours = dpc_plan_neighbours(&model->cascade);
     st = choose_backend(model, opts.backend);
     if (st != DPC_OK) {
         dpc_cascade_release(&model->cascade);
@@ -413,83 +395,6 @@ dpc_status dpc_model_metadata_at(const dpc_model *model, size_t index, const cha
 
 /* ---- generation -------------------------------------------------------------------------- */
 
-static void fill_uniform(uint64_t seed, size_t count, float *out) {
-    const uint64_t state0 = dpc_mix64(seed);
-    for (size_t c = 0; c < count; c++) out[c] = dpc_uniform_at(state0, c);
-}
-
-/* The stratified input of docs/model-format.md §5 for m points in n dimensions. The cell lists
- * live in out itself (cell of point i in word i; for n >= 2 the cell permutation in words
- * m .. m + C), so the CPU and Vulkan paths need no allocation. m <= DPC_MAX_POINTS < 2^32. */
-static uint32_t below(uint64_t state1, uint64_t *counter, uint32_t bound) {
-    /* an integer in [0, bound): the high 32 bits of the next stream value, scaled */
-    uint64_t z = dpc_mix64(state1 + (++*counter) * 0x9E3779B97F4A7C15ull);
-    return (uint32_t)(((z >> 32) * (uint64_t)bound) >> 32);
-}
-
-static uint32_t word_at(const float *out, size_t i) {
-    uint32_t w;
-    memcpy(&w, out + i, sizeof w);
-    return w;
-}
-
-static void set_word(float *out, size_t i, uint32_t w) { memcpy(out + i, &w, sizeof w); }
-
-/* Whether g^n <= m, without overflow. */
-static int power_fits(uint64_t g, size_t n, size_t m) {
-    uint64_t p = 1;
-    for (size_t a = 0; a < n; a++) {
-        p *= g;
-        if (p > m) return 0;
-    }
-    return 1;
-}
-
-static void fill_stratified(uint64_t seed, size_t m, size_t n, float *out) {
-    uint32_t g = (uint32_t)floor(pow((double)m, 1.0 / (double)n)); /* then exactly: the largest g^n <= m */
-    if (g < 1) g = 1;
-    while (g > 1 && !power_fits(g, n, m)) g--;
-    while (power_fits((uint64_t)g + 1, n, m)) g++;
-    uint64_t cells = 1;
-    for (size_t a = 0; a < n; a++) cells *= g;
-    const size_t base = m / (size_t)cells, extra = m % (size_t)cells;
-    const uint64_t state1 = dpc_mix64(seed ^ 0x5354524154494649ull); /* a stream of its own */
-    uint64_t counter = 0;
-    /* every cell `base` times, then `extra` distinct cells (a partial Fisher-Yates shuffle of all
-     * cells; extra > 0 implies n >= 2, since g = m in 1-D, so words m .. m + cells are free) */
-    for (size_t i = 0; i < base * (size_t)cells; i++) set_word(out, i, (uint32_t)(i % cells));
-    if (extra) {
-        for (size_t c = 0; c < cells; c++) set_word(out, m + c, (uint32_t)c);
-        for (size_t t = 0; t < extra; t++) {
-            const size_t j = t + below(state1, &counter, (uint32_t)(cells - t));
-            const uint32_t wj = word_at(out, m + j);
-            set_word(out, m + j, word_at(out, m + t));
-            set_word(out, base * (size_t)cells + t, wj);
-            set_word(out, m + t, wj);
-        }
-    }
-    for (size_t i = m - 1; i > 0; i--) { /* random order: any prefix of the set covers the domain */
-        const size_t j = below(state1, &counter, (uint32_t)(i + 1));
-        const uint32_t wi = word_at(out, i);
-        set_word(out, i, word_at(out, j));
-        set_word(out, j, wi);
-    }
-    /* point i = its cell plus the uniform numbers of point i; from the last point down, so
-     * point i's coordinates (words i n .. i n + n - 1 >= i) overwrite only cells already read */
-    const uint64_t state0 = dpc_mix64(seed);
-    const float below_one = 0x1.fffffep-1f;
-    for (size_t i = m; i-- > 0;) {
-        uint32_t cell = word_at(out, i);
-        for (size_t a = 0; a < n; a++) {
-            const uint32_t digit = cell % g;
-            cell /= g;
-            const float u = dpc_uniform_at(state0, i * n + a);
-            const float x = (float)(((double)digit + (double)u) / (double)g);
-            out[i * n + a] = x < 1.0f ? x : below_one;
-        }
-    }
-}
-
 static dpc_status check_input_size(const float *out, size_t n_points, size_t dims) {
     if (!out) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "out is NULL");
     if (n_points == 0 || dims == 0) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "n_points and dims must be positive");
@@ -501,7 +406,7 @@ dpc_status dpc_uniform(uint64_t seed, size_t n_points, size_t dims, float *out) 
     dpc_clear_error();
     dpc_status st = check_input_size(out, n_points, dims);
     if (st != DPC_OK) return st;
-    fill_uniform(seed, n_points * dims, out);
+    dpc_input_uniform(seed, n_points * dims, out);
     return DPC_OK;
 }
 
@@ -511,7 +416,7 @@ dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, float *ou
     if (st != DPC_OK) return st;
     if (n_points > DPC_MAX_POINTS)
         return dpc_fail(DPC_ERROR_LIMIT, "%zu points requested, at most %u per set", n_points, DPC_MAX_POINTS);
-    fill_stratified(seed, n_points, dims, out);
+    dpc_input_stratified(seed, n_points, dims, out);
     return DPC_OK;
 }
 
@@ -544,25 +449,6 @@ static dpc_status check_count(const dpc_model *model, size_t *n_points) {
     return DPC_OK;
 }
 
-static void fill_grid(const dpc_cascade *c, size_t m, float *x) {
-    for (size_t i = 0; i < m; i++) {
-        size_t rest = i;
-        for (uint32_t g = 0; g < c->grid_dims; g++) {
-            size_t cell = rest % c->grid_shape[g];
-            rest /= c->grid_shape[g];
-            x[i * c->dims + c->grid_axis[g]] = (float)(((double)cell + 0.5) / c->grid_shape[g]);
-        }
-    }
-}
-
-/* The input points of one set: the model's input kind, then the grid's cell centres. */
-static void fill_input(const dpc_model *model, uint64_t seed, size_t m, float *x) {
-    const dpc_cascade *c = &model->cascade;
-    if (model->input == DPC_INPUT_STRATIFIED) fill_stratified(seed, m, c->dims, x);
-    else fill_uniform(seed, m * c->dims, x);
-    fill_grid(c, m, x);
-}
-
 /* Progress of one dpc_generate_ex call (dpc_progress_fn): shared by its worker threads, the
  * callback called under the lock so that calls never overlap. */
 typedef struct progress {
@@ -587,38 +473,24 @@ static dpc_status progress_add(progress *p, uint64_t units) {
     return cancelled ? DPC_ERROR_CANCELLED : DPC_OK;
 }
 
-#if defined(DPC_CPU_HAS_LAYER_HOOK)
-/* The engine's hook (cpu_cascade.h): after each layer (one unit of progress), and between
- * chunks of points inside a long layer (a poll, so that a cancel is seen within a layer). */
+/* The CPU engine's hook (cpu_cascade.h): before each set and between chunks of points inside a
+ * long layer (a poll, so that a cancel is seen within a layer), and after each layer (one unit
+ * of progress). */
 static dpc_status engine_hook(void *ctx, int layer_done) {
     return progress_add((progress *)ctx, layer_done ? 1u : 0u);
 }
-#endif
-
-static dpc_status generate_one(const dpc_model *model, const dpc_cpu_engine *engine, uint64_t seed,
-                               size_t m, float *out, progress *p) {
-    if (progress_add(p, 0) != DPC_OK) return DPC_ERROR_CANCELLED;
-    fill_input(model, seed, m, out);
-    if (!p || !p->fn) return dpc_cpu_filter(&model->cascade, engine, m, out);
-#if defined(DPC_CPU_HAS_LAYER_HOOK)
-    return dpc_cpu_filter_hooked(&model->cascade, engine, m, out, engine_hook, p);
-#else
-    /* this engine reports no layers: the whole set at once */
-    const dpc_status st = dpc_cpu_filter(&model->cascade, engine, m, out);
-    return st != DPC_OK ? st : progress_add(p, model->cascade.n_layers);
-#endif
-}
 
 dpc_status dpc_model_generate_cpu(const dpc_model *model, uint64_t seed, size_t m, float *out) {
-    dpc_cpu_engine scalar;
-    dpc_status st = dpc_cpu_engine_init(&scalar, model->engine.isa, 1); /* every ISA: the same bits */
+    dpc_cpu_engine one;
+    dpc_status st = dpc_cpu_engine_init(&one, model->engine.isa, 1); /* every ISA: the same bits */
     if (st != DPC_OK) return st;
     if ((st = check_count(model, &m)) != DPC_OK) return st;
-    return generate_one(model, &scalar, seed, m, out, NULL);
+    return dpc_cpu_generate(&model->cascade, model->input, &one, seed, 1, m, out, NULL, NULL);
 }
 
 #if defined(DPC_HAVE_VULKAN)
-/* Inputs of a Vulkan run: the CPU backend's input points (same code), or the caller's points. */
+/* Inputs of a Vulkan run: the model's input points (model/input.h, as on the CPU), or the
+ * caller's points. */
 typedef struct vk_inputs {
     const dpc_model *model;
     uint64_t seed;
@@ -633,7 +505,7 @@ static void vk_fill(void *ctx, size_t set, float *x) {
         memcpy(x, in->given, in->m * c->dims * sizeof(float));
         return;
     }
-    fill_input(in->model, in->seed + set, in->m, x);
+    dpc_input_fill(c, in->model->input, in->seed + set, in->m, x);
 }
 
 static dpc_status vk_generate(const dpc_model *model, uint64_t seed, size_t count, size_t m, float *out) {
@@ -650,7 +522,7 @@ dpc_status dpc_generate_n(const dpc_model *model, uint64_t seed, size_t n_points
 #if defined(DPC_HAVE_VULKAN)
     if (model->backend == DPC_BACKEND_VULKAN) return vk_generate(model, seed, 1, n_points, out);
 #endif
-    return generate_one(model, &model->engine, seed, n_points, out, NULL);
+    return dpc_cpu_generate(&model->cascade, model->input, &model->engine, seed, 1, n_points, out, NULL, NULL);
 }
 
 dpc_status dpc_generate(const dpc_model *model, uint64_t seed, float *out) {
@@ -664,25 +536,6 @@ size_t dpc_output_size(const dpc_model *model, size_t count, size_t n_points) {
     if (m && per / m != model->cascade.dims) return 0;
     if (count && per > SIZE_MAX / count) return 0;
     return per * count;
-}
-
-/* Batches: with several threads, whole sets go to threads (set c always from seed + c, so the
- * bits are those of the serial loop). */
-typedef struct batch_job {
-    const dpc_model *model;
-    dpc_cpu_engine engine; /* single-threaded copy */
-    uint64_t seed;
-    size_t count, m, stride, next_step, first;
-    float *out;
-    progress *progress;
-    dpc_status status;
-} batch_job;
-
-static void *batch_worker(void *arg) {
-    batch_job *j = (batch_job *)arg;
-    for (size_t c = j->first; c < j->count && j->status == DPC_OK; c += j->next_step)
-        j->status = generate_one(j->model, &j->engine, j->seed + c, j->m, j->out + c * j->stride, j->progress);
-    return NULL;
 }
 
 void dpc_generate_options_init(dpc_generate_options *options) {
@@ -711,7 +564,6 @@ static dpc_status generate_batch(const dpc_model *model, uint64_t seed, size_t c
     dpc_status st = dpc_generate_size(model, count, n_points, &floats);
     if (st != DPC_OK) return st;
     if (!n_points) n_points = model->cascade.n_points;
-    const size_t stride = n_points * model->cascade.dims;
     if (p) p->total = (uint64_t)count * model->cascade.n_layers;
 #if defined(DPC_HAVE_VULKAN)
     if (model->backend == DPC_BACKEND_VULKAN) { /* many sets per dispatch: progress once, at the end */
@@ -722,35 +574,8 @@ static dpc_status generate_batch(const dpc_model *model, uint64_t seed, size_t c
         return DPC_OK;
     }
 #endif
-    unsigned threads = model->engine.threads;
-    if (threads > count) threads = (unsigned)count;
-    if (threads <= 1 || n_points >= 65536) { /* big sets parallelise inside each set instead */
-        for (size_t c = 0; c < count; c++)
-            if ((st = generate_one(model, &model->engine, seed + c, n_points, out + c * stride, p)) != DPC_OK)
-                return st == DPC_ERROR_CANCELLED
-                           ? dpc_fail(st, "cancelled by the progress callback (%zu of %zu sets done)", c, count)
-                           : st;
-        return DPC_OK;
-    }
-    batch_job jobs[64];
-    pthread_t ids[64];
-    int started[64];
-    for (unsigned t = 0; t < threads; t++) {
-        jobs[t] = (batch_job){model, model->engine, seed, count, n_points, stride, threads, t, out, p, DPC_OK};
-        jobs[t].engine.threads = 1;
-    }
-    for (unsigned t = 1; t < threads; t++) started[t] = pthread_create(&ids[t], NULL, batch_worker, &jobs[t]) == 0;
-    batch_worker(&jobs[0]);
-    for (unsigned t = 1; t < threads; t++) {
-        if (started[t]) pthread_join(ids[t], NULL);
-        else batch_worker(&jobs[t]);
-    }
-    for (unsigned t = 0; t < threads; t++)
-        if (jobs[t].status == DPC_ERROR_CANCELLED) return dpc_fail(DPC_ERROR_CANCELLED, "cancelled by the progress callback");
-    for (unsigned t = 0; t < threads; t++)
-        if (jobs[t].status != DPC_OK)
-            return dpc_fail(jobs[t].status, "generating a set of the batch failed (%s)", dpc_status_string(jobs[t].status));
-    return DPC_OK;
+    return dpc_cpu_generate(&model->cascade, model->input, &model->engine, seed, count, n_points, out,
+                            p ? engine_hook : NULL, p);
 }
 
 dpc_status dpc_generate_batch(const dpc_model *model, uint64_t seed, size_t count, size_t n_points, float *out) {
@@ -859,23 +684,50 @@ static dpc_status check_layer_call(const dpc_layer_desc *layer, const double *ke
     return DPC_OK;
 }
 
-dpc_status dpc_layer_forward(const dpc_layer_desc *layer, const double *kernels, size_t count, size_t n_points,
-                             const double *x, double *y, uint32_t threads) {
-    dpc_clear_error();
-    dpc_train_layer L;
-    dpc_status st = check_layer_call(layer, kernels, count, n_points, x, &L);
-    if (st != DPC_OK) return st;
-    if (!y) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "y is NULL");
-    return dpc_train_forward(&L, count, n_points, x, y, threads);
+void dpc_layer_options_init(dpc_layer_options *options) {
+    if (!options) return;
+    memset(options, 0, sizeof *options);
+    options->struct_size = (uint32_t)sizeof *options;
+    options->threads = 1;
+    options->isa = DPC_ISA_AUTO;
 }
 
-dpc_status dpc_layer_backward(const dpc_layer_desc *layer, const double *kernels, size_t count, size_t n_points,
-                              const double *x, const double *grad_y, double *grad_x, double *grad_kernels,
-                              uint32_t threads) {
+static dpc_status layer_options(const dpc_layer_options *options, dpc_layer_options *out) {
+    dpc_layer_options_init(out);
+    if (!options) return DPC_OK;
+    if (options->struct_size != sizeof *out)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
+                        "options.struct_size is %u, expected %u: initialise with dpc_layer_options_init",
+                        options->struct_size, (unsigned)sizeof *out);
+    *out = *options;
+    if (out->isa != DPC_ISA_AUTO && out->isa != DPC_ISA_SCALAR && out->isa != DPC_ISA_AVX2 &&
+        out->isa != DPC_ISA_AVX512)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "options.isa is %d: use DPC_ISA_AUTO, _SCALAR, _AVX2 or _AVX512",
+                        (int)out->isa);
+    return DPC_OK;
+}
+
+dpc_status dpc_layer_forward_ex(const dpc_layer_desc *layer, const double *kernels, size_t count, size_t n_points,
+                                const double *x, double *y, const dpc_layer_options *options) {
     dpc_clear_error();
-    dpc_train_layer L;
-    dpc_status st = check_layer_call(layer, kernels, count, n_points, x, &L);
+    dpc_layer_options o;
+    dpc_status st = layer_options(options, &o);
     if (st != DPC_OK) return st;
+    dpc_train_layer L;
+    if ((st = check_layer_call(layer, kernels, count, n_points, x, &L)) != DPC_OK) return st;
+    if (!y) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "y is NULL");
+    return dpc_train_forward(&L, count, n_points, x, y, o.threads, o.isa);
+}
+
+dpc_status dpc_layer_backward_ex(const dpc_layer_desc *layer, const double *kernels, size_t count, size_t n_points,
+                                 const double *x, const double *grad_y, double *grad_x, double *grad_kernels,
+                                 const dpc_layer_options *options) {
+    dpc_clear_error();
+    dpc_layer_options o;
+    dpc_status st = layer_options(options, &o);
+    if (st != DPC_OK) return st;
+    dpc_train_layer L;
+    if ((st = check_layer_call(layer, kernels, count, n_points, x, &L)) != DPC_OK) return st;
     if (!grad_y || !grad_x || !grad_kernels)
         return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "grad_y, grad_x or grad_kernels is NULL");
     const size_t total = count * n_points * L.n;
@@ -883,5 +735,22 @@ dpc_status dpc_layer_backward(const dpc_layer_desc *layer, const double *kernels
         if (!isfinite(grad_y[i]))
             return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "grad_y: set %zu, point %zu, dimension %zu is not finite",
                             i / (n_points * L.n), i / L.n % n_points, i % L.n);
-    return dpc_train_backward(&L, count, n_points, x, grad_y, grad_x, grad_kernels, threads);
+    return dpc_train_backward(&L, count, n_points, x, grad_y, grad_x, grad_kernels, o.threads, o.isa);
+}
+
+dpc_status dpc_layer_forward(const dpc_layer_desc *layer, const double *kernels, size_t count, size_t n_points,
+                             const double *x, double *y, uint32_t threads) {
+    dpc_layer_options o;
+    dpc_layer_options_init(&o);
+    o.threads = threads;
+    return dpc_layer_forward_ex(layer, kernels, count, n_points, x, y, &o);
+}
+
+dpc_status dpc_layer_backward(const dpc_layer_desc *layer, const double *kernels, size_t count, size_t n_points,
+                              const double *x, const double *grad_y, double *grad_x, double *grad_kernels,
+                              uint32_t threads) {
+    dpc_layer_options o;
+    dpc_layer_options_init(&o);
+    o.threads = threads;
+    return dpc_layer_backward_ex(layer, kernels, count, n_points, x, grad_y, grad_x, grad_kernels, &o);
 }

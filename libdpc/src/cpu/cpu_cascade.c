@@ -8,18 +8,25 @@
 #include "cpu/cpu_cascade.h"
 
 #include <math.h>
-#include <pthread.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "common/error.h"
+#include "common/threads.h"
 #include "cpu/cpu_grid.h"
+#include "model/input.h"
+#include "model/plan.h"
 
-#define MAX_RANGES 512u          /* index ranges per point (2 per row of cells) */
-#define DPC_MAX_THREADS 64u
+#define MAX_RANGES DPC_PLAN_MAX_RANGES /* index ranges per point (2 per row of cells) */
 
 #define PARALLEL_MIN_POINTS 8192 /* below this, threads cost more than they save */
+
+/* The engine's loops over points: one range per worker (dpc_parallel_ranges), or the whole
+ * range on the calling thread for small sets. */
+static void parallel_for(unsigned threads, size_t n, dpc_range_fn fn, void *ctx) {
+    dpc_parallel_ranges(n < PARALLEL_MIN_POINTS ? 1u : threads, n, fn, ctx);
+}
 
 typedef struct workspace {
     size_t m, n;
@@ -72,7 +79,7 @@ static dpc_status workspace_init(workspace *w, size_t m, size_t n, unsigned thre
     memset(w, 0, sizeof *w);
     w->m = m;
     w->n = n;
-    w->cell_cap = 2 * m + 64;
+    w->cell_cap = 2 * m + DPC_PLAN_CELL_SLACK; /* the most cells a plan's grid has */
     w->stride = (m + 15) / 16 * 16 + 16;
     w->delta = (float *)malloc(m * n * sizeof(float));
     w->soa = (float *)calloc(w->stride * n, sizeof(float));
@@ -93,85 +100,17 @@ static dpc_status workspace_init(workspace *w, size_t m, size_t n, unsigned thre
     return DPC_OK;
 }
 
-/* ---- a minimal parallel-for over index ranges -------------------------------------------- */
-
-/* fn(ctx, slot, lo, hi): slot < threads identifies the worker (for per-thread scratch). */
-typedef void (*range_fn)(void *ctx, unsigned slot, size_t lo, size_t hi);
-
-typedef struct chunk {
-    range_fn fn;
-    void *ctx;
-    unsigned slot;
-    size_t lo, hi;
-} chunk;
-
-static void *chunk_main(void *arg) {
-    chunk *c = (chunk *)arg;
-    c->fn(c->ctx, c->slot, c->lo, c->hi);
-    return NULL;
-}
-
-static void parallel_for(unsigned threads, size_t n, range_fn fn, void *ctx) {
-    if (threads > DPC_MAX_THREADS) threads = DPC_MAX_THREADS;
-    if (threads <= 1 || n < PARALLEL_MIN_POINTS) {
-        fn(ctx, 0, 0, n);
-        return;
-    }
-    chunk chunks[64];
-    pthread_t ids[64];
-    int started[64];
-    for (unsigned t = 0; t < threads; t++) {
-        chunks[t].fn = fn;
-        chunks[t].ctx = ctx;
-        chunks[t].slot = t;
-        chunks[t].lo = n * t / threads;
-        chunks[t].hi = n * (t + 1) / threads;
-    }
-    for (unsigned t = 1; t < threads; t++)
-        started[t] = pthread_create(&ids[t], NULL, chunk_main, &chunks[t]) == 0;
-    fn(ctx, 0, chunks[0].lo, chunks[0].hi);
-    for (unsigned t = 1; t < threads; t++) {
-        if (started[t]) pthread_join(ids[t], NULL);
-        else chunk_main(&chunks[t]); /* no thread to be had: do the work here */
-    }
-}
-
 /* ---- one subspace of one layer ----------------------------------------------------------- */
 
 typedef struct sub_pass {
     const dpc_cpu_engine *engine;
     workspace *ws;
     dpc_sub_job job;
-    unsigned dim[DPC_MAX_DIMS]; /* subspace dimension q -> point dimension */
-    float h;                    /* mean spacing of the subspace */
-    int grid;                   /* 0: all pairs */
-    uint32_t G, R;              /* cells per axis, cell offsets searched per axis */
+    const unsigned *dim; /* subspace dimension q -> point dimension (the plan's) */
+    float h;             /* mean spacing of the subspace */
+    int grid;            /* 0: all pairs */
+    uint32_t G, R;       /* cells per axis, cell offsets searched per axis */
 } sub_pass;
-
-/* Decide between the cell grid and all pairs, and pick the grid resolution. */
-static void plan_grid(sub_pass *p, size_t m) {
-    const unsigned k = p->job.k;
-    p->grid = 0;
-    if (k > 4 || m < 64) return;
-    const double r = p->job.radius;
-    const double reach = k <= 2 ? 2.0 : 1.0; /* cells per radius: finer cells visit less area */
-    /* Cell coordinates are computed as (int)(x * G) in float, off by up to G * 6e-8 cells near
-     * cell edges; the margin of 1e-3 cells (G <= 16384) keeps every neighbour within R cells. */
-    const double margin = 1e-3;
-    double G = floor(reach / (r * (1.0 + margin)));
-    const double cap = floor(pow(2.0 * (double)m, 1.0 / k) + 1e-9); /* at most ~2m cells */
-    if (G > cap) G = cap;
-    if (G > 16384) G = 16384;
-    if (G < 3) return;
-    const double R = ceil(r * G + margin);
-    if (2 * R + 1 > G) return;
-    if (pow((2 * R + 1) / G, k) > 0.5) return; /* visits most of the domain: all pairs is faster */
-    double rows = 2 * pow(2 * R + 1, k - 1);
-    if (rows > MAX_RANGES || pow(G, k) > (double)p->ws->cell_cap) return;
-    p->grid = 1;
-    p->G = (uint32_t)G;
-    p->R = (uint32_t)R;
-}
 
 /* Sort points by cell (stable counting sort): cell_of, cell_start and perm. */
 static void sort_cells(sub_pass *p, const float *x) {
@@ -301,29 +240,30 @@ static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws
     memset(ws->delta, 0, m * n * sizeof(float));
     apply_pass a;
     memset(&a, 0, sizeof a);
+    unsigned count[DPC_MAX_DIMS];
+    dpc_plan_counts((unsigned)n, L->n_sub, L->masks, L->fixed, count);
+    for (size_t d = 0; d < n; d++) a.count[d] = (float)count[d];
     for (unsigned t = 0; t < L->n_sub; t++) {
-        if (!(L->masks[t] & ~L->fixed)) continue; /* moves nothing (e.g. the grid's own axes) */
+        dpc_sub_plan plan;
+        dpc_plan_subspace(L->masks[t], L->fixed, L->radius[t], L->eps, L->bins, m, DPC_PLAN_F32, &plan);
+        if (!plan.moves) continue; /* moves nothing (e.g. the grid's own axes) */
         sub_pass p;
         memset(&p, 0, sizeof p);
         p.engine = e;
         p.ws = ws;
-        unsigned k = 0;
-        for (unsigned d = 0; d < n; d++)
-            if (L->masks[t] >> d & 1) {
-                p.dim[k++] = d;
-                if (!(L->fixed >> d & 1)) a.count[d] += 1.0f;
-            }
-        p.job.k = k;
-        p.h = (float)pow((double)m, -1.0 / k);
-        float r = L->radius[t] * p.h;
-        p.job.radius = r < 0.5f ? r : 0.5f;
-        p.job.cutoff = L->eps * p.h;
-        p.job.scale = (float)(L->bins - 1) / p.job.radius;
-        p.job.umax = (float)(L->bins - 1);
-        p.job.qmax = (int32_t)L->bins - 2;
+        p.dim = plan.dim;
+        p.job.k = plan.k;
+        p.h = (float)plan.h;
+        p.job.radius = (float)plan.r;
+        p.job.cutoff = (float)plan.e;
+        p.job.scale = (float)plan.scale;
+        p.job.umax = (float)plan.umax;
+        p.job.qmax = plan.qmax;
         p.job.w = L->kernels + (size_t)t * L->bins;
         p.job.dw = L->slopes + (size_t)t * L->bins;
-        plan_grid(&p, m);
+        p.grid = plan.grid;
+        p.G = plan.G;
+        p.R = plan.R;
         sort_cells(&p, ws->x);
         if (p.grid && !accumulated) reorder_points(ws);
         fill_soa(&p, ws->x);
@@ -362,5 +302,63 @@ dpc_status dpc_cpu_filter_hooked(const dpc_cascade *c, const dpc_cpu_engine *e, 
     }
     for (size_t i = 0; i < m; i++) memcpy(x + (size_t)ws.order[i] * n, ws.x + i * n, n * sizeof(float));
     workspace_free(&ws);
+    return DPC_OK;
+}
+
+/* ---- whole sets: input points, then the cascade; batches fanned out over threads ------------ */
+
+static dpc_status generate_one(const dpc_cascade *c, dpc_input input, const dpc_cpu_engine *e, uint64_t seed,
+                               size_t m, float *out, dpc_cpu_hook hook, void *ctx) {
+    if (hook && hook(ctx, 0) != DPC_OK) return DPC_ERROR_CANCELLED;
+    dpc_input_fill(c, input, seed, m, out);
+    return dpc_cpu_filter_hooked(c, e, m, out, hook, ctx);
+}
+
+/* Batches with several threads: whole sets go to workers, set c always from seed + c, so the
+ * bits are those of the serial loop. */
+typedef struct batch_job {
+    const dpc_cascade *cascade;
+    dpc_input input;
+    dpc_cpu_engine engine; /* single-threaded copy */
+    uint64_t seed;
+    size_t count, m, stride;
+    unsigned workers;
+    float *out;
+    dpc_cpu_hook hook;
+    void *ctx;
+    dpc_status status[DPC_MAX_THREADS];
+} batch_job;
+
+static void batch_worker(void *arg, unsigned slot) {
+    batch_job *j = (batch_job *)arg;
+    dpc_status st = DPC_OK;
+    for (size_t c = slot; c < j->count && st == DPC_OK; c += j->workers)
+        st = generate_one(j->cascade, j->input, &j->engine, j->seed + c, j->m, j->out + c * j->stride, j->hook, j->ctx);
+    j->status[slot] = st;
+}
+
+dpc_status dpc_cpu_generate(const dpc_cascade *c, dpc_input input, const dpc_cpu_engine *e, uint64_t seed,
+                            size_t count, size_t m, float *out, dpc_cpu_hook hook, void *ctx) {
+    const size_t stride = m * c->dims;
+    unsigned threads = e->threads;
+    if (threads > count) threads = (unsigned)count;
+    if (threads <= 1 || m >= 65536) { /* big sets parallelise inside each set instead */
+        for (size_t s = 0; s < count; s++) {
+            const dpc_status st = generate_one(c, input, e, seed + s, m, out + s * stride, hook, ctx);
+            if (st != DPC_OK)
+                return st == DPC_ERROR_CANCELLED
+                           ? dpc_fail(st, "cancelled by the progress callback (%zu of %zu sets done)", s, count)
+                           : st;
+        }
+        return DPC_OK;
+    }
+    batch_job j = {c, input, *e, seed, count, m, stride, threads, out, hook, ctx, {DPC_OK}};
+    j.engine.threads = 1;
+    dpc_run_workers(threads, batch_worker, &j);
+    for (unsigned t = 0; t < threads; t++)
+        if (j.status[t] == DPC_ERROR_CANCELLED) return dpc_fail(DPC_ERROR_CANCELLED, "cancelled by the progress callback");
+    for (unsigned t = 0; t < threads; t++)
+        if (j.status[t] != DPC_OK)
+            return dpc_fail(j.status[t], "generating a set of the batch failed (%s)", dpc_status_string(j.status[t]));
     return DPC_OK;
 }

@@ -8,13 +8,19 @@
 typedef struct dpc_cpu_engine {
     dpc_isa isa;        /* resolved: never DPC_ISA_AUTO */
     dpc_block_fn block; /* that ISA's kernel */
-    unsigned threads;   /* >= 1 */
+    unsigned threads;   /* 1 .. DPC_MAX_THREADS */
 } dpc_cpu_engine;
 
 /* Whether this build and CPU run isa's path (AUTO and SCALAR: always). */
 int dpc_cpu_isa_available(dpc_isa isa);
 
-/* Pick the kernel for isa (AUTO: DPC_ISA environment variable, else the best the CPU has). */
+/* Resolve isa: AUTO is the DPC_ISA environment variable ("scalar", "avx2", "avx512"; unset, ""
+ * or "auto": ignored), else the best the CPU has. A path this build or CPU lacks is
+ * DPC_ERROR_UNSUPPORTED, a bad DPC_ISA DPC_ERROR_INVALID_ARGUMENT. Shared by the inference
+ * engine and the training kernels. */
+dpc_status dpc_cpu_resolve_isa(dpc_isa isa, dpc_isa *out);
+
+/* Pick the kernel for isa (dpc_cpu_resolve_isa) and the thread count (0: one per online CPU). */
 dpc_status dpc_cpu_engine_init(dpc_cpu_engine *e, dpc_isa isa, unsigned threads);
 
 /* Filter m points (row-major, c->dims per point, all in [0,1)) through every layer, in place. */
@@ -26,9 +32,17 @@ dpc_status dpc_cpu_filter(const dpc_cascade *c, const dpc_cpu_engine *e, size_t 
  * returns that status, x then unspecified. The bits of a run that is not stopped are those of
  * dpc_cpu_filter. */
 typedef dpc_status (*dpc_cpu_hook)(void *ctx, int layer_done);
-#define DPC_CPU_HAS_LAYER_HOOK 1
 #define DPC_CPU_POLL_POINTS 16384u
 dpc_status dpc_cpu_filter_hooked(const dpc_cascade *c, const dpc_cpu_engine *e, size_t m, float *x,
                                  dpc_cpu_hook hook, void *ctx);
+
+/* count sets of m points (m already checked): set s is the input points of seed + s (kind
+ * `input`, model/input.h) filtered through the cascade, at out + s * m * dims. With several
+ * threads and sets below 65,536 points, whole sets go to workers (one single-threaded engine
+ * each); otherwise sets run in order, each using the engine's threads. The bits are the same
+ * either way. hook (or NULL) is also called (layer_done = 0) before each set; when it stops the
+ * run the result is DPC_ERROR_CANCELLED with a message. */
+dpc_status dpc_cpu_generate(const dpc_cascade *c, dpc_input input, const dpc_cpu_engine *e, uint64_t seed,
+                            size_t count, size_t m, float *out, dpc_cpu_hook hook, void *ctx);
 
 #endif

@@ -17,6 +17,15 @@ static int cpu_has_avx512(void) {
 #endif
 }
 
+static int cpu_has_fma(void) {
+#if defined(DPC_HAVE_AVX2) && (defined(__x86_64__) || defined(__i386__)) && defined(__GNUC__)
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("fma");
+#else
+    return 0;
+#endif
+}
+
 static int cpu_has_avx2_fma(void) {
 #if defined(DPC_HAVE_AVX2) && (defined(__x86_64__) || defined(__i386__)) && defined(__GNUC__)
     __builtin_cpu_init();
@@ -79,6 +88,8 @@ dpc_status dpc_cpu_engine_init(dpc_cpu_engine *e, dpc_isa isa, unsigned threads)
     if (st != DPC_OK) return st;
     e->block = dpc_block_scalar;
 #if defined(DPC_HAVE_AVX2)
+    /* the scalar path's source compiled with -mfma: fmaf is an instruction, the bits the same */
+    if (isa == DPC_ISA_SCALAR && cpu_has_fma()) e->block = dpc_block_scalar_fma;
     if (isa == DPC_ISA_AVX2) e->block = dpc_block_avx2;
     if (isa == DPC_ISA_AVX512) e->block = dpc_block_avx512;
 #endif

@@ -14,8 +14,8 @@
  * per worker, never O(m²).
  *
  * The pair loop (filter candidates on d², then the pair math on the survivors) is per ISA:
- * cpu_layer_train_scalar.c, _avx2.c, _avx512.c, chosen like the inference kernels (DPC_ISA, else
- * cpuid). Vector paths sum in lanes, so they differ from the scalar path by rounding; each path
+ * cpu_layer_train_scalar.c, _avx2.c, _avx512.c, the ISA given by the caller (AUTO: resolved like
+ * the inference engine's, DPC_ISA, else cpuid). Vector paths sum in lanes, so they differ from the scalar path by rounding; each path
  * on its own is deterministic and thread-count independent. Sets below SET_PARALLEL_BELOW points
  * always run whole on one worker, and there the vector paths take each unordered pair once and
  * scatter its (odd) term to the upper point (set_fn, cpu_layer_train_simd.h): still a fixed
@@ -23,17 +23,16 @@
 #include "cpu/cpu_layer_train_impl.h"
 
 #include <math.h>
-#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "common/error.h"
+#include "common/threads.h"
 #include "cpu/cpu_cascade.h"
 #include "cpu/cpu_grid.h"
+#include "model/plan.h"
 
-#define MAX_THREADS 64u
-#define MAX_RANGES DPC_TRAIN_MAX_RANGES
+#define MAX_THREADS DPC_MAX_THREADS
 #define SET_PARALLEL_BELOW 8192u /* smaller sets go to threads whole: no spawn per subspace */
 #define MIN_CHUNK 256u
 
@@ -44,38 +43,14 @@ typedef dpc_train_plan plan;
 typedef dpc_train_ws wspace;
 typedef dpc_train_pass pass;
 
-/* Grid or all pairs, and the grid resolution (the cell side is at least r / reach). */
-static void plan_grid(sub_plan *sp, size_t m) {
-    const unsigned k = sp->k;
-    sp->grid = 0;
-    if (k > 4 || m < 64) return;
-    const double reach = k <= 2 ? 2.0 : 1.0; /* finer cells visit less area in 1-D and 2-D */
-    /* Cell indices are rounded products x·G (error ~1e-12 cells): a margin of 1e-3 cells keeps
-     * every neighbour within R cells. */
-    const double margin = 1e-3;
-    double G = floor(reach / (sp->r * (1.0 + margin)));
-    const double cap = floor(pow(2.0 * (double)m, 1.0 / k) + 1e-9); /* at most ~2m cells */
-    if (G > cap) G = cap;
-    if (G > 16384) G = 16384;
-    if (G < 3) return;
-    const double R = ceil(sp->r * G + margin);
-    if (2 * R + 1 > G) return;                      /* a cell would be visited twice */
-    if (pow((2 * R + 1) / G, k) > 0.5) return;      /* most of the domain anyway: all pairs */
-    if (2 * pow(2 * R + 1, k - 1) > MAX_RANGES) return;
-    sp->grid = 1;
-    sp->G = (uint32_t)G;
-    sp->R = (uint32_t)R;
-}
-
-/* The pair loop for the ISA the inference engine would pick (DPC_ISA, else the best of cpuid),
- * with the same errors for a bad DPC_ISA or a path the CPU lacks. */
-static dpc_status pick_isa(plan *p) {
-    dpc_cpu_engine e;
-    const dpc_status st = dpc_cpu_engine_init(&e, DPC_ISA_AUTO, 1);
+/* The pair loop of isa (AUTO: the inference engine's choice, DPC_ISA, else the best of cpuid),
+ * with the same errors for a bad DPC_ISA or a path this build or CPU lacks. */
+static dpc_status pick_isa(plan *p, dpc_isa isa) {
+    const dpc_status st = dpc_cpu_resolve_isa(isa, &isa);
     if (st != DPC_OK) return st;
     p->chunk_fn = dpc_train_chunk_scalar;
     p->set_fn = NULL;
-    switch (e.isa) {
+    switch (isa) {
 #if defined(DPC_HAVE_AVX2)
     case DPC_ISA_AVX2: p->chunk_fn = dpc_train_chunk_avx2, p->set_fn = dpc_train_set_avx2; break;
     case DPC_ISA_AVX512: p->chunk_fn = dpc_train_chunk_avx512, p->set_fn = dpc_train_set_avx512; break;
@@ -85,9 +60,9 @@ static dpc_status pick_isa(plan *p) {
     return DPC_OK;
 }
 
-static dpc_status plan_init(plan *p, const dpc_train_layer *L, size_t m) {
+static dpc_status plan_init(plan *p, const dpc_train_layer *L, size_t m, dpc_isa isa) {
     memset(p, 0, sizeof *p);
-    const dpc_status st = pick_isa(p);
+    const dpc_status st = pick_isa(p, isa);
     if (st != DPC_OK) return st;
     /* Unordered pairs need a whole set per worker: only sets that always run in set mode use
      * them, whatever the thread count (run() picks set mode for every m below this). */
@@ -99,25 +74,25 @@ static dpc_status plan_init(plan *p, const dpc_train_layer *L, size_t m) {
     p->b = L->b;
     p->sub = (sub_plan *)calloc(L->s, sizeof *p->sub);
     if (!p->sub) return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory for a layer plan");
-    for (unsigned t = 0; t < L->s; t++)
-        for (unsigned d = 0; d < L->n; d++)
-            if (L->masks[t] >> d & 1) p->count[d] += 1.0;
-    for (unsigned d = 0; d < L->n; d++)
-        if (L->fixed >> d & 1) p->count[d] = 0.0;
+    unsigned count[DPC_MAX_DIMS];
+    dpc_plan_counts(L->n, L->s, L->masks, L->fixed, count);
+    for (unsigned d = 0; d < L->n; d++) p->count[d] = (double)count[d];
     p->max_cells = 1;
     for (unsigned t = 0; t < L->s; t++) {
         sub_plan *sp = &p->sub[t];
-        for (unsigned d = 0; d < L->n; d++)
-            if (L->masks[t] >> d & 1) sp->dim[sp->k++] = d;
-        sp->h = pow((double)m, -1.0 / sp->k);
+        dpc_sub_plan sub;
+        dpc_plan_subspace(L->masks[t], L->fixed, L->radius[t], L->eps, L->b, m, DPC_PLAN_F64, &sub);
+        sp->k = sub.k;
+        memcpy(sp->dim, sub.dim, sizeof sp->dim);
+        sp->moves = sub.moves;
+        sp->h = sub.h;
+        sp->r = sub.r;
+        sp->e = sub.e;
+        sp->scale = sub.scale;
         for (unsigned q = 0; q < sp->k; q++) {
             const double c = p->count[sp->dim[q]];
             sp->vscale[q] = c > 0.0 ? sp->h / c : 0.0;
-            if (c > 0.0) sp->moves = 1;
         }
-        const double r = L->radius[t] * sp->h;
-        sp->r = r < 0.5 ? r : 0.5;
-        sp->e = L->eps * sp->h;
         /* Bounds on the exact r² and e² (rounded sqrt is monotone), so a test on d² drops only
          * pairs the exact test on d would drop too. */
         sp->r2_keep = sp->r * sp->r * (1.0 + 0x1p-50);
@@ -139,12 +114,13 @@ static dpc_status plan_init(plan *p, const dpc_train_layer *L, size_t m) {
                 if ((double)sp->e2_f > lo * lo) sp->e2_f = nextafterf(sp->e2_f, 0.0f);
             }
         }
-        sp->scale = (double)(L->b - 1) / sp->r;
         sp->w = L->w + (size_t)t * L->b;
         if (!sp->moves) continue;
         if (sp->k > p->kmax) p->kmax = sp->k;
-        plan_grid(sp, m);
+        sp->grid = sub.grid;
         if (sp->grid) {
+            sp->G = sub.G;
+            sp->R = sub.R;
             size_t cells = 1;
             for (unsigned q = 0; q < sp->k; q++) cells *= sp->G;
             if (cells > p->max_cells) p->max_cells = cells;
@@ -254,49 +230,6 @@ static void run_chunk(const pass *ps, size_t j, double *part) {
     ps->p->chunk_fn(ps, lo, hi, part);
 }
 
-/* ---- threads -------------------------------------------------------------------------------- */
-
-typedef void (*worker_fn)(void *ctx, unsigned slot);
-
-typedef struct worker {
-    worker_fn fn;
-    void *ctx;
-    unsigned slot;
-} worker;
-
-static void *worker_main(void *arg) {
-    worker *w = (worker *)arg;
-    w->fn(w->ctx, w->slot);
-    return NULL;
-}
-
-/* fn(ctx, slot) for slot = 0 .. T-1, slot 0 on the calling thread. A thread that cannot be
- * created has its slot run here afterwards: slots are independent, so results do not change. */
-static void run_workers(unsigned T, worker_fn fn, void *ctx) {
-    if (T <= 1) {
-        fn(ctx, 0);
-        return;
-    }
-    worker ws[MAX_THREADS];
-    pthread_t ids[MAX_THREADS];
-    int started[MAX_THREADS];
-    for (unsigned t = 0; t < T; t++) ws[t] = (worker){fn, ctx, t};
-    for (unsigned t = 1; t < T; t++) started[t] = pthread_create(&ids[t], NULL, worker_main, &ws[t]) == 0;
-    fn(ctx, 0);
-    for (unsigned t = 1; t < T; t++) {
-        if (started[t]) pthread_join(ids[t], NULL);
-        else fn(ctx, t);
-    }
-}
-
-static unsigned resolve_threads(unsigned threads) {
-    if (threads == 0) {
-        long c = sysconf(_SC_NPROCESSORS_ONLN);
-        threads = c > 0 ? (unsigned)c : 1u;
-    }
-    return threads > MAX_THREADS ? MAX_THREADS : threads;
-}
-
 /* ---- whole sets ----------------------------------------------------------------------------- */
 
 typedef struct job {
@@ -375,13 +308,13 @@ static void chunk_worker(void *ctx, unsigned slot) {
 }
 
 static dpc_status run(const dpc_train_layer *L, size_t count, size_t m, const double *x, const double *gy,
-                      double *y, double *gx, double *gw, unsigned threads) {
+                      double *y, double *gx, double *gw, unsigned threads, dpc_isa isa) {
     plan p;
-    dpc_status st = plan_init(&p, L, m);
+    dpc_status st = plan_init(&p, L, m, isa);
     if (st != DPC_OK) return st;
     const int backward = gy != NULL;
     const size_t mn = m * p.n, sb = (size_t)p.s * p.b;
-    unsigned T = resolve_threads(threads);
+    unsigned T = dpc_threads_resolve(threads);
     /* Set mode: whole sets per worker (small sets, or enough of them). Chunk mode: the chunks of
      * one set across workers. Both compute every value by the same operations in the same order. */
     const int set_mode = T <= 1 || count >= T || m < SET_PARALLEL_BELOW;
@@ -406,7 +339,7 @@ static dpc_status run(const dpc_train_layer *L, size_t count, size_t m, const do
         if (set_mode) {
             for (size_t c0 = 0; c0 < count; c0 += T) { /* waves of T sets; sums in set order */
                 jb.first = c0;
-                run_workers(T, set_worker, &jb);
+                dpc_run_workers(T, set_worker, &jb);
                 if (backward)
                     for (size_t c = c0; c < count && c < c0 + T; c++) add_into(total, ws[c - c0].gk, sb);
             }
@@ -420,7 +353,7 @@ static dpc_status run(const dpc_train_layer *L, size_t count, size_t m, const do
                     pass ps = {&p, &p.sub[t], &ws[0], gyc};
                     prepare_pass(&ps, xc);
                     jb.ps = &ps;
-                    run_workers(T, chunk_worker, &jb);
+                    dpc_run_workers(T, chunk_worker, &jb);
                     if (backward)
                         for (size_t j = 0; j < p.n_chunks; j++)
                             add_into(ws[0].gk + (size_t)t * p.b, ws[0].part + j * p.b, p.b);
@@ -438,11 +371,11 @@ static dpc_status run(const dpc_train_layer *L, size_t count, size_t m, const do
 }
 
 dpc_status dpc_train_forward(const dpc_train_layer *L, size_t count, size_t m, const double *x, double *y,
-                             unsigned threads) {
-    return run(L, count, m, x, NULL, y, NULL, NULL, threads);
+                             unsigned threads, dpc_isa isa) {
+    return run(L, count, m, x, NULL, y, NULL, NULL, threads, isa);
 }
 
 dpc_status dpc_train_backward(const dpc_train_layer *L, size_t count, size_t m, const double *x,
-                              const double *gy, double *grad_x, double *grad_w, unsigned threads) {
-    return run(L, count, m, x, gy, NULL, grad_x, grad_w, threads);
+                              const double *gy, double *grad_x, double *grad_w, unsigned threads, dpc_isa isa) {
+    return run(L, count, m, x, gy, NULL, grad_x, grad_w, threads, isa);
 }

@@ -8,10 +8,12 @@
 #include <stdint.h>
 
 #include "cpu/cpu_layer_train.h"
+#include "model/plan.h"
 
-#define DPC_TRAIN_MAX_RANGES 512u /* candidate index ranges per cell (2 per row of cells) */
+#define DPC_TRAIN_MAX_RANGES DPC_PLAN_MAX_RANGES /* candidate index ranges per cell (2 per row of cells) */
 #define DPC_TRAIN_PAD 16u         /* entries readable past the m-th of each packed column */
 
+/* One subspace: the plan's values (model/plan.h, float64) and what the pair loops derive. */
 typedef struct dpc_train_sub {
     unsigned k;                  /* |D_t| */
     unsigned dim[DPC_MAX_DIMS];  /* subspace axis q -> point dimension */
@@ -67,11 +69,6 @@ struct dpc_train_pass {
     dpc_train_ws *ws;
     const double *gy; /* this set's dL/dy, NULL forward */
 };
-
-/* Column q of the packed coordinates / v. */
-static inline const double *dpc_train_col(const dpc_train_pass *ps, const double *base, unsigned q) {
-    return base + (size_t)q * ps->p->stride;
-}
 
 void dpc_train_chunk_scalar(const dpc_train_pass *ps, size_t lo, size_t hi, double *part);
 #if defined(DPC_HAVE_AVX2)

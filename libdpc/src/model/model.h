@@ -24,7 +24,7 @@ typedef struct dpc_layer {
     uint64_t fixed;         /* dimensions this layer never moves */
     uint64_t masks[DPC_MAX_SUBSPACES];
     float radius[DPC_MAX_SUBSPACES]; /* rho_t, in units of mean spacing */
-    float *kernels;         /* [n_sub * bins] (+8 zero floats of padding), row t = subspace t */
+    float *kernels;         /* [n_sub * bins], row t = subspace t */
     float *slopes;          /* [n_sub * bins], kernels[q+1] - kernels[q] (last entry 0) */
 } dpc_layer;
 

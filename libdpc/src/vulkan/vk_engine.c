@@ -7,8 +7,10 @@
  * point), or from tiled all pairs in shared memory (pairs.comp, split over partner ranges
  * and summed by pairs_sum.comp when a set has too few points to fill a GPU) where the grid does
  * not pay; apply.comp ends the layer. Every point's sum is computed in a fixed order, so the bits
- * depend on the device and driver but not on timing. The input points are made on
- * the host by api.c (the same SplitMix64 code as the CPU backend) and uploaded. */
+ * depend on the device and driver but not on timing. Radii, cutoffs, bin scales, c_k and the
+ * grid-or-all-pairs choice come from the subspace plan the CPU engine uses (model/plan.h,
+ * float32). The input points are made on the host (model/input.h, as for the CPU backend) and
+ * uploaded. */
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -16,6 +18,7 @@
 #include <string.h>
 
 #include "common/error.h"
+#include "model/plan.h"
 #include "vulkan/vk_backend.h"
 #include "vulkan/vk_loader.h"
 #include "vulkan/vk_spirv.h"
@@ -425,12 +428,9 @@ static dpc_status upload_tables(dpc_vk_engine *e, const dpc_cascade *c) {
     for (uint32_t l = 0; l < c->n_layers; l++) {
         const dpc_layer *L = &c->layers[l];
         float *block = dst + e->layer_off[l];
-        for (size_t d = 0; d < n; d++) block[d] = 0.0f;
-        for (uint32_t t = 0; t < L->n_sub; t++) {
-            if (!(L->masks[t] & ~L->fixed)) continue; /* skipped, as on the CPU: counts nothing */
-            for (size_t d = 0; d < n; d++)
-                if ((L->masks[t] >> d & 1) && !(L->fixed >> d & 1)) block[d] += 1.0f;
-        }
+        unsigned count[DPC_MAX_DIMS];
+        dpc_plan_counts((unsigned)n, L->n_sub, L->masks, L->fixed, count);
+        for (size_t d = 0; d < n; d++) block[d] = (float)count[d];
         for (uint32_t t = 0; t < L->n_sub; t++) {
             memcpy(block + n + 2 * (size_t)t * L->bins, L->kernels + (size_t)t * L->bins, L->bins * sizeof(float));
             memcpy(block + n + (2 * (size_t)t + 1) * L->bins, L->slopes + (size_t)t * L->bins, L->bins * sizeof(float));
@@ -530,7 +530,7 @@ typedef struct sizes {
 } sizes;
 
 static void work_sizes(size_t m, size_t n, sizes *s) {
-    s->cstride = 2 * m + 65; /* grids have at most 2m + 64 cells (plan_subspace), plus the end entry */
+    s->cstride = 2 * m + DPC_PLAN_CELL_SLACK + 1; /* a plan's grid has at most 2m + 64 cells, plus the end entry */
     s->nblocks_max = div_up(s->cstride, SCAN_BLOCK);
     memset(s->per_set, 0, sizeof s->per_set);
     s->per_set[B_X] = s->per_set[B_DELTA] = (VkDeviceSize)m * n * sizeof(float);
@@ -598,26 +598,6 @@ static dpc_status ensure_buffers(dpc_vk_engine *e, const sizes *s, size_t sets) 
 
 /* ---- recording a run ----------------------------------------------------------------------- */
 
-/* Grid or all pairs for a subspace, with the CPU backend's resolution rules (cpu_cascade.c
- * plan_grid): about 2 cells per radius in 1-2-D and 1 in 3-4-D, at most ~2m cells, a margin of
- * 1e-3 cells for float rounding of cell coordinates, and all pairs when the grid would visit
- * most of the domain anyway. */
-static int plan_subspace(unsigned k, float r, size_t m, uint32_t *G_out, uint32_t *R_out) {
-    if (k > 4 || m < 64) return 0;
-    const double reach = k <= 2 ? 2.0 : 1.0, margin = 1e-3;
-    double G = floor(reach / ((double)r * (1.0 + margin)));
-    const double cap = floor(pow(2.0 * (double)m, 1.0 / k) + 1e-9);
-    if (G > cap) G = cap;
-    if (G > 16384) G = 16384;
-    if (G < 3) return 0;
-    const double R = ceil((double)r * G + margin);
-    if (2 * R + 1 > G) return 0;
-    if (pow((2 * R + 1) / G, k) > 0.5) return 0;
-    *G_out = (uint32_t)G;
-    *R_out = (uint32_t)R;
-    return 1;
-}
-
 static void dispatch(dpc_vk_engine *e, int pipe, const vk_params *p, uint32_t gx, uint32_t sets) {
     e->fn.vkCmdBindPipeline(e->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, e->pipe[pipe]);
     e->fn.vkCmdPushConstants(e->cmd, e->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof *p, p);
@@ -633,31 +613,29 @@ static void record_layer(dpc_vk_engine *e, const dpc_cascade *c, uint32_t l, siz
     int moved = 0;
     for (uint32_t t = 0; t < L->n_sub; t++) {
         const uint64_t mask = L->masks[t];
-        if (!(mask & ~L->fixed)) continue; /* moves nothing (e.g. the grid's own axes) */
+        dpc_sub_plan plan; /* the CPU engine's plan: the same float radius, cutoff, bin scale, search */
+        dpc_plan_subspace(mask, L->fixed, L->radius[t], L->eps, L->bins, m, DPC_PLAN_F32, &plan);
+        if (!plan.moves) continue; /* moves nothing (e.g. the grid's own axes) */
+        const unsigned k = plan.k;
         vk_params p;
         memset(&p, 0, sizeof p);
-        const unsigned k = (unsigned)__builtin_popcountll(mask);
-        /* The CPU backend's parameter arithmetic (cpu_cascade.c run_layer), so both filter with
-         * the same float radius, cutoff and bin scale. */
-        const float h = (float)pow((double)m, -1.0 / k);
-        const float r = L->radius[t] * h;
         p.m = (uint32_t)m;
         p.n = n;
         p.k = k;
-        p.h = h;
-        p.radius = r < 0.5f ? r : 0.5f;
-        p.cutoff = L->eps * h;
-        p.scale = (float)(L->bins - 1) / p.radius;
-        p.umax = (float)(L->bins - 1);
-        p.qmax = (int32_t)L->bins - 2;
+        p.h = (float)plan.h;
+        p.radius = (float)plan.r;
+        p.cutoff = (float)plan.e;
+        p.scale = (float)plan.scale;
+        p.umax = (float)plan.umax;
+        p.qmax = plan.qmax;
         p.w_off = e->layer_off[l] + n + 2 * t * L->bins;
         p.dw_off = p.w_off + L->bins;
         p.c_off = e->layer_off[l];
         p.mask_lo = (uint32_t)mask;
         p.mask_hi = (uint32_t)(mask >> 32);
         p.cstride = (uint32_t)s->cstride;
-        uint32_t G, R;
-        if (plan_subspace(k, p.radius, m, &G, &R)) {
+        if (plan.grid) {
+            const uint32_t G = plan.G, R = plan.R;
             unsigned q = 0;
             for (unsigned d = 0; d < n; d++)
                 if (mask >> d & 1) p.dims |= d << (8 * q++);
