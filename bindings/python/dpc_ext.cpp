@@ -106,15 +106,16 @@ constexpr double INLINE_WORK = 1 << 21;
 
 class Model {
   public:
-    Model(const std::string &path, int isa, unsigned threads, int backend, int input, double max_neighbours) {
+    Model(const std::string &path, dpc_isa isa, unsigned threads, dpc_backend backend, dpc_input input,
+          double max_neighbours) {
         if (path.find('\0') != std::string::npos)
             raise_status(DPC_ERROR_INVALID_ARGUMENT, "the model path contains a NUL character");
         dpc_load_options options;
         dpc_load_options_init(&options);
-        options.isa = static_cast<dpc_isa>(isa);
+        options.isa = isa;
         options.threads = threads;
-        options.backend = static_cast<dpc_backend>(backend);
-        options.input = static_cast<dpc_input>(input);
+        options.backend = backend;
+        options.input = input;
         options.max_neighbours = max_neighbours;
         dpc_model *raw = nullptr;
         call([&] { return dpc_model_load_file(path.c_str(), &options, &raw); });
@@ -139,10 +140,10 @@ class Model {
         }
         d["grid_axes"] = axes;
         d["grid_shape"] = shape;
-        d["isa"] = static_cast<int>(info_.isa);
+        d["isa"] = info_.isa;
         d["threads"] = info_.threads;
-        d["backend"] = static_cast<int>(backend_);
-        d["input"] = static_cast<int>(input_);
+        d["backend"] = backend_;
+        d["input"] = input_;
         d["device"] = std::string(dpc_model_device(model_.get()));
         d["neighbours"] = neighbours_;
         return d;
@@ -382,19 +383,28 @@ LayerCall layer_call(const Array64 &x, const Array64 &kernels, const py::sequenc
     return c;
 }
 
+dpc_layer_options layer_options(uint32_t threads, dpc_isa isa) {
+    dpc_layer_options o;
+    dpc_layer_options_init(&o);
+    o.threads = threads;
+    o.isa = isa;
+    return o;
+}
+
 Array64 layer_forward(const Array64 &x, const Array64 &kernels, const py::sequence &subspaces,
-                      const std::vector<double> &radius, double eps, py::handle fixed, uint32_t threads) {
+                      const std::vector<double> &radius, double eps, py::handle fixed, uint32_t threads, dpc_isa isa) {
     LayerCall c = layer_call(x, kernels, subspaces, radius, eps, fixed);
     Array64 y(c.shape);
     double *yp = y.mutable_data();
     const double *xp = x.data(), *kp = kernels.data();
-    call([&] { return dpc_layer_forward(&c.desc, kp, c.count, c.m, xp, yp, threads); });
+    const dpc_layer_options o = layer_options(threads, isa);
+    call([&] { return dpc_layer_forward_ex(&c.desc, kp, c.count, c.m, xp, yp, &o); });
     return y;
 }
 
 py::tuple layer_backward(const Array64 &x, const Array64 &kernels, const py::sequence &subspaces,
                          const std::vector<double> &radius, double eps, py::handle fixed, const Array64 &grad_y,
-                         uint32_t threads) {
+                         uint32_t threads, dpc_isa isa) {
     LayerCall c = layer_call(x, kernels, subspaces, radius, eps, fixed);
     if (grad_y.ndim() != x.ndim() || !std::equal(c.shape.begin(), c.shape.end(), grad_y.shape()))
         raise_status(DPC_ERROR_INVALID_ARGUMENT, "grad_y must have the shape of x");
@@ -402,17 +412,53 @@ py::tuple layer_backward(const Array64 &x, const Array64 &kernels, const py::seq
     Array64 gk({kernels.shape(0), kernels.shape(1)});
     double *gxp = gx.mutable_data(), *gkp = gk.mutable_data();
     const double *xp = x.data(), *kp = kernels.data(), *gyp = grad_y.data();
-    call([&] { return dpc_layer_backward(&c.desc, kp, c.count, c.m, xp, gyp, gxp, gkp, threads); });
+    const dpc_layer_options o = layer_options(threads, isa);
+    call([&] { return dpc_layer_backward_ex(&c.desc, kp, c.count, c.m, xp, gyp, gxp, gkp, &o); });
     return py::make_tuple(gx, gk);
 }
 
 void register_layer_training(py::module_ &mod) {
     mod.def("layer_forward", &layer_forward, py::arg("x"), py::arg("kernels"), py::arg("subspaces"),
-            py::arg("radius"), py::arg("eps"), py::arg("fixed"), py::arg("threads"),
+            py::arg("radius"), py::arg("eps"), py::arg("fixed"), py::arg("threads"), py::arg("isa") = DPC_ISA_AUTO,
             "One PointFilter layer in float64: x (m, n) or (batch, m, n) -> y of the same shape.");
     mod.def("layer_backward", &layer_backward, py::arg("x"), py::arg("kernels"), py::arg("subspaces"),
             py::arg("radius"), py::arg("eps"), py::arg("fixed"), py::arg("grad_y"), py::arg("threads"),
+            py::arg("isa") = DPC_ISA_AUTO,
             "Gradients of one PointFilter layer: (grad_x like x, grad_kernels (s, b) summed over sets).");
+}
+
+// The enums of dpc.h, so that Python names them from the header instead of repeating the values.
+void register_enums(py::module_ &mod) {
+    py::enum_<dpc_isa>(mod, "Isa", "dpc_isa: the CPU code path")
+        .value("AUTO", DPC_ISA_AUTO)
+        .value("SCALAR", DPC_ISA_SCALAR)
+        .value("AVX2", DPC_ISA_AVX2)
+        .value("AVX512", DPC_ISA_AVX512);
+    py::enum_<dpc_backend>(mod, "Backend", "dpc_backend: what runs the cascade")
+        .value("AUTO", DPC_BACKEND_AUTO)
+        .value("CPU", DPC_BACKEND_CPU)
+        .value("VULKAN", DPC_BACKEND_VULKAN);
+    py::enum_<dpc_input>(mod, "Input", "dpc_input: the input points a model filters")
+        .value("AUTO", DPC_INPUT_AUTO)
+        .value("UNIFORM", DPC_INPUT_UNIFORM)
+        .value("STRATIFIED", DPC_INPUT_STRATIFIED);
+}
+
+// The defaults of dpc_load_options_init and dpc_layer_options_init, read from libdpc.
+py::dict load_defaults() {
+    dpc_load_options o;
+    dpc_load_options_init(&o);
+    dpc_layer_options l;
+    dpc_layer_options_init(&l);
+    py::dict d;
+    d["isa"] = o.isa;
+    d["threads"] = o.threads;
+    d["backend"] = o.backend;
+    d["input"] = o.input;
+    d["max_neighbours"] = o.max_neighbours;
+    d["layer_threads"] = l.threads;
+    d["layer_isa"] = l.isa;
+    return d;
 }
 
 }  // namespace
@@ -420,9 +466,13 @@ void register_layer_training(py::module_ &mod) {
 PYBIND11_MODULE(_core, mod) {
     mod.doc() = "libdpc bindings (use the dpc package, not this module)";
     mod.attr("__version__") = dpc_version_string();
+    mod.attr("VERSION_NUMBER") = dpc_version_number();
     mod.attr("FORMAT_VERSION") = DPC_FORMAT_VERSION;
+    register_enums(mod);
+    mod.def("load_defaults", &load_defaults);
     py::class_<Model>(mod, "Model")
-        .def(py::init<const std::string &, int, unsigned, int, int, double>(), py::arg("path"), py::arg("isa"),
+        .def(py::init<const std::string &, dpc_isa, unsigned, dpc_backend, dpc_input, double>(), py::arg("path"),
+             py::arg("isa"),
              py::arg("threads"), py::arg("backend"), py::arg("input"),
              py::arg("max_neighbours") = DPC_DEFAULT_MAX_NEIGHBOURS)
         .def("info", &Model::info)
@@ -441,7 +491,7 @@ PYBIND11_MODULE(_core, mod) {
         .def("get", &Sampler::get, py::arg("x"), py::arg("y"), py::arg("index"), py::arg("dim"), py::arg("width"))
         .def("table", &Sampler::table, py::arg("t"));
     mod.def("sampler_mask", &sampler_mask);
-    mod.def("isa_supported", [](int isa) { return dpc_isa_supported(static_cast<dpc_isa>(isa)) != 0; }, py::arg("isa"));
+    mod.def("isa_supported", [](dpc_isa isa) { return dpc_isa_supported(isa) != 0; }, py::arg("isa"));
     mod.def("uniform", [](uint64_t seed, size_t m, size_t n, double max_bytes) {
         return input_points(seed, m, n, max_bytes, false);
     }, py::arg("seed"), py::arg("m"), py::arg("n"), py::arg("max_bytes"));

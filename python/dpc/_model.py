@@ -13,12 +13,38 @@ import numpy as np
 from . import _core
 from .errors import InvalidArgumentError, LimitError, ModelNotFoundError
 
-_ISA = {"auto": 0, "scalar": 1, "avx2": 2, "avx512": 3}
-_ISA_NAME = {v: k for k, v in _ISA.items()}
-_BACKEND = {"auto": 0, "cpu": 1, "vulkan": 2}
-_BACKEND_NAME = {v: k for k, v in _BACKEND.items()}
-_INPUT = {"auto": 0, "uniform": 1, "stratified": 2}
-_INPUT_NAME = {v: k for k, v in _INPUT.items()}
+#: dpc_isa, dpc_backend, dpc_input of dpc.h, as the binding exports them (the Python API names
+#: their members in lower case: "auto", "scalar", "avx2", "avx512"; "auto", "cpu", "vulkan";
+#: "auto", "uniform", "stratified").
+Isa = _core.Isa
+Backend = _core.Backend
+Input = _core.Input
+
+
+def _names(enum) -> dict:
+    return {name.lower(): value for name, value in enum.__members__.items()}
+
+
+_ISA = _names(Isa)
+_BACKEND = _names(Backend)
+_INPUT = _names(Input)
+
+
+def _choice(value, enum, names: dict, what: str):
+    """The enum member for a name ("avx2") or a member (dpc.Isa.AVX2); InvalidArgumentError else."""
+    if isinstance(value, enum):
+        return value
+    if isinstance(value, str) and value in names:
+        return names[value]
+    raise InvalidArgumentError(f"{what} must be one of {sorted(names)}, got {value!r}")
+
+
+_DEFAULTS = _core.load_defaults()
+
+#: Worker threads of a model (``load(threads=)``), of the CLI (``-t``), of a layer call
+#: (``dpc.training``) and of training (``[train] threads``): libdpc's default
+#: (``dpc_load_options_init``), 1, the calling thread only. 0 means one per CPU.
+DEFAULT_THREADS = int(_DEFAULTS["threads"])
 
 #: Largest point count of one set (libdpc's DPC_MAX_POINTS).
 MAX_POINTS = int(_core.MAX_POINTS)
@@ -98,9 +124,7 @@ def _bundled_dirs() -> list[Path]:
 def isa_supported(isa: str) -> bool:
     """Whether this build and CPU run ``isa``'s path ("auto", "scalar", "avx2", "avx512"). Every
     path gives the same bits; they differ in speed only."""
-    if isa not in _ISA:
-        raise InvalidArgumentError(f"isa must be one of {sorted(_ISA)}, got {isa!r}")
-    return _core.isa_supported(_ISA[isa])
+    return _core.isa_supported(_choice(isa, Isa, _ISA, "isa"))
 
 
 def available_models() -> list[str]:
@@ -157,14 +181,11 @@ def stratified(seed: int, m: int, n: int) -> np.ndarray:
 class Model:
     """A loaded dpc model. Create with :func:`load`."""
 
-    def __init__(self, path, *, isa: str = "auto", threads: int = 0, backend: str = "auto",
+    def __init__(self, path, *, isa: str = "auto", threads: int = DEFAULT_THREADS, backend: str = "auto",
                  input: str = "auto", max_neighbours: float | None = None):  # noqa: A002
-        if isa not in _ISA:
-            raise InvalidArgumentError(f"isa must be one of {sorted(_ISA)}, got {isa!r}")
-        if backend not in _BACKEND:
-            raise InvalidArgumentError(f"backend must be one of {sorted(_BACKEND)}, got {backend!r}")
-        if input not in _INPUT:
-            raise InvalidArgumentError(f"input must be one of {sorted(_INPUT)}, got {input!r}")
+        isa = _choice(isa, Isa, _ISA, "isa")
+        backend = _choice(backend, Backend, _BACKEND, "backend")
+        input = _choice(input, Input, _INPUT, "input")  # noqa: A001
         threads = _integer(threads, "threads", 0, 0xFFFFFFFF)
         if max_neighbours is None:
             max_neighbours = DEFAULT_MAX_NEIGHBOURS
@@ -172,7 +193,7 @@ class Model:
                 or not max_neighbours > 0):
             raise InvalidArgumentError(f"max_neighbours must be > 0 (math.inf: no bound), got {max_neighbours!r}")
         self.path = Path(_check_path(path))
-        self._h = _core.Model(os.fspath(self.path), _ISA[isa], threads, _BACKEND[backend], _INPUT[input],
+        self._h = _core.Model(os.fspath(self.path), isa, threads, backend, input,
                               float(max_neighbours))
         info = self._h.info()
         self.dims: int = info["dims"]
@@ -180,11 +201,11 @@ class Model:
         self.layers: int = info["layers"]
         self.grid_axes: tuple[int, ...] = tuple(info["grid_axes"])
         self.grid_shape: tuple[int, ...] = tuple(info["grid_shape"])
-        self.isa: str = _ISA_NAME[info["isa"]]
+        self.isa: str = info["isa"].name.lower()
         self.threads: int = info["threads"]
-        self.backend: str = _BACKEND_NAME[info["backend"]]  # "cpu" or "vulkan": what runs the cascade
+        self.backend: str = info["backend"].name.lower()  # "cpu" or "vulkan": what runs the cascade
         self.device: str = info["device"]  # "cpu", or the Vulkan device's name
-        self.input: str = _INPUT_NAME[info["input"]]  # "uniform" or "stratified": what generate() filters
+        self.input: str = info["input"].name.lower()  # "uniform" or "stratified": what generate() filters
         self.neighbours: float = info["neighbours"]  # neighbours per point it asks for (max_neighbours)
         self.metadata: dict[str, str] = dict(self._h.metadata())
         self.name: str = self.metadata.get("dpc.name", self.path.stem)
@@ -231,12 +252,15 @@ class Model:
         return pts
 
 
-def load(path_or_name, *, isa: str = "auto", threads: int = 0, backend: str = "auto",
+def load(path_or_name, *, isa: str = "auto", threads: int = DEFAULT_THREADS, backend: str = "auto",
          input: str = "auto", max_neighbours: float | None = None) -> Model:  # noqa: A002
     """Load a model file, or a bundled model by name (see :func:`available_models`).
 
+    ``isa``, ``backend`` and ``input`` take names (below) or members of :class:`Isa`,
+    :class:`Backend`, :class:`Input` (the enums of dpc.h).
     ``isa``: "auto" (best the CPU supports), "scalar", "avx2" or "avx512". ``threads``: worker threads per
-    call, 0 = one per CPU; the output bits do not depend on it.
+    call (default 1, :data:`DEFAULT_THREADS`: the calling thread only, as in C; 0 = one per CPU);
+    the output bits do not depend on it.
     ``backend``: "auto" (a GPU through Vulkan where libdpc has the Vulkan backend and the machine a
     hardware GPU, else the CPU), "cpu", or "vulkan" (any Vulkan device, software drivers included;
     :class:`UnsupportedError` saying why when there is none or the package was built without

@@ -21,6 +21,7 @@ import click
 import numpy as np
 
 from . import _atomic, baselines, pointio
+from ._model import DEFAULT_THREADS
 from .errors import DpcError, InvalidArgumentError, ModelNotFoundError
 
 _POINT_EXTS = pointio.EXTENSIONS
@@ -41,7 +42,7 @@ def _progress(iterable, desc: str, total: int | None = None):
                 file=sys.stderr)
 
 
-def _load_model(name: str, threads: int = 0, isa: str = "auto", backend: str = "auto",
+def _load_model(name: str, threads: int = DEFAULT_THREADS, isa: str = "auto", backend: str = "auto",
                 input: str = "auto"):  # noqa: A002
     import dpc
     return dpc.load(name, threads=threads, isa=isa, backend=backend, input=input)
@@ -74,7 +75,7 @@ def _max_bytes(text: str | None) -> float | None:
 
 
 def _generate(spec: str, n_points: int | None, dims: int | None, count: int, seed: int,
-              threads: int = 0, isa: str = "auto", backend: str = "auto",
+              threads: int = DEFAULT_THREADS, isa: str = "auto", backend: str = "auto",
               input: str = "auto", max_bytes: float | None = None,  # noqa: A002
               ) -> tuple[np.ndarray, str, object]:
     """Sets from a dpc model (bundled name or .onnx path) or a baseline name, with a progress
@@ -129,7 +130,8 @@ def _input_kind(stratified: bool | None) -> str:
 
 
 def _read_inputs(specs, n_points, dims, count, seed, bin_dtype, stratified: bool | None = None,
-                 max_bytes: float | None = None) -> list[tuple[str, np.ndarray, object]]:
+                 max_bytes: float | None = None,
+                 threads: int = DEFAULT_THREADS) -> list[tuple[str, np.ndarray, object]]:
     """Each input: a point file, or a model (bundled name or .onnx file) or baseline to generate
     from (a model from stratified input points is labelled "NAME (stratified)"). Returns
     (label, sets, the model or None)."""
@@ -139,7 +141,7 @@ def _read_inputs(specs, n_points, dims, count, seed, bin_dtype, stratified: bool
             out.append((Path(spec).stem, pointio.read_points(spec, dims=dims, bin_dtype=bin_dtype,
                                                              progress_bar=True), None))
         else:
-            sets, name, model = _generate(spec, n_points, dims, count, seed,
+            sets, name, model = _generate(spec, n_points, dims, count, seed, threads,
                                           input=_input_kind(stratified), max_bytes=max_bytes)
             label = name + (" (stratified)" if model and model.input == "stratified" else "")
             out.append((label, sets.astype(np.float64), model))
@@ -184,6 +186,12 @@ def _table(rows: list[dict], cols: list[str]) -> str:
     return "\n".join(out)
 
 
+_threads_option = click.option(
+    "-t", "--threads", type=click.IntRange(min=0), default=DEFAULT_THREADS, show_default=True,
+    help="Worker threads for models: 1 runs on the calling thread (libdpc's default), 0 = one per "
+         "CPU. The points do not depend on it.")
+
+
 def _analysis_options(f):
     opts = [
         click.option("--nu-max", type=click.FloatRange(min=0.1), default=4.0, show_default=True,
@@ -212,6 +220,7 @@ def _analysis_options(f):
         click.option("--max-output", "max_output", default=None, metavar="SIZE",
                      help="Largest output one model call may allocate, e.g. 16G (default 4G or "
                           "$DPC_MAX_OUTPUT_BYTES)."),
+        _threads_option,
     ]
     for o in reversed(opts):
         f = o(f)
@@ -305,8 +314,7 @@ def list_cmd():
                    "txt, text: the same); csv (commas); bin (UTK's binary format).")
 @click.option("--bin-dtype", type=click.Choice(["float64", "float32"]), default="float64",
               show_default=True, help="Float type of UTK .bin output.")
-@click.option("-t", "--threads", type=click.IntRange(min=0), default=0, show_default=True,
-              help="Worker threads for models (0 = one per CPU).")
+@_threads_option
 @click.option("--isa", type=click.Choice(["auto", "scalar", "avx2", "avx512"]), default="auto",
               show_default=True,
               help="CPU code path for models. Every path gives the same bits (a canonical "
@@ -358,7 +366,7 @@ def generate_cmd(model, n_points, dims, seed, count, output, fmt, bin_dtype, thr
 @_stratified_option
 def analyze_cmd(inputs, more, output, label, no_plots, nu_max, max_size, subspace, disc,
                 disc_budget, n_points, dims, count, seed, bin_dtype, plot_formats, max_output,
-                stratified):
+                threads, stratified):
     """Measure point sets: spectra, anisotropy, PCF, minimum distance, discrepancy."""
     specs = list(inputs) + list(more)
     if not specs:
@@ -367,7 +375,7 @@ def analyze_cmd(inputs, more, output, label, no_plots, nu_max, max_size, subspac
     with _atomic.transaction():  # all outputs, or (on any failure) none and no new folder
         out = _output_dir(output)
         loaded = _read_inputs(specs, n_points, dims, count, seed, bin_dtype, stratified,
-                              _max_bytes(max_output))
+                              _max_bytes(max_output), threads)
         shapes = {a.shape[1:] for _, a, _ in loaded}
         if len(shapes) > 1:
             raise click.ClickException(
@@ -463,7 +471,7 @@ def _analysis_plots(res, sets, out: Path, nu_max: float, formats=("png",),
 @_stratified_option
 def compare_cmd(inputs, more, output, integration, nu_max, max_size, subspace, disc,
                 disc_budget, n_points, dims, count, seed, bin_dtype, plot_formats, max_output,
-                stratified):
+                threads, stratified):
     """Compare several inputs (files, models, baselines) in one table and plots."""
     specs = list(inputs) + list(more)
     if len(specs) < 1:
@@ -472,7 +480,7 @@ def compare_cmd(inputs, more, output, integration, nu_max, max_size, subspace, d
     with _atomic.transaction():  # all outputs, or (on any failure) none and no new folder
         out = _output_dir(output)
         loaded = _read_inputs(specs, n_points, dims, count, seed, bin_dtype, stratified,
-                              _max_bytes(max_output))
+                              _max_bytes(max_output), threads)
         labels, seen = [], {}
         for name, _, _ in loaded:  # unique labels
             seen[name] = seen.get(name, 0) + 1
@@ -663,12 +671,15 @@ def dither_cmd(image, model, size, channel, frame, seed, output, mask_output, wh
     except (OSError, SyntaxError, ValueError) as e:  # Pillow/libpng failures on bad files
         raise InvalidArgumentError(f"cannot read image {image}: {e}") from e
     out = D.dither(img, mask)
-    mpimg.imsave(output, out.astype(np.uint8) * 255, cmap="gray", vmin=0, vmax=255)
-    if mask_output is not None:
-        if mask_output.lower().endswith(".npy"):
-            np.save(mask_output, mask)
-        else:
-            mpimg.imsave(mask_output, mask, cmap="gray", vmin=0.0, vmax=1.0)
+    with _atomic.transaction():  # the image and the mask, or (on any failure) neither
+        with _atomic.atomic_file(output, "wb") as fh:
+            mpimg.imsave(fh, out.astype(np.uint8) * 255, cmap="gray", vmin=0, vmax=255, format="png")
+        if mask_output is not None:
+            with _atomic.atomic_file(mask_output, "wb") as fh:
+                if mask_output.lower().endswith(".npy"):
+                    np.save(fh, mask)
+                else:
+                    mpimg.imsave(fh, mask, cmap="gray", vmin=0.0, vmax=1.0, format="png")
     click.echo(f"wrote {output} ({out.shape[1]} x {out.shape[0]}, {out.mean():.3f} white) with a "
                f"{mask.shape[1]} x {mask.shape[0]} mask from "
                f"{'white noise' if white_noise else model}", err=True)

@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import _atomic
 from . import baselines as _bl
 from .errors import DpcError, InvalidArgumentError, ModelNotFoundError
 
@@ -127,8 +128,8 @@ def _filter_at_any_size(model, pts: np.ndarray) -> np.ndarray:
     one through libdpc's float64 layer kernels (dpc_layer_forward, the training API; radii
     scale with the point count as in every layer, docs/model-format.md §3). Needs the onnx
     package to read the layers (the ``masks`` extra)."""
-    from . import _core
     from .model_file import read_model
+    from .training import layer_forward
     try:
         spec = read_model(model.path)
     except ImportError as e:
@@ -136,9 +137,8 @@ def _filter_at_any_size(model, pts: np.ndarray) -> np.ndarray:
             f"a mask model at a size other than its grid needs the onnx package ({e})") from e
     x = np.ascontiguousarray(pts, dtype=np.float64)
     for layer in spec.layers:
-        x = _core.layer_forward(x, np.ascontiguousarray(layer.kernels, dtype=np.float64),
-                                list(layer.subspaces), [float(r) for r in layer.radius],
-                                float(layer.eps), int(layer.fixed), threads=0)
+        x = layer_forward(x, layer.kernels, layer.subspaces, layer.radius, layer.eps, int(layer.fixed),
+                          threads=0)
         x = x - np.floor(x)
     return x
 
@@ -265,18 +265,19 @@ def _write_png(path: Path, img: np.ndarray, bits: int) -> None:
         rgb[..., :c] = codes                                   # 2 values: R, G (B = 0)
         rows, grey, planes = rgb.reshape(codes.shape[0], -1), False, 3
     writer = png.Writer(width=codes.shape[1], height=codes.shape[0], greyscale=grey, bitdepth=bits)
-    with open(path, "wb") as f:
+    with _atomic.atomic_file(path, "wb") as f:
         writer.write(f, rows.tolist())
     del planes
 
 
 def _read_png(path: Path, channels: int | None) -> np.ndarray:
     import png
-    w, h, rows, info = png.Reader(filename=str(path)).read()
-    bits, planes = info["bitdepth"], info["planes"]
-    if bits not in (8, 16):
-        raise InvalidArgumentError(f"{path}: {bits}-bit PNG; masks are 8 or 16 bits")
-    a = np.array([np.asarray(r, dtype=np.float64) for r in rows]).reshape(h, w, planes)
+    with open(path, "rb") as fh:  # pypng reads rows lazily: all of them before the file closes
+        w, h, rows, info = png.Reader(file=fh).read()
+        bits, planes = info["bitdepth"], info["planes"]
+        if bits not in (8, 16):
+            raise InvalidArgumentError(f"{path}: {bits}-bit PNG; masks are 8 or 16 bits")
+        a = np.array([np.asarray(r, dtype=np.float64) for r in rows]).reshape(h, w, planes)
     v = (a + 0.5) / (1 << bits)
     if planes == 1:
         return v[:, :, 0]
@@ -297,8 +298,8 @@ def _write_exr(path: Path, img: np.ndarray) -> None:
             raise InvalidArgumentError("EXR output holds at most 4 channels")
         chans = {_EXR_CHANNELS[c]: np.ascontiguousarray(a[:, :, c]) for c in range(a.shape[2])}
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    with OpenEXR.File(header, chans) as f:
-        f.write(str(path))
+    with _atomic.atomic_path(path) as tmp, OpenEXR.File(header, chans) as f:
+        f.write(str(tmp))
 
 
 def _read_exr(path: Path) -> np.ndarray:
@@ -317,7 +318,11 @@ def write_mask(path, mask_array: np.ndarray, bits: int = 16, spatiotemporal: boo
     """Write a mask: ``.npy`` (float64, exact), ``.png`` (8- or 16-bit codes floor(v · 2^bits);
     grey for scalar, R, G (B = 0) for 2 values) or ``.exr`` (float32, exact for masks up to
     2^23 pixels; channel Y, or R, G, …). A spatiotemporal (T, N, N) mask goes to one ``.npy``,
-    or to T files stem_000.png … (each frame a scalar mask). Returns the paths written."""
+    or to T files stem_000.png … (each frame a scalar mask). Returns the paths written.
+
+    Written atomically (``dpc._atomic``): each file goes to a temporary file beside it and is
+    renamed into place when complete, and the frames of a spatiotemporal mask appear together;
+    on any failure no new file is left and existing files are unchanged."""
     p = Path(path)
     ext = p.suffix.lower()
     if ext not in MASK_EXTENSIONS:
@@ -327,16 +332,18 @@ def write_mask(path, mask_array: np.ndarray, bits: int = 16, spatiotemporal: boo
     if not np.all(np.isfinite(a)) or a.min() < 0 or a.max() >= 1:
         raise InvalidArgumentError("mask values must be finite and in [0, 1)")
     if ext == ".npy":
-        np.save(p, a)
+        with _atomic.atomic_file(p, "wb") as fh:
+            np.save(fh, a)
         return [p]
     if ext == ".png" and bits not in (8, 16):
         raise InvalidArgumentError(f"PNG bit depth must be 8 or 16, got {bits}")
     images, paths = ([a], [p]) if kind != "spatiotemporal" else (list(a), frame_paths(p, a.shape[0]))
-    for img, q in zip(images, paths):
-        if ext == ".png":
-            _write_png(q, img, bits)
-        else:
-            _write_exr(q, img)
+    with _atomic.transaction():  # every frame, or none
+        for img, q in zip(images, paths):
+            if ext == ".png":
+                _write_png(q, img, bits)
+            else:
+                _write_exr(q, img)
     return paths
 
 

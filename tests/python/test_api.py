@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from cpu_isa import HAVE_AVX2, HAVE_AVX512, VECTOR_ISAS  # noqa: E402,F401
 
-dpc = pytest.importorskip("dpc")
+import dpc
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 M2D = DATA / "model_2d.onnx"
@@ -287,7 +287,7 @@ def test_stratified_input_points_and_the_load_option():
 def test_input_auto_follows_the_files_dpc_input(tmp_path):
     """input="auto" (default) is what the model was trained on: metadata dpc.input, uniform
     without it; a bad value or stratified with grid axes is a format error."""
-    mf = pytest.importorskip("dpc.model_file")
+    from dpc import model_file as mf
     layers = [mf.Layer([0b11], [3.0], -0.02 * np.ones((1, 8), dtype=np.float32))]
     paths = {}
     for tag, meta, grid in [("none", {}, False), ("strat", {"dpc.input": "stratified"}, False),

@@ -24,7 +24,7 @@ import pytest
 import reference_cascade as rc
 from cpu_isa import VECTOR_ISAS
 
-dpc = pytest.importorskip("dpc")
+import dpc
 from dpc import _core, errors  # noqa: E402
 
 EPS = 1e-4
@@ -211,7 +211,9 @@ torch = None
 def _torch():
     global torch
     if torch is None:
-        torch = pytest.importorskip("torch")
+        import torch as t
+
+        torch = t
     return torch
 
 
@@ -427,3 +429,33 @@ def test_bad_grad_y():
     bad[7, 1] = np.nan
     with pytest.raises(errors.InvalidArgumentError, match="point 7, dimension 1 is not finite"):
         _core.layer_backward(*args, bad, 1)
+
+
+def test_public_layer_ops_take_the_isa_as_an_argument(monkeypatch):
+    """dpc.training (the public home of these ops): isa= gives the bits of DPC_ISA naming that
+    path, whatever DPC_ISA says meanwhile; unknown names and paths the CPU lacks are refused."""
+    from dpc import training
+
+    rng = np.random.default_rng(21)
+    x = rng.random((2, 800, 3))
+    w = kernels_for(rng, 2, 16)
+    g = rng.normal(size=x.shape)
+    args = (x, w, [0b111, 0b011], [2.0, 3.0], EPS, 0b100)
+    for isa_name in ISAS:
+        monkeypatch.setenv("DPC_ISA", isa_name)
+        want = _both(x, w, [0b111, 0b011], [2.0, 3.0], 0b100, g, 2)
+        for other in ISAS:
+            monkeypatch.setenv("DPC_ISA", other)
+            got = (training.layer_forward(*args, threads=2, isa=isa_name),
+                   *training.layer_backward(*args, grad_y=g, threads=2, isa=isa_name))
+            for a, b in zip(want, got):
+                assert np.array_equal(_bits(a), _bits(b)), (isa_name, other)
+    monkeypatch.delenv("DPC_ISA")
+    assert np.array_equal(training.layer_forward(*args), _core.layer_forward(*args, 1))  # defaults: 1 thread, auto
+    with pytest.raises(errors.InvalidArgumentError, match="isa"):
+        training.layer_forward(*args, isa="sse9")
+    with pytest.raises(errors.InvalidArgumentError, match="threads"):
+        training.layer_forward(*args, threads=-1)
+    if not dpc.isa_supported("avx512"):
+        with pytest.raises(errors.UnsupportedError, match="AVX-512"):
+            training.layer_forward(*args, isa="avx512")

@@ -124,7 +124,6 @@ def test_mask_from_a_gridded_model_at_its_size_and_another():
     a = M.mask(str(grid), seed=1)
     assert a.shape == (model.grid_shape[1], model.grid_shape[0]) and _exact_levels(a)
     assert np.array_equal(a, rank_normalise(model.generate(seed=1)[:, 2].reshape(a.shape)))
-    pytest.importorskip("onnx")
     b = M.mask(str(grid), seed=1, size=2 * a.shape[0])
     assert b.shape == (2 * a.shape[0],) * 2 and _exact_levels(b)
     with pytest.raises(InvalidArgumentError):
@@ -133,8 +132,6 @@ def test_mask_from_a_gridded_model_at_its_size_and_another():
 
 @pytest.mark.parametrize("shape", [(32, 32), (32, 32, 2), (4, 16, 16)])
 def test_files_read_back_exactly(tmp_path, shape):
-    pytest.importorskip("png")
-    pytest.importorskip("OpenEXR")
     st = len(shape) == 3 and shape[2] != 2
     if st:
         a = np.stack([B.white_mask(shape[1:], s) for s in range(shape[0])])
@@ -180,7 +177,6 @@ def test_write_mask_rejects_bad_input(tmp_path):
 
 # ---------------------------------------------------------------- CLI
 def test_mask_command_writes_and_reports(tmp_path, capsys):
-    pytest.importorskip("png")
     out = tmp_path / "vc.png"
     rc = main(["mask", "-m", "void-and-cluster", "-n", "32", "-s", "1", "-o", str(out)])
     err = capsys.readouterr().err
@@ -208,6 +204,70 @@ def test_dither_command_with_a_baseline_mask(tmp_path, capsys):
     assert abs(white.mean() - ramp.mean()) < 0.05
     rc = main(["dither", str(src), "-m", "stbn", "-n", "8", "--frame", "2", "-o", str(out)])
     assert rc == 0
+
+
+# ---------------------------------------------------------------- atomic writes (issue 16)
+def _snapshot(folder):
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir())}
+
+
+def _disk_full(monkeypatch):
+    """fsync fails, as on a full disk, for every writer that goes through dpc._atomic."""
+    import errno
+
+    from dpc import _atomic
+
+    def full(fd):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(_atomic.os, "fsync", full)
+
+
+@pytest.mark.parametrize("name, shape", [("m.npy", (16, 16)), ("m.png", (16, 16)), ("m.exr", (16, 16, 2)),
+                                         ("st.png", (3, 8, 8)), ("st.exr", (3, 8, 8))])
+def test_write_mask_is_atomic(tmp_path, monkeypatch, name, shape):
+    """A failing write_mask leaves every existing file as it was and adds nothing (no temporary,
+    no first frame of a spatiotemporal mask); then the same call succeeds."""
+    st = len(shape) == 3 and shape[2] != 2
+    a = np.stack([B.white_mask(shape[1:], s) for s in range(shape[0])]) if st else B.white_mask(shape, 3)
+    target = tmp_path / name
+    old = {target.name: b"old mask"}
+    if st:  # an old frame 1 only: frames 0 and 2 would be new files
+        old = {M.frame_paths(target, shape[0])[1].name: b"old frame"}
+    for k, v in old.items():
+        (tmp_path / k).write_bytes(v)
+    with monkeypatch.context() as mp:
+        _disk_full(mp)
+        with pytest.raises(OSError, match="No space"):
+            M.write_mask(target, a, spatiotemporal=st)
+    assert _snapshot(tmp_path) == old
+    paths = M.write_mask(target, a, spatiotemporal=st)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(p.name for p in paths)
+    back = M.read_mask(paths if len(paths) > 1 else paths[0])
+    assert np.array_equal(M.rank_normalise(back, M.kind_of(a, st)), a)
+
+
+@pytest.mark.parametrize("mask_ext", [".npy", ".png"])
+def test_dither_command_is_atomic(tmp_path, monkeypatch, capsys, mask_ext):
+    """dpc dither writes the image and --mask-output together, or neither."""
+    import matplotlib.image as mpimg
+    ramp = np.tile(np.linspace(0, 1, 32), (16, 1))
+    src = tmp_path / "ramp.png"
+    mpimg.imsave(src, ramp, cmap="gray", vmin=0, vmax=1)
+    out, mask = tmp_path / "out.png", tmp_path / f"mask{mask_ext}"
+    out.write_bytes(b"old image")
+    args = ["dither", str(src), "-m", "void-and-cluster", "-n", "8", "-o", str(out), "--mask-output", str(mask)]
+    before = _snapshot(tmp_path)
+    with monkeypatch.context() as mp:
+        _disk_full(mp)
+        assert main(args) == 1
+    assert "No space" in capsys.readouterr().err
+    assert _snapshot(tmp_path) == before  # the old image kept, no mask file, no temporary
+    assert main(args) == 0, capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([src.name, out.name, mask.name])
+    assert mpimg.imread(out).shape[:2] == ramp.shape
+    if mask_ext == ".npy":
+        assert np.array_equal(np.load(mask), B.void_and_cluster(8, 0))
 
 
 # ---------------------------------------------------------------- C: baking a mask at load time

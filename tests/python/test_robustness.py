@@ -170,8 +170,6 @@ def test_analysis_write_failure_changes_nothing(tmp_path, command):
 
 
 def test_training_export_and_checkpoint_write_failures_keep_the_old_files(tmp_path):
-    pytest.importorskip("torch")
-    pytest.importorskip("onnx")
     train = [sys.executable, str(REPO / "training" / "train.py"), "--config",
              str(REPO / "training" / "configs" / "tiny-test.toml"), "--run-dir", str(tmp_path / "run"),
              "--no-progress"]
@@ -351,8 +349,7 @@ def test_oversize_counts_are_limit_errors_before_allocation(n):
 
 
 def _wide_model(tmp_path, radius):
-    mf = pytest.importorskip("dpc.model_file")
-    pytest.importorskip("onnx")
+    from dpc import model_file as mf
     kern = (-0.05 * np.sin(np.pi * np.linspace(0.0, 1.0, 16)))[None, :]
     layers = [mf.Layer([0b11], [radius], kern) for _ in range(3)]
     path = tmp_path / f"wide-{radius:g}.onnx"

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-dpc = pytest.importorskip("dpc")
+import dpc
 from reference_sampler import ReferenceSampler  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[1] / "data"

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-dpc = pytest.importorskip("dpc")
+import dpc
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 MODELS = ["model_2d", "model_3d_proj", "model_3d_mixed", "model_grid_3to1", "model_10d"]
@@ -94,8 +94,7 @@ def test_vulkan_matches_cpu(name):
 
 def _written_model(tmp_path, name, dims, subspaces, radius, m, bins=24):
     """A 3-layer model with a smooth repulsive kernel (zero at distance 0 and at the radius)."""
-    model_file = pytest.importorskip("dpc.model_file")
-    pytest.importorskip("onnx")
+    from dpc import model_file
     kernel = (-0.05 * np.sin(np.pi * np.linspace(0.0, 1.0, bins)))[None, :]
     kernels = np.repeat(kernel, len(subspaces), axis=0)
     layers = [model_file.Layer(subspaces, [radius] * len(subspaces), kernels) for _ in range(3)]

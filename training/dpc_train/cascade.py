@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import torch
 
-from .filter import FilterConfigError, NeighbourCache, check_layer, filter_layer, mask_dims
+from .filter import FilterConfigError, NeighbourCache, check_layer, filter_layer
 
 AXES = "xyzwabcdefghijklmnopqrstuv"
 
@@ -96,8 +96,9 @@ class CascadeSpec:
 def repulsion_kernel(bins: int, rho: float, sigma: float, amplitude: float) -> torch.Tensor:
     """Table of g(d) = −A·exp(−d²/2σ²) at the bin distances d_q = q·ρ/(b−1) (spacing units).
 
-    A local Gaussian repulsion (DESIGN §9): applied a few dozen times from uniform points it
-    already removes most low-frequency energy, so it is a far better start than zero.
+    A local Gaussian repulsion (docs/architecture.md, "A quick study the design started from"):
+    applied a few dozen times from uniform points it already removes most low-frequency energy,
+    so it is a far better start than zero.
     """
     d = torch.arange(bins, dtype=torch.float64) * (rho / (bins - 1))
     return -amplitude * torch.exp(-0.5 * (d / sigma) ** 2)
@@ -168,6 +169,3 @@ class Cascade(torch.nn.Module):
                 x[:, :, a] = (((idx // div) % gsz).double() + 0.5) / gsz
                 div *= gsz
         return x.to(dtype=dtype, device=device)
-
-    def dims_of(self, t: int) -> list[int]:
-        return mask_dims(self.spec.masks[t], self.spec.dims)

@@ -18,6 +18,8 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from dpc import DEFAULT_THREADS
+
 from .cascade import CascadeSpec
 from .filter import IMPLS
 
@@ -58,7 +60,9 @@ class TrainConfig:
     lr_final: float = 1e-4     # exponential decay from lr to lr_final over `steps`
     seed: int = 0
     device: str = "cpu"
-    threads: int = 1
+    # torch's intra-op threads and the C op's threads; dpc's one default (dpc.DEFAULT_THREADS, 1),
+    # 0: torch's default (one per core)
+    threads: int = DEFAULT_THREADS
     impl: str = "torch"
     checkpoint_every: int = 50
     log_every: int = 1

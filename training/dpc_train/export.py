@@ -1,39 +1,23 @@
-"""Export a trained cascade: the dpc model file (custom PointFilter nodes, written by
-dpc.model_file.write_model) and an optional plain-ONNX variant (standard operators only, dense
+"""Export a trained cascade: the dpc model file (custom PointFilter nodes, built by
+dpc.model_file) and an optional plain-ONNX variant (standard operators only, dense
 all pairs per layer) that runs unchanged in stock onnxruntime."""
 
 from __future__ import annotations
 
-import importlib
-import importlib.util
 import json
 from pathlib import Path
 
 import numpy as np
+from dpc import model_file
 
 from .filter import mask_dims
-
-REPO = Path(__file__).resolve().parents[2]
-
-
-def model_file_module():
-    """dpc.model_file: from the installed package if it imports, else straight from the repo
-    file (it is pure Python; `import dpc` itself needs the compiled dpc._core)."""
-    try:
-        return importlib.import_module("dpc.model_file")
-    except ImportError:
-        path = REPO / "python" / "dpc" / "model_file.py"
-        spec = importlib.util.spec_from_file_location("dpc_model_file", path)
-        mod = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(mod)
-        return mod
 
 
 def model_spec_from_checkpoint(st: dict, quality: dict | None = None, name: str | None = None):
     """A dpc.model_file.ModelSpec for a checkpoint dict (tables as trained, float32)."""
     from .trainer import cascade_from_checkpoint
 
-    mf = model_file_module()
+    mf = model_file
     model, cfg = cascade_from_checkpoint(st)
     sp = model.spec
     tables = model.tables().detach().cpu().numpy().astype(np.float32)
@@ -166,7 +150,7 @@ def export(checkpoint, out, standard_ops: str | None = None, name: str | None = 
     spec = model_spec_from_checkpoint(st, quality or {}, name)
     # Both files are built in memory first, then each written atomically (temporary file in
     # its folder, fsync, rename): a failure leaves any existing file as it was, and no half file.
-    data = model_file_module().build_onnx(spec).SerializeToString()
+    data = model_file.build_onnx(spec).SerializeToString()
     std = build_standard_onnx(spec, batched=batched).SerializeToString() if standard_ops else None
     Path(out).parent.mkdir(parents=True, exist_ok=True)
     from .trainer import atomic_write_bytes

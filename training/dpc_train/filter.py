@@ -1,14 +1,14 @@
 """One PointFilter layer (docs/model-format.md §3) in PyTorch.
 
-Two implementations of the same op, both differentiable w.r.t. points and kernel tables:
+Three implementations of the same op, all differentiable w.r.t. points and kernel tables:
 
 * ``impl="torch"``: plain autograd over the gathered neighbour pairs (the reference; runs on
   CPU and CUDA).
 * ``impl="analytic"``: a ``torch.autograd.Function`` whose backward is the closed form of paper
-  Appendix A (adapted to the scale-aware radius and the normalised subspace sum). It is the
-  shape the C kernels will take.
+  Appendix A (adapted to the scale-aware radius and the normalised subspace sum): the template
+  the C kernels follow.
 * ``impl="c"``: libdpc's C kernels (float64 forward and Appendix-A backward, CPU, parallel
-  over points) through the ``dpc`` bindings; the fast path for training on the CPU.
+  over points) through ``dpc.training``; the fast path for training on the CPU.
 
 Memory is O(m · neighbours): candidate pairs are found without grad (a toroidal cell grid for
 subspaces of up to 3 dimensions, chunked all-pairs distances otherwise), only pairs inside the
@@ -165,7 +165,7 @@ def find_pairs(x: torch.Tensor, dims: list[int], r: float, e: float):
 
 
 # ----------------------------------------------------------------------------------------
-# Forward pieces shared by both implementations
+# Forward pieces shared by impl="torch" and impl="analytic"
 # ----------------------------------------------------------------------------------------
 
 @dataclass
@@ -381,30 +381,31 @@ def to_torus_dtype(y: torch.Tensor, dtype: torch.dtype) -> torch.Tensor:
 
 class _FilterC(torch.autograd.Function):
     """Forward and backward in libdpc (C, float64, parallel over points, bits independent of
-    the thread count), through the dpc bindings. Inputs of any float dtype are computed in
-    float64 and returned in their own dtype."""
+    the thread count), through dpc.training. Inputs of any float dtype are computed in float64
+    and returned in their own dtype. The kernels use torch's intra-op thread count (``[train]
+    threads`` sets both) and the ISA path libdpc picks (``isa="auto"``)."""
 
     @staticmethod
     def forward(ctx, x, kernels, subspaces, radius, eps, fixed):
-        from dpc import _core  # the compiled bindings; imported here so impl="torch" needs none
+        from dpc.training import layer_forward
 
         x64 = x.detach().to(torch.float64).contiguous().numpy()
         k64 = kernels.detach().to(torch.float64).contiguous().numpy()
         args = (list(subspaces), list(radius), float(eps), int(fixed))
-        y = _core.layer_forward(x64, k64, *args, threads=torch.get_num_threads())
+        y = layer_forward(x64, k64, *args, threads=torch.get_num_threads())
         ctx.save_for_backward(x, kernels)
         ctx.args = args
         return to_torus_dtype(torch.from_numpy(y), x.dtype)
 
     @staticmethod
     def backward(ctx, grad_y):
-        from dpc import _core
+        from dpc.training import layer_backward
 
         x, kernels = ctx.saved_tensors
         x64 = x.detach().to(torch.float64).contiguous().numpy()
         k64 = kernels.detach().to(torch.float64).contiguous().numpy()
         g64 = grad_y.detach().to(torch.float64).contiguous().numpy()
-        gx, gk = _core.layer_backward(x64, k64, *ctx.args, grad_y=g64, threads=torch.get_num_threads())
+        gx, gk = layer_backward(x64, k64, *ctx.args, grad_y=g64, threads=torch.get_num_threads())
         return (torch.from_numpy(gx).to(x.dtype), torch.from_numpy(gk).to(kernels.dtype),
                 None, None, None, None)
 

@@ -1,4 +1,4 @@
-"""The loss language (paper Sec. 4, DESIGN §7): differentiable point-correlation operators.
+"""The loss language (paper Sec. 4; docs/training.md §3): differentiable point-correlation operators.
 
 Conventions (docs/training.md): X is a batch [B, m, n] of point sets on the unit torus.
 Power spectrum P(q) = |Σ_k exp(2πi⟨q, x_k⟩)|² / m at integer q (white noise = 1), DC set to 0,
@@ -266,7 +266,7 @@ def lowband_weight(m: int, k: int, nu_max: float = 4.0, nu_low: float = 0.75,
 
 
 def lowband_energy(X: torch.Tensor, nu_low: float) -> torch.Tensor:
-    """E_low (DESIGN §9): mean power over all integer q with 0 < ν < nu_low (area-weighted,
+    """E_low (docs/architecture.md, "A quick study"): mean power over all integer q with 0 < ν < nu_low (area-weighted,
     k ≤ 2), spectra averaged over the batch. The authors' 20 BNOT sets at m = 256 give 0.0024
     (ν < 0.5) and 0.026 (ν < 0.75)."""
     X = _batch(X)

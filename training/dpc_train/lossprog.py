@@ -26,6 +26,7 @@ import torch
 
 from . import losses as L
 from . import targets as T
+from .cascade import AXES
 
 REGISTRY: dict[str, Callable] = {}
 
@@ -92,8 +93,13 @@ def radspec_loss(m: int, n: int, target: str = "bnot", axes: str = "", nu_max: f
                  metric: str = "l1", nu_low: float = 0.75, low_factor: float = 1.0,
                  pcf_weight: float = 0.0, pcf_target: str = "", pcf_r_max: float = 2.0):
     """metric(radspec(axes(X)) − target) with an optional low-band weight (factor below ν_low)
-    and an optional PCF term pcf_weight·l1(raddom − PCF of the point sets `pcf_target`)."""
-    axes = axes or "xyzw"[:n]
+    and an optional PCF term pcf_weight·l1(raddom − PCF of the point sets `pcf_target`).
+    axes: a swizzle such as "xz"; default every dimension (radspec of the whole n-D set)."""
+    if not axes:
+        if n > len(AXES):
+            raise LossConfigError(f"radspec over all {n} dims: only the first {len(AXES)} have axis letters; "
+                                  "give params.axes")
+        axes = AXES[:n]  # every dimension (a 10-D pattern: all 10, not the first 4)
     k = len(axes)
     tgt = T.radial_target(target, m, k, nu_max)
     w = L.lowband_weight(m, k, nu_max, nu_low, low_factor)

@@ -1,4 +1,4 @@
-"""Loss targets: the authors' files (vendored in python/dpc/data/deepsampling, see its README),
+"""Loss targets: the authors' files (vendored in the dpc package, dpc/data/deepsampling, see its README),
 analytic step and jitter spectra, profiles measured from point sets, integrand spectra (Eq. 5).
 
 Every spectral target is returned in the conventions of losses.py (white noise = 1, DC = 0,
@@ -9,6 +9,7 @@ and `spec(X) ∘ F` line up entry by entry.
 from __future__ import annotations
 
 import math
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -18,19 +19,12 @@ from .losses import LossError, radial_bins, radspec, spec
 
 
 def data_dir() -> Path:
-    """The vendored deepsampling folder (repo checkout first, then an installed dpc)."""
-    here = Path(__file__).resolve().parents[2] / "python" / "dpc" / "data" / "deepsampling"
-    if here.is_dir():
-        return here
-    try:
-        from importlib import resources
-
-        p = Path(str(resources.files("dpc") / "data" / "deepsampling"))
-        if p.is_dir():
-            return p
-    except (ImportError, ModuleNotFoundError):
-        pass
-    raise LossError("cannot find the deepsampling target files (python/dpc/data/deepsampling)")
+    """The authors' target files, vendored in the dpc package (dpc/data/deepsampling, see its
+    README), found through importlib.resources."""
+    p = resources.files("dpc").joinpath("data", "deepsampling")
+    if not p.is_dir():
+        raise LossError(f"the dpc package has no deepsampling target files ({p})")
+    return Path(str(p))
 
 
 def load_radial_file(name: str, k: int, m: int) -> np.ndarray:

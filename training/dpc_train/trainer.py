@@ -100,7 +100,7 @@ def step_generator(seed: int, step: int) -> torch.Generator:
 
 def measure_quality(model: Cascade, loss_fn, cfg: Config, device="cpu") -> dict:
     """Loss on `eval_sets` fresh realisations (seeds disjoint from training), plus for 2-D
-    patterns the spectral metrics of DESIGN §9 (E_low, radial peak)."""
+    patterns the spectral metrics of docs/architecture.md (E_low, radial peak)."""
     sp = model.spec
     n_sets = max(1, cfg.train.eval_sets)
     g = torch.Generator().manual_seed(0x5EED_0000 + cfg.train.seed)

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import _atomic
 from ..errors import InvalidArgumentError
 
 LEVELS = tuple(k / 8 for k in range(1, 8))
@@ -152,6 +153,8 @@ def save_mask_figure(path, mask: np.ndarray, title: str = "") -> Path:
         fig.suptitle(title)
     fig.tight_layout()
     path = Path(path)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    try:
+        _atomic.save_figure(fig, path, dpi=110)  # atomic, like every writer of dpc
+    finally:
+        plt.close(fig)
     return path

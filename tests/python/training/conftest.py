@@ -1,12 +1,8 @@
-"""Make the training package importable (training/ is not installed) and keep torch to 1 thread."""
-
-import sys
-from pathlib import Path
+"""The training tests run against the installed dpc_train (pip install '.[train]'); torch is kept to
+1 thread."""
 
 import torch
 
-REPO = Path(__file__).resolve().parents[3]
-sys.path.insert(0, str(REPO / "training"))
 torch.set_num_threads(1)
 
 

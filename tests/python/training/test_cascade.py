@@ -141,7 +141,7 @@ def test_neighbour_cache_gives_the_fresh_search_result():
 def test_stratified_training_inputs_are_libdpcs():
     """[model] input = "stratified": the batch is dpc.stratified of seeds drawn from the step's
     generator, so training sees exactly what dpc.load(..., input="stratified") will feed."""
-    dpc = pytest.importorskip("dpc")
+    import dpc
     sp = CascadeSpec(dims=2, n_points=64, layers=2, unique_kernels=1, bins=4, input="stratified")
     x = Cascade(sp).input_points(3, torch.Generator().manual_seed(5), dtype=torch.float64)
     seeds = torch.randint(0, 1 << 62, (3,), generator=torch.Generator().manual_seed(5)).tolist()

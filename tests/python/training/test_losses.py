@@ -222,6 +222,21 @@ def test_loss_programs():
         build_loss({}, 256, 2)
 
 
+def test_registered_radspec_uses_every_dimension():
+    """[loss] name = "radspec" without axes: the radial spectrum of all n dimensions (5 here), not
+    of the first 4; past the 26 axis letters it asks for axes instead of dropping dimensions."""
+    X = torch.rand(2, 64, 5, generator=torch.Generator().manual_seed(1), dtype=torch.float64)
+    params = {"target": "step", "nu_max": 1.0}
+    values = []
+    for axes in (None, "xyzwa", "xyzw"):
+        fn, _ = build_loss({"name": "radspec", "params": dict(params, **({"axes": axes} if axes else {}))}, 64, 5)
+        torch.manual_seed(3)  # the Monte Carlo directions of k >= 3
+        values.append(float(fn(X)))
+    assert values[0] == values[1] != values[2]
+    with pytest.raises(LossConfigError, match="axis letters"):
+        build_loss({"name": "radspec", "params": params}, 64, 30)
+
+
 @pytest.mark.parametrize("name", ["bnot", "jitter"])
 def test_2d_spectrum_files_radially_average_to_the_radial_files(name):
     """The authors' 2-D spectra, cropped by spectrum2d_target and floor-binned like radspec,

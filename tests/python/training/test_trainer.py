@@ -70,16 +70,16 @@ def test_kill_and_resume_matches_uninterrupted(tmp_path):
     run = tmp_path / "killed"
     cmd = [sys.executable, str(REPO / "training" / "train.py"), "--config", str(cfg_path),
            "--run-dir", str(run), "--no-progress"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     csv = run / "loss.csv"
-    deadline = time.time() + 60
-    while time.time() < deadline:
-        if csv.exists() and len(csv.read_text().splitlines()) > 10:
-            break
-        time.sleep(0.02)
-    assert proc.poll() is None, "the run finished before it could be killed"
-    os.kill(proc.pid, signal.SIGKILL)
-    proc.wait()
+    with subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL) as proc:
+        deadline = time.time() + 60
+        while time.time() < deadline:
+            if csv.exists() and len(csv.read_text().splitlines()) > 10:
+                break
+            time.sleep(0.02)
+        assert proc.poll() is None, "the run finished before it could be killed"
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait()
     st = TR.load_checkpoint(run / TR.CHECKPOINT)  # never corrupt
     killed_at = st["step"]
     assert 10 <= killed_at < steps and killed_at % 5 == 0
