@@ -2,14 +2,16 @@
 # Runs every dpc test suite on a fresh Debian 12 machine, installing what it needs first.
 #   bash tests/run_all.sh            # everything (about 10 minutes on 2 cores)
 #   DPC_FUZZ_SECONDS=10 bash tests/run_all.sh   # shorter fuzzing
-# Suites: C tests (GoogleTest via ctest) under ASan+UBSan, the same with the Vulkan backend on
-# lavapipe (Mesa's CPU Vulkan driver), its Vulkan tests under the Khronos validation layer
-# (synchronization validation), the thread tests under TSan, a Release build's ctest (every
-# ISA path the CPU has), the reader fuzzer (libFuzzer), libdpc as another project's dependency
-# (tests/downstream/run.sh: install, find_package, pkg-config, add_subdirectory), the wheel in a
-# clean virtual environment, and pytest against the pip-installed package (built with the Vulkan
-# backend; it also runs the README's and docs' marked command blocks). Any failure, or a suite
-# that runs no test, fails the script.
+# Suites: the formatters' checks (clang-format over the C/C++ sources, ruff check and ruff
+# format over the Python files; tests/format_files.sh lists them), C tests (GoogleTest via ctest)
+# under ASan+UBSan, the same with the Vulkan backend on lavapipe (Mesa's CPU Vulkan driver), its
+# Vulkan tests under the Khronos validation layer (synchronization validation), the thread tests
+# under TSan, a Release build's ctest (every ISA path the CPU has), the reader fuzzer
+# (libFuzzer), libdpc as another project's dependency (tests/downstream/run.sh: install,
+# find_package, pkg-config, add_subdirectory), the wheel in a clean virtual environment (with the
+# train extra: dpc-train and dpc-export), and pytest against the pip-installed package (built
+# with the Vulkan backend; it also runs the README's and docs' marked command blocks). Any
+# failure, or a suite that runs no test, fails the script.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$(pwd)
@@ -24,6 +26,8 @@ step "system packages"
 APT_PKGS="libgtest-dev clang libclang-rt-14-dev cmake ninja-build mesa-vulkan-drivers libvulkan-dev glslc vulkan-validationlayers"
 # pkg-config, python3-venv: libdpc as a dependency of another project, the wheel in a clean venv.
 APT_PKGS="$APT_PKGS pkg-config python3-venv unzip"
+# clang-format (14 on Debian 12, the version the tree is formatted with): the format check.
+APT_PKGS="$APT_PKGS clang-format"
 missing=$(for p in $APT_PKGS; do dpkg -s "$p" >/dev/null 2>&1 || echo "$p"; done)
 if [ -n "$missing" ]; then
   SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
@@ -35,6 +39,23 @@ step "python packages"
 # torch first and pinned: the CPU build of 2.13.0 is on this image's disk; anything else pulls CUDA.
 python3 -m pip install -q --disable-pip-version-check torch==2.13.0
 python3 -m pip install -q --disable-pip-version-check scikit-build-core pybind11 ninja cmake
+# ruff pinned: another version may format differently (the format check below).
+python3 -m pip install -q --disable-pip-version-check ruff==0.17.6
+
+step "formatting: clang-format (C/C++), ruff check and ruff format (Python)"
+# Exactly the files tests/format_files.sh lists (libdpc/, bindings/, tests/, python/, training/;
+# not models/, bench/, docs/ or generated files). To fix: clang-format -i / ruff format on them.
+mapfile -t C_FILES < <(bash tests/format_files.sh c)
+mapfile -t PY_FILES < <(bash tests/format_files.sh py)
+[ "${#C_FILES[@]}" -gt 40 ] && [ "${#PY_FILES[@]}" -gt 60 ] || { echo "tests/format_files.sh listed too few files"; exit 1; }
+clang-format --version
+clang-format --dry-run --Werror "${C_FILES[@]}"
+python3 -m ruff --version
+python3 -m ruff check --no-cache "${PY_FILES[@]}"
+python3 -m ruff format --check --no-cache "${PY_FILES[@]}"
+echo "${#C_FILES[@]} C/C++ files and ${#PY_FILES[@]} Python files are formatted"
+
+step "the dpc package (with the Vulkan backend; extras test, train, mitsuba)"
 python3 -m pip install -q --disable-pip-version-check --no-build-isolation -C cmake.define.DPC_VULKAN=ON "$ROOT[test,train,mitsuba]"
 # lavapipe is installed above: the Vulkan tests must find a device, not skip.
 export DPC_TEST_REQUIRE_VULKAN=1
@@ -116,6 +137,11 @@ print('clean venv:', dpc.__version__, len(dpc.available_models()), 'models,', a.
 build/wheel-venv/bin/python -m pip install -q --disable-pip-version-check torch==2.13.0
 build/wheel-venv/bin/python -m pip install -q --disable-pip-version-check "$WHEEL[train]"
 build/wheel-venv/bin/python -c "import torch, onnx; assert torch.version.cuda is None, torch.version.cuda; print('train extra: torch', torch.__version__, 'onnx', onnx.__version__)"
+# the training commands of the train extra, from the wheel: a short run and its export
+(cd /tmp && "$ROOT/build/wheel-venv/bin/dpc-train" --config "$ROOT/training/configs/tiny-test.toml" --steps 2 \
+   --run-dir "$ROOT/build/wheel-train" --force --no-progress >/dev/null \
+ && "$ROOT/build/wheel-venv/bin/dpc-export" "$ROOT/build/wheel-train/checkpoint.pt" -o "$ROOT/build/wheel-tiny.onnx" >/dev/null \
+ && "$ROOT/build/wheel-venv/bin/python" -c "import dpc, sys; m = dpc.load(sys.argv[1]); print('dpc-train, dpc-export:', m.name, m.layers, 'layers')" "$ROOT/build/wheel-tiny.onnx")
 
 step "Python tests (installed package)"
 set +e

@@ -485,6 +485,8 @@ PYBIND11_MODULE(_core, mod) {
         .def("filter", &Model::filter, py::arg("points"));
     mod.attr("DEFAULT_MAX_NEIGHBOURS") = DPC_DEFAULT_MAX_NEIGHBOURS;
     mod.attr("MAX_POINTS") = DPC_MAX_POINTS;
+    mod.attr("SAMPLER_MAX_SPP") = DPC_SAMPLER_MAX_SPP;
+    mod.attr("SAMPLER_MAX_DIMENSIONS") = DPC_SAMPLER_MAX_DIMENSIONS;
     py::class_<Sampler>(mod, "Sampler")
         .def(py::init<const std::vector<const Model *> &, uint32_t, uint32_t, uint64_t>(), py::arg("models"),
              py::arg("spp"), py::arg("dims"), py::arg("seed"))

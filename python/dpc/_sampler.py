@@ -11,8 +11,8 @@ from ._model import Model, load
 from .errors import InvalidArgumentError
 
 DEFAULT_MODEL = "bnot-2d-stratified"
-MAX_SPP = 1 << 16
-MAX_DIMENSIONS = 4096
+MAX_SPP = int(_core.SAMPLER_MAX_SPP)  # DPC_SAMPLER_MAX_SPP
+MAX_DIMENSIONS = int(_core.SAMPLER_MAX_DIMENSIONS)  # DPC_SAMPLER_MAX_DIMENSIONS
 
 
 def _integer(value, name: str, low: int, high: int) -> int:

@@ -149,7 +149,8 @@ typedef struct dpc_load_options {
     uint32_t struct_size; /* sizeof(dpc_load_options), set by dpc_load_options_init */
     dpc_isa isa;          /* default DPC_ISA_AUTO */
     /* Worker threads one generate call may use: 1 (default) runs on the calling thread only;
-     * 0 means one per online CPU. Output bits do not depend on this. CPU backend only. */
+     * 0 means one per online CPU. Output bits do not depend on this. CPU backend only. (The one
+     * default of libdpc: also dpc_layer_options, and the Python package, its CLI and training.) */
     uint32_t threads;
     /* Default DPC_BACKEND_AUTO. The field was added after the first release: a struct_size of
      * the struct without it (offsetof(dpc_load_options, backend)) is still accepted, as AUTO. */

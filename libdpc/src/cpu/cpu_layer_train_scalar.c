@@ -92,7 +92,7 @@ ALWAYS_INLINE void chunk_body(const dpc_train_pass *ps, size_t lo, size_t hi, do
     ranges[1] = (uint32_t)m;
     uint32_t cur = UINT32_MAX;
     for (size_t s = lo; s < hi; s++) {
-        /* K <= 8: grids have k <= 4 (plan_grid); the bound lets the compiler see dpc_grid_ranges in bounds. */
+        /* K <= 8: grids have k <= 4 (dpc_plan_search); the bound lets the compiler see dpc_grid_ranges in bounds. */
         if (K <= 8 && sp->grid && ws->cell[s] != cur) { /* a cell's consecutive points share ranges */
             cur = ws->cell[s];
             nr = dpc_grid_ranges(sp->k, sp->G, sp->R, ws->cell_start, cur, ranges);
