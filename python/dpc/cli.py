@@ -156,7 +156,7 @@ def _parse_list(text: str | None, what: str, cast=str) -> list | None:
     try:
         return [cast(t.strip()) for t in text.split(",") if t.strip()]
     except ValueError:
-        raise click.BadParameter(f"expected a comma-separated list of {what}, got {text!r}")
+        raise click.BadParameter(f"expected a comma-separated list of {what}, got {text!r}") from None
 
 
 def _dump_json(doc, path: Path) -> None:
@@ -180,7 +180,10 @@ def _fmt(v) -> str:
 def _table(rows: list[dict], cols: list[str]) -> str:
     cells = [[_fmt(r.get(c)) for c in cols] for r in rows]
     widths = [max(len(c), *(len(row[i]) for row in cells)) for i, c in enumerate(cols)]
-    line = lambda vals: "| " + " | ".join(v.rjust(w) for v, w in zip(vals, widths)) + " |"
+
+    def line(vals):
+        return "| " + " | ".join(v.rjust(w) for v, w in zip(vals, widths)) + " |"
+
     out = [line(cols), "|" + "|".join("-" * (w + 2) for w in widths) + "|"]
     out += [line(row) for row in cells]
     return "\n".join(out)
@@ -486,7 +489,7 @@ def compare_cmd(inputs, more, output, integration, nu_max, max_size, subspace, d
             seen[name] = seen.get(name, 0) + 1
             labels.append(name if seen[name] == 1 else f"{name}#{seen[name]}")
         results, rows = [], []
-        for (name, sets, _), label in zip(loaded, labels):
+        for (_, sets, _), label in zip(loaded, labels):
             res = _run_analysis(sets, label, nu_max, max_size, subspace, disc, disc_budget, seed)
             row = res.summary()
             if integration:

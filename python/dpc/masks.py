@@ -92,7 +92,6 @@ def _model_mask(model, size: int | None, frames: int | None, seed: int) -> np.nd
         if frames is not None:
             raise InvalidArgumentError(f"frames applies to spatiotemporal masks; this is a {kind} mask")
         want = (n, n)
-    m = math.prod(want)
     if want == shape:
         pts = model.generate(seed=seed)
     else:

@@ -71,7 +71,8 @@ def test_min_distance_matches_brute_force_and_design_value():
     md = analysis.min_distance(x)
     for s in range(3):
         assert md.distances[s] == pytest.approx(_brute_min_distance(x[s]), rel=1e-12)
-    # docs/architecture.md ("A quick study"): the authors' 20 BNOT sets at m = 256 have delta_min = 0.74 (mean over sets).
+    # docs/architecture.md ("A quick study"): the authors' 20 BNOT sets at m = 256 have
+    # delta_min = 0.74 (mean over sets).
     bnot = baselines.generate("ref-bnot", 256, dims=2, count=20)
     assert analysis.min_distance_ratio(bnot) == pytest.approx(0.74, abs=0.01)
     # The PCF pass finds the same minimum.

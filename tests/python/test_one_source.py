@@ -39,7 +39,8 @@ def test_one_version_everywhere():
     m = re.search(meta["regex"], HEADER.read_text(), re.M)
     assert meta["result"].format(**m.groupdict()) == v
     cmake = (REPO / "CMakeLists.txt").read_text()
-    assert re.search(r"project\(dpc VERSION \$\{DPC_VERSION_MAJOR\}\.\$\{DPC_VERSION_MINOR\}\.\$\{DPC_VERSION_PATCH\}", cmake)
+    version_vars = r"\$\{DPC_VERSION_MAJOR\}\.\$\{DPC_VERSION_MINOR\}\.\$\{DPC_VERSION_PATCH\}"
+    assert re.search(r"project\(dpc VERSION " + version_vars, cmake)
     assert not re.search(r"project\(dpc VERSION \d", cmake)
     # the shared library inside the package is named by CMake's project version (soname)
     assert (Path(dpc.__file__).parent / "lib" / f"libdpc.so.{major}").is_file()

@@ -119,8 +119,8 @@ class Cascade(torch.nn.Module):
 
     def layer_weights(self) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """(lo, hi, frac): layer i uses (1−frac[i])·θ[lo[i]] + frac[i]·θ[hi[i]]."""
-        lu, l = self.spec.unique_kernels, self.spec.layers
-        pos = torch.arange(l, dtype=torch.float64) * ((lu - 1) / (l - 1) if l > 1 else 0.0)
+        lu, n_layers = self.spec.unique_kernels, self.spec.layers
+        pos = torch.arange(n_layers, dtype=torch.float64) * ((lu - 1) / (n_layers - 1) if n_layers > 1 else 0.0)
         lo = torch.clamp(torch.floor(pos).long(), max=lu - 1)
         hi = torch.clamp(lo + 1, max=lu - 1)
         return lo, hi, pos - lo.double()

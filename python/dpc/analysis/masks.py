@@ -99,7 +99,7 @@ def accumulated_error(volume, steps=STEP_LEVELS, q_max: float = 6.0) -> dict:
     the RMS error over pixels and step integrands, and the low-band power of the error image
     (normalised so that independent white-noise values score 1)."""
     v = _as_stack(volume, 3, "accumulated_error")
-    cnt, t, n = v.shape[0], v.shape[1], v.shape[2]
+    t, n = v.shape[1], v.shape[2]
     low = _low_band(n, q_max)
     rmse, elow = [], []
     cs = np.asarray(steps, dtype=np.float64)
@@ -124,7 +124,7 @@ def spatiotemporal_quality(volumes, q_max: float = 6.0) -> dict:
     if vs.shape[2] != vs.shape[3] or vs.shape[2] < 4 or vs.shape[1] < 2:
         raise InvalidArgumentError(f"spatiotemporal masks must be (count, T, N, N), T >= 2, "
                                    f"N >= 4; got {np.shape(volumes)}")
-    cnt, t = vs.shape[0], vs.shape[1]
+    t = vs.shape[1]
     r = np.stack([np.stack([rank_normalise(f) for f in vol]) for vol in vs])
     frames = [mask_quality(r[:, k], q_max=q_max) for k in range(t)]
     ts = temporal_spectrum(r)

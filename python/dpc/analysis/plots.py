@@ -80,8 +80,8 @@ def save_spectrum2d(path, spec: Spectrum2D, *, title: str = "",
     im = ax.imshow(p.T, origin="lower", cmap="gray", vmin=0.0, vmax=vmax,
                    extent=(-ext, ext, -ext, ext), interpolation="nearest")
     fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04, label="power P (white noise = 1)")
-    ax.set_xlabel(r"$\nu_{%d}$" % spec.dims[0])
-    ax.set_ylabel(r"$\nu_{%d}$" % spec.dims[1])
+    ax.set_xlabel(rf"$\nu_{{{spec.dims[0]}}}$")
+    ax.set_ylabel(rf"$\nu_{{{spec.dims[1]}}}$")
     ax.set_title(title or f"power spectrum, m={spec.n_points}, {spec.n_sets} sets", fontsize=10)
     return _save(fig, path, formats)
 

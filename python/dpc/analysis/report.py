@@ -222,6 +222,6 @@ def analyze(points, *, label: str = "points", nu_max: float = 4.0, max_size: int
                 res.notes.append(f"discrepancies averaged over the first {k} of {s_count} sets "
                                  f"(budget {discrepancy_budget:.3g} pair terms)")
             for mth in methods:
-                res.discrepancy[mth] = timed(f"discrepancy_{mth}", lambda: float(
+                res.discrepancy[mth] = timed(f"discrepancy_{mth}", lambda mth=mth: float(
                     discrepancy_per_set(sets[:k], mth, progress_bar=progress_bar).mean()))
     return res

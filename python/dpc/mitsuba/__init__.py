@@ -83,7 +83,8 @@ def _compile_command(output: Path) -> list[str]:
     try:
         import nanobind  # noqa: PLC0415
     except ImportError as e:
-        raise UnsupportedError("building the dpc Mitsuba plugin needs the nanobind headers: pip install nanobind") from e
+        raise UnsupportedError(
+            "building the dpc Mitsuba plugin needs the nanobind headers: pip install nanobind") from e
     import drjit  # noqa: PLC0415  (installed with mitsuba)
 
     mi_dir, dr_dir, pkg = Path(mi.__file__).parent, Path(drjit.__file__).parent, _package_dir()
