@@ -7,7 +7,6 @@ The same command as ``dpc-export`` (dpc_train.cli.export_main). Run as a script,
 folder first on the module path, so ``dpc_train`` is the package beside this file.
 """
 
-
 from dpc_train.cli import export
 
 if __name__ == "__main__":

@@ -5,7 +5,6 @@ The same command as ``dpc-train`` (dpc_train.cli.train_main). Run as a script, P
 folder first on the module path, so ``dpc_train`` is the package beside this file.
 """
 
-
 from dpc_train.cli import train
 
 if __name__ == "__main__":

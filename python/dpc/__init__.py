@@ -8,22 +8,70 @@
 Arrays follow scipy.stats.qmc: C-contiguous ``(m, n)`` points in [0, 1), batches ``(sets, m, n)``.
 """
 
-from .errors import (CancelledError, DpcError, InternalError, InvalidArgumentError, LimitError,
-                     ModelFormatError, ModelIOError, ModelNotFoundError, OutOfMemoryError,
-                     UnsupportedError)
-from ._model import (DEFAULT_MAX_NEIGHBOURS, DEFAULT_MAX_OUTPUT_BYTES, DEFAULT_THREADS, MAX_POINTS, Backend,
-                     Input, Isa, Model, available_models, isa_supported, load, model_path, stratified,
-                     uniform)
-from ._sampler import Sampler
+from . import (
+    masks,  # blue-noise threshold masks, docs/masks.md
+    training,  # the float64 layer ops (dpc_layer_forward / _backward)
+)
 from ._core import __version__  # version of the linked libdpc (dpc.h; = the distribution's version)
-from . import training  # the float64 layer ops (dpc_layer_forward / _backward)
-from . import masks  # blue-noise threshold masks, docs/masks.md
+from ._model import (
+    DEFAULT_MAX_NEIGHBOURS,
+    DEFAULT_MAX_OUTPUT_BYTES,
+    DEFAULT_THREADS,
+    MAX_POINTS,
+    Backend,
+    Input,
+    Isa,
+    Model,
+    available_models,
+    isa_supported,
+    load,
+    model_path,
+    stratified,
+    uniform,
+)
+from ._sampler import Sampler
+from .errors import (
+    CancelledError,
+    DpcError,
+    InternalError,
+    InvalidArgumentError,
+    LimitError,
+    ModelFormatError,
+    ModelIOError,
+    ModelNotFoundError,
+    OutOfMemoryError,
+    UnsupportedError,
+)
 from .masks import mask
 
 __all__ = [
-    "Model", "load", "uniform", "stratified", "available_models", "model_path", "Sampler", "isa_supported",
-    "DpcError", "InvalidArgumentError", "ModelIOError", "ModelFormatError", "UnsupportedError",
-    "OutOfMemoryError", "LimitError", "InternalError", "ModelNotFoundError", "CancelledError",
-    "MAX_POINTS", "DEFAULT_MAX_NEIGHBOURS", "DEFAULT_MAX_OUTPUT_BYTES", "DEFAULT_THREADS",
-    "Isa", "Backend", "Input", "training", "masks", "mask", "__version__",
+    "Model",
+    "load",
+    "uniform",
+    "stratified",
+    "available_models",
+    "model_path",
+    "Sampler",
+    "isa_supported",
+    "DpcError",
+    "InvalidArgumentError",
+    "ModelIOError",
+    "ModelFormatError",
+    "UnsupportedError",
+    "OutOfMemoryError",
+    "LimitError",
+    "InternalError",
+    "ModelNotFoundError",
+    "CancelledError",
+    "MAX_POINTS",
+    "DEFAULT_MAX_NEIGHBOURS",
+    "DEFAULT_MAX_OUTPUT_BYTES",
+    "DEFAULT_THREADS",
+    "Isa",
+    "Backend",
+    "Input",
+    "training",
+    "masks",
+    "mask",
+    "__version__",
 ]

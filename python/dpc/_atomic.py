@@ -25,8 +25,7 @@ import os
 import secrets
 from pathlib import Path
 
-_CURRENT: contextvars.ContextVar["_Transaction | None"] = contextvars.ContextVar("dpc_transaction",
-                                                                                 default=None)
+_CURRENT: contextvars.ContextVar[_Transaction | None] = contextvars.ContextVar("dpc_transaction", default=None)
 
 
 def _umask_mode() -> int:
@@ -61,7 +60,7 @@ def _unlink(path: Path) -> None:
 class _Transaction:
     def __init__(self) -> None:
         self.files: list[tuple[Path, Path]] = []  # (temporary, target)
-        self.dirs: list[Path] = []                # folders created, outermost first
+        self.dirs: list[Path] = []  # folders created, outermost first
 
     def commit(self) -> None:
         done = []

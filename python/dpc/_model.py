@@ -148,7 +148,8 @@ def model_path(name_or_path) -> Path:
             return cand
     raise ModelNotFoundError(
         f"no model file or bundled model named {str(name_or_path)!r}; "
-        f"bundled: {', '.join(available_models()) or '(none)'}")
+        f"bundled: {', '.join(available_models()) or '(none)'}"
+    )
 
 
 def uniform(seed: int, m: int, n: int) -> np.ndarray:
@@ -164,8 +165,10 @@ def _input_size(m, n, most: int) -> tuple[int, int, float]:
     n = _integer(n, "n", 1, most, limit=True)
     limit = _max_bytes(None)
     if m * n * 4 > limit:
-        raise LimitError(f"{m} x {n} floats would take {m * n * 4 / 2**30:.3g} GiB, more than the "
-                         f"limit of {limit / 2**30:.3g} GiB (DPC_MAX_OUTPUT_BYTES raises it)")
+        raise LimitError(
+            f"{m} x {n} floats would take {m * n * 4 / 2**30:.3g} GiB, more than the "
+            f"limit of {limit / 2**30:.3g} GiB (DPC_MAX_OUTPUT_BYTES raises it)"
+        )
     return m, n, limit
 
 
@@ -181,20 +184,26 @@ def stratified(seed: int, m: int, n: int) -> np.ndarray:
 class Model:
     """A loaded dpc model. Create with :func:`load`."""
 
-    def __init__(self, path, *, isa: str = "auto", threads: int = DEFAULT_THREADS, backend: str = "auto",
-                 input: str = "auto", max_neighbours: float | None = None):  # noqa: A002
+    def __init__(
+        self,
+        path,
+        *,
+        isa: str = "auto",
+        threads: int = DEFAULT_THREADS,
+        backend: str = "auto",
+        input: str = "auto",
+        max_neighbours: float | None = None,
+    ):  # noqa: A002
         isa = _choice(isa, Isa, _ISA, "isa")
         backend = _choice(backend, Backend, _BACKEND, "backend")
         input = _choice(input, Input, _INPUT, "input")  # noqa: A001
         threads = _integer(threads, "threads", 0, 0xFFFFFFFF)
         if max_neighbours is None:
             max_neighbours = DEFAULT_MAX_NEIGHBOURS
-        if (isinstance(max_neighbours, bool) or not isinstance(max_neighbours, numbers.Real)
-                or not max_neighbours > 0):
+        if isinstance(max_neighbours, bool) or not isinstance(max_neighbours, numbers.Real) or not max_neighbours > 0:
             raise InvalidArgumentError(f"max_neighbours must be > 0 (math.inf: no bound), got {max_neighbours!r}")
         self.path = Path(_check_path(path))
-        self._h = _core.Model(os.fspath(self.path), isa, threads, backend, input,
-                              float(max_neighbours))
+        self._h = _core.Model(os.fspath(self.path), isa, threads, backend, input, float(max_neighbours))
         info = self._h.info()
         self.dims: int = info["dims"]
         self.n_points: int = info["n_points"]
@@ -211,8 +220,10 @@ class Model:
         self.name: str = self.metadata.get("dpc.name", self.path.stem)
 
     def __repr__(self) -> str:
-        return (f"dpc.Model({self.name!r}, dims={self.dims}, n_points={self.n_points}, "
-                f"layers={self.layers}, isa={self.isa!r}, backend={self.backend!r})")
+        return (
+            f"dpc.Model({self.name!r}, dims={self.dims}, n_points={self.n_points}, "
+            f"layers={self.layers}, isa={self.isa!r}, backend={self.backend!r})"
+        )
 
     @staticmethod
     def _count(n_points) -> int:
@@ -220,8 +231,9 @@ class Model:
             return 0
         return _integer(n_points, "n_points", 1, MAX_POINTS, limit=True)
 
-    def generate(self, seed: int = 0, n_points: int | None = None, *, max_bytes: float | None = None,
-                 progress=None) -> np.ndarray:
+    def generate(
+        self, seed: int = 0, n_points: int | None = None, *, max_bytes: float | None = None, progress=None
+    ) -> np.ndarray:
         """One point set: (n_points or the trained count, dims) float32 in [0, 1).
 
         ``seed``: an integer in 0 .. 2^64 - 1. ``n_points``: a positive integer up to
@@ -231,17 +243,16 @@ class Model:
         ``progress(done, total)``: called on this thread while libdpc works (units: layers of
         sets). A large request runs off the calling thread, so Ctrl-C stops it with
         KeyboardInterrupt and no partial result."""
-        return self._h.generate(_seed(seed), 1, self._count(n_points), False, _max_bytes(max_bytes),
-                                progress)
+        return self._h.generate(_seed(seed), 1, self._count(n_points), False, _max_bytes(max_bytes), progress)
 
-    def generate_batch(self, count: int, seed: int = 0, n_points: int | None = None, *,
-                       max_bytes: float | None = None, progress=None) -> np.ndarray:
+    def generate_batch(
+        self, count: int, seed: int = 0, n_points: int | None = None, *, max_bytes: float | None = None, progress=None
+    ) -> np.ndarray:
         """``count`` sets, set c from seed ``(seed + c) mod 2^64``: (count, m, dims) float32.
         The total, count x m x dims floats, is checked against ``max_bytes`` before allocation
         (see :meth:`generate`)."""
         count = _integer(count, "count", 1, (1 << 63) - 1, limit=True)
-        return self._h.generate(_seed(seed), count, self._count(n_points), True, _max_bytes(max_bytes),
-                                progress)
+        return self._h.generate(_seed(seed), count, self._count(n_points), True, _max_bytes(max_bytes), progress)
 
     def filter(self, points) -> np.ndarray:
         """Run the cascade on your own (m, dims) points; returns a new float32 array."""
@@ -252,8 +263,15 @@ class Model:
         return pts
 
 
-def load(path_or_name, *, isa: str = "auto", threads: int = DEFAULT_THREADS, backend: str = "auto",
-         input: str = "auto", max_neighbours: float | None = None) -> Model:  # noqa: A002
+def load(
+    path_or_name,
+    *,
+    isa: str = "auto",
+    threads: int = DEFAULT_THREADS,
+    backend: str = "auto",
+    input: str = "auto",
+    max_neighbours: float | None = None,
+) -> Model:  # noqa: A002
     """Load a model file, or a bundled model by name (see :func:`available_models`).
 
     ``isa``, ``backend`` and ``input`` take names (below) or members of :class:`Isa`,
@@ -280,5 +298,6 @@ def load(path_or_name, *, isa: str = "auto", threads: int = DEFAULT_THREADS, bac
     Names are looked up in the folders of ``$DPC_MODEL_PATH`` (separated by ``os.pathsep``),
     then among the bundled models; a path ending in ``.onnx`` or naming a file is loaded as it
     is."""
-    return Model(model_path(path_or_name), isa=isa, threads=threads, backend=backend, input=input,
-                 max_neighbours=max_neighbours)
+    return Model(
+        model_path(path_or_name), isa=isa, threads=threads, backend=backend, input=input, max_neighbours=max_neighbours
+    )

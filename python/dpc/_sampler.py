@@ -67,13 +67,18 @@ class Sampler:
 
     def __repr__(self) -> str:
         names = ", ".join(m.name for m in self.models)
-        return (f"dpc.Sampler([{names}], samples_per_pixel={self.samples_per_pixel}, "
-                f"dimensions={self.dimensions}, seed={self.seed})")
+        return (
+            f"dpc.Sampler([{names}], samples_per_pixel={self.samples_per_pixel}, "
+            f"dimensions={self.dimensions}, seed={self.seed})"
+        )
 
     def _lookup(self, x, y, index, dimension, width: int) -> np.ndarray:
-        arrays = np.broadcast_arrays(_uint32_array(x, "x", wrap=True), _uint32_array(y, "y", wrap=True),
-                                     _uint32_array(index, "index", wrap=False),
-                                     _uint32_array(dimension, "dimension", wrap=False))
+        arrays = np.broadcast_arrays(
+            _uint32_array(x, "x", wrap=True),
+            _uint32_array(y, "y", wrap=True),
+            _uint32_array(index, "index", wrap=False),
+            _uint32_array(dimension, "dimension", wrap=False),
+        )
         shape = arrays[0].shape
         flat = [np.ascontiguousarray(a.ravel()) for a in arrays]
         out = self._h.get(*flat, width)

@@ -46,6 +46,7 @@ def _check_seed(seed) -> int:
 def _qmc_engine(name: str, dims: int, rng: np.random.Generator, **kw):
     # Imported here: scipy.stats takes a second to import, and most commands never need it.
     from scipy.stats import qmc
+
     cls = getattr(qmc, name)
     # scipy >= 1.15 takes rng=, older releases seed= (same meaning for a Generator).
     try:
@@ -61,10 +62,9 @@ def _white(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
 
 def _jitter(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
     k = round(m ** (1.0 / n))
-    if k ** n != m:
+    if k**n != m:
         lo, hi = math.floor(m ** (1.0 / n)), math.ceil(m ** (1.0 / n))
-        raise InvalidArgumentError(
-            f"jitter needs m = k^{n} points; nearest: {max(lo, 1) ** n} or {hi ** n}")
+        raise InvalidArgumentError(f"jitter needs m = k^{n} points; nearest: {max(lo, 1) ** n} or {hi**n}")
     cells = np.stack(np.meshgrid(*([np.arange(k)] * n), indexing="ij"), axis=-1).reshape(-1, n)
     return (cells + rng.random((m, n))) / k
 
@@ -91,6 +91,7 @@ def _poisson_disk(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
     # part of the square empty. Instead fill the whole cube at a radius small enough to give
     # at least m points, then drop the surplus (a few percent) at random.
     from .analysis._common import max_packing_distance
+
     radius = 0.71 * max_packing_distance(m, n)  # ~5% surplus in 2-D, more in 3-D
     for _ in range(60):
         pts = _qmc_engine("PoissonDisk", n, rng, radius=radius).fill_space()
@@ -121,7 +122,7 @@ def korobov_generator(m: int, n: int) -> tuple[int, ...]:
         prod = np.ones(m)
         for zj in z:
             x = (i * zj % m) / m
-            prod *= 1.0 + 2.0 * math.pi ** 2 * (x * x - x + 1.0 / 6.0)
+            prod *= 1.0 + 2.0 * math.pi**2 * (x * x - x + 1.0 / 6.0)
         p2 = prod.mean() - 1.0
         if p2 < best:
             best, best_a = p2, int(a)
@@ -131,7 +132,7 @@ def korobov_generator(m: int, n: int) -> tuple[int, ...]:
 def _lattice(m: int, z, rng: np.random.Generator) -> np.ndarray:
     i = np.arange(m, dtype=np.int64)[:, None]
     pts = (i * np.asarray(z, dtype=np.int64)[None, :] % m) / m
-    pts = pts + rng.random(len(z))          # Cranley-Patterson rotation
+    pts = pts + rng.random(len(z))  # Cranley-Patterson rotation
     return pts - np.floor(pts)
 
 
@@ -162,8 +163,8 @@ def _fibonacci(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
         below = max([f for f in fib if f < m] or [3])
         above = min(f for f in fib if f > m)
         raise InvalidArgumentError(
-            f"the Fibonacci lattice needs a Fibonacci number of points >= 3; "
-            f"nearest: {below} or {above}")
+            f"the Fibonacci lattice needs a Fibonacci number of points >= 3; nearest: {below} or {above}"
+        )
     k = fib.index(m)
     return _lattice(m, (1, fib[k - 1]), rng)
 
@@ -171,6 +172,7 @@ def _fibonacci(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
 @dataclass(frozen=True)
 class Baseline:
     """A synthetic sampler: ``make(m, n, rng) -> (m, n)``."""
+
     name: str
     description: str
     make: Callable[[int, int, np.random.Generator], np.ndarray]
@@ -179,16 +181,14 @@ class Baseline:
         """One set (m, n) from ``seed``."""
         return self.generate_batch(1, n_points, dims, seed)[0]
 
-    def generate_batch(self, count: int, n_points: int | None, dims: int | None = 2,
-                       seed: int = 0) -> np.ndarray:
+    def generate_batch(self, count: int, n_points: int | None, dims: int | None = 2, seed: int = 0) -> np.ndarray:
         """``count`` sets (count, m, n); set c from seed ``seed + c``."""
         if n_points is None:
             raise InvalidArgumentError(f"{self.name} needs a number of points")
         m, n, c = int(n_points), int(2 if dims is None else dims), int(count)
         s = _check_seed(seed)
         if m < 1 or n < 1 or c < 1:
-            raise InvalidArgumentError(
-                f"count, points and dims must be positive, got {count}, {n_points}, {dims}")
+            raise InvalidArgumentError(f"count, points and dims must be positive, got {count}, {n_points}, {dims}")
         out = np.empty((c, m, n))
         for i in range(c):
             out[i] = self.make(m, n, _rng(s + i))
@@ -230,8 +230,7 @@ def reference_sets(pattern: str, n_points: int, dims: int = 2) -> np.ndarray:
     files = _reference_index().get(key)
     if not files:
         have = ", ".join(f"{p} d={d} m={m}" for p, d, m in sorted(_reference_index()))
-        raise InvalidArgumentError(
-            f"no reference sets for {pattern} with dims={dims}, m={n_points}; available: {have}")
+        raise InvalidArgumentError(f"no reference sets for {pattern} with dims={dims}, m={n_points}; available: {have}")
     root = _ref_root()
     sets = []
     for name in files:
@@ -247,37 +246,38 @@ def reference_sets(pattern: str, n_points: int, dims: int = 2) -> np.ndarray:
 @dataclass(frozen=True)
 class ReferenceBaseline:
     """The authors' published sets of one pattern."""
+
     name: str
     pattern: str
     description: str
 
     def available(self) -> list[tuple[int, int, int]]:
         """(m, dims, number of sets) for which sets exist."""
-        return sorted((m, d, len(f)) for (p, d, m), f in _reference_index().items()
-                      if p == self.pattern)
+        return sorted((m, d, len(f)) for (p, d, m), f in _reference_index().items() if p == self.pattern)
 
-    def generate(self, n_points: int | None = None, dims: int | None = None,
-                 seed: int = 0) -> np.ndarray:
+    def generate(self, n_points: int | None = None, dims: int | None = None, seed: int = 0) -> np.ndarray:
         return self.generate_batch(1, n_points, dims, seed)[0]
 
-    def generate_batch(self, count: int, n_points: int | None = None, dims: int | None = None,
-                       seed: int = 0) -> np.ndarray:
+    def generate_batch(
+        self, count: int, n_points: int | None = None, dims: int | None = None, seed: int = 0
+    ) -> np.ndarray:
         """``count`` distinct published sets, set c being number (seed + c) mod sets.
         ``n_points``/``dims`` may be omitted where only one collection fits."""
         s = _check_seed(seed)
-        fits = [(m, d, k) for m, d, k in self.available()
-                if (n_points is None or m == int(n_points)) and (dims is None or d == int(dims))]
-        if len(fits) > 1 and dims is None:      # unspecified dims: 2-D, like the other baselines
+        fits = [
+            (m, d, k)
+            for m, d, k in self.available()
+            if (n_points is None or m == int(n_points)) and (dims is None or d == int(dims))
+        ]
+        if len(fits) > 1 and dims is None:  # unspecified dims: 2-D, like the other baselines
             fits = [f for f in fits if f[1] == 2] or fits
         if len(fits) != 1:
             have = ", ".join(f"m={m} dims={d} ({k} sets)" for m, d, k in self.available())
             want = "ambiguous" if fits else "not available"
-            raise InvalidArgumentError(
-                f"{self.name}: m={n_points}, dims={dims} is {want}; published: {have}")
+            raise InvalidArgumentError(f"{self.name}: m={n_points}, dims={dims} is {want}; published: {have}")
         m, d, k = fits[0]
         if not 1 <= int(count) <= k:
-            raise InvalidArgumentError(
-                f"{self.name} has {k} sets of m={m}, dims={d}; asked for {count}")
+            raise InvalidArgumentError(f"{self.name} has {k} sets of m={m}, dims={d}; asked for {count}")
         sets = reference_sets(self.pattern, m, d)
         idx = [(s + c) % k for c in range(int(count))]
         return np.array(sets[idx])
@@ -285,16 +285,13 @@ class ReferenceBaseline:
 
 _SYNTHETIC = [
     Baseline("white", "uniform random points (white noise)", _white),
-    Baseline("jitter", "jittered grid: one uniform point per cell of a k^n grid (m = k^n)",
-             _jitter),
+    Baseline("jitter", "jittered grid: one uniform point per cell of a k^n grid (m = k^n)", _jitter),
     Baseline("sobol", "Owen-scrambled Sobol' (scipy.stats.qmc.Sobol)", _sobol),
     Baseline("halton", "scrambled Halton (scipy.stats.qmc.Halton)", _halton),
     Baseline("lhs", "Latin hypercube (scipy.stats.qmc.LatinHypercube)", _lhs),
-    Baseline("poisson-disk", "maximal Poisson disk (scipy.stats.qmc.PoissonDisk), trimmed to m",
-             _poisson_disk),
+    Baseline("poisson-disk", "maximal Poisson disk (scipy.stats.qmc.PoissonDisk), trimmed to m", _poisson_disk),
     Baseline("rank1", "Korobov rank-1 lattice (P_2-optimal generator), random shift", _rank1),
-    Baseline("fibonacci", "2-D Fibonacci lattice z = (1, F_(k-1)), m = F_k, random shift",
-             _fibonacci),
+    Baseline("fibonacci", "2-D Fibonacci lattice z = (1, F_(k-1)), m = F_k, random shift", _fibonacci),
 ]
 _REFERENCE = [
     ReferenceBaseline("ref-bnot", "bnot", "the authors' BNOT sets (De Goes et al. 2012)"),
@@ -315,12 +312,10 @@ def get(name: str) -> Baseline | ReferenceBaseline:
     try:
         return BASELINES[name]
     except KeyError:
-        raise InvalidArgumentError(
-            f"unknown baseline {name!r}; available: {', '.join(BASELINES)}") from None
+        raise InvalidArgumentError(f"unknown baseline {name!r}; available: {', '.join(BASELINES)}") from None
 
 
-def generate(name: str, n_points: int | None, dims: int | None = 2, count: int = 1,
-             seed: int = 0) -> np.ndarray:
+def generate(name: str, n_points: int | None, dims: int | None = 2, count: int = 1, seed: int = 0) -> np.ndarray:
     """``count`` sets of baseline ``name``: float64 (count, m, n)."""
     return get(name).generate_batch(count, n_points, dims, seed)
 
@@ -330,6 +325,7 @@ def generate(name: str, n_points: int | None, dims: int | None = 2, count: int =
 # mask models (docs/masks.md). A mask is float64 with values (rank + ½) / size, each value exactly
 # once: scalar (N, N); vector (N, N, 2); spatiotemporal (T, N, N) (slice t = frame t).
 # Every mask here is toroidal (it tiles without a seam): the energies below wrap around.
+
 
 def _check_mask_size(n, what: str = "size", minimum: int = 2) -> int:
     try:
@@ -370,7 +366,7 @@ class _ToroidalEnergy:
     def toggle(self, flat: int, on: bool) -> None:
         n = self.n
         i, j = divmod(int(flat), n)
-        view = self.tiled[n - i:2 * n - i, n - j:2 * n - j]     # kernel rolled to (i, j)
+        view = self.tiled[n - i : 2 * n - i, n - j : 2 * n - j]  # kernel rolled to (i, j)
         if on:
             self.e += view
         else:
@@ -462,6 +458,7 @@ def _rank_per_channel(a: np.ndarray, vector: bool) -> np.ndarray:
 def bayer_mask(size: int) -> np.ndarray:
     """The size × size Bayer (ordered-dither) matrix, size a power of two, as (rank + ½)/size²."""
     from .analysis.dither import bayer
+
     return bayer(_check_mask_size(size, minimum=1))
 
 
@@ -484,8 +481,9 @@ def _normalised_gaussian_1d(n: int, sigma: float) -> np.ndarray:
     return g
 
 
-def stbn_scalar(size: int, frames: int, seed: int = 0, sigma_space: float = 1.9,
-                sigma_time: float = 1.9, density: float = 0.1) -> np.ndarray:
+def stbn_scalar(
+    size: int, frames: int, seed: int = 0, sigma_space: float = 1.9, sigma_time: float = 1.9, density: float = 0.1
+) -> np.ndarray:
     """A (frames, size, size) scalar spatiotemporal blue-noise mask after Wolfe et al.,
     "Spatiotemporal Blue Noise Masks" (EGSR 2022): void-and-cluster over the whole volume with
     the energy of a pixel split into a spatial part (a 2-D Gaussian over the pixels of its own
@@ -504,7 +502,7 @@ def stbn_scalar(size: int, frames: int, seed: int = 0, sigma_space: float = 1.9,
     if not 0.0 < density < 0.5:
         raise InvalidArgumentError(f"density must be in (0, 0.5), got {density}")
     gs = _normalised_gaussian_1d(n, sigma_space)
-    space = np.tile(np.outer(gs, gs), (2, 2))                  # rolled by slicing
+    space = np.tile(np.outer(gs, gs), (2, 2))  # rolled by slicing
     time = np.tile(_normalised_gaussian_1d(t, sigma_time), 2)
     total = t * n * n
     e = np.zeros((t, n, n))
@@ -514,9 +512,9 @@ def stbn_scalar(size: int, frames: int, seed: int = 0, sigma_space: float = 1.9,
         k, rem = divmod(int(flat), n * n)
         i, j = divmod(rem, n)
         sign = 1.0 if on else -1.0
-        e[k] += sign * space[n - i:2 * n - i, n - j:2 * n - j]
-        col = time[t - k:2 * t - k].copy()                # g((k' − k) mod frames)
-        col[k] = 0.0                                       # the pixel itself: counted in space
+        e[k] += sign * space[n - i : 2 * n - i, n - j : 2 * n - j]
+        col = time[t - k : 2 * t - k].copy()  # g((k' − k) mod frames)
+        col[k] = 0.0  # the pixel itself: counted in space
         e[:, i, j] += sign * col
         b.flat[flat] = on
 

@@ -25,8 +25,7 @@ from ._model import DEFAULT_THREADS
 from .errors import DpcError, InvalidArgumentError, ModelNotFoundError
 
 _POINT_EXTS = pointio.EXTENSIONS
-_MODEL_HELP = ("a bundled model name (see 'dpc list'; the folders of $DPC_MODEL_PATH are searched "
-               "first) or a .onnx file")
+_MODEL_HELP = "a bundled model name (see 'dpc list'; the folders of $DPC_MODEL_PATH are searched first) or a .onnx file"
 _PLOT_FORMATS = ("png", "pdf", "svg")
 # = dpc.analysis.DISCREPANCY_METHODS (not imported here: scipy makes start-up slow)
 _DISC_DEFAULT = "CD,WD,MD,L2-star,GL2,UL2"
@@ -38,18 +37,21 @@ _SEED = click.IntRange(min=0, max=(1 << 64) - 1)
 # ---------------------------------------------------------------- helpers
 def _progress(iterable, desc: str, total: int | None = None):
     from tqdm import tqdm
-    return tqdm(iterable, desc=desc, total=total, delay=1.0, leave=False, dynamic_ncols=True,
-                file=sys.stderr)
+
+    return tqdm(iterable, desc=desc, total=total, delay=1.0, leave=False, dynamic_ncols=True, file=sys.stderr)
 
 
-def _load_model(name: str, threads: int = DEFAULT_THREADS, isa: str = "auto", backend: str = "auto",
-                input: str = "auto"):  # noqa: A002
+def _load_model(
+    name: str, threads: int = DEFAULT_THREADS, isa: str = "auto", backend: str = "auto", input: str = "auto"
+):  # noqa: A002
     import dpc
+
     return dpc.load(name, threads=threads, isa=isa, backend=backend, input=input)
 
 
 def _is_model(spec: str) -> bool:
     import dpc
+
     if Path(spec).suffix.lower() == ".onnx":
         return True  # a model path; a missing file is reported by dpc.load
     try:
@@ -61,23 +63,36 @@ def _is_model(spec: str) -> bool:
 
 def _max_output_option(f):
     return click.option(
-        "--max-output", "max_output", default=None, metavar="SIZE",
+        "--max-output",
+        "max_output",
+        default=None,
+        metavar="SIZE",
         help="Largest output one model call may allocate (sets x points x dims floats), e.g. "
-             "16G; default 4G or $DPC_MAX_OUTPUT_BYTES. Bigger requests stop with an error "
-             "before allocating.")(f)
+        "16G; default 4G or $DPC_MAX_OUTPUT_BYTES. Bigger requests stop with an error "
+        "before allocating.",
+    )(f)
 
 
 def _max_bytes(text: str | None) -> float | None:
     if text is None:
         return None
     from ._model import parse_size
+
     return float(parse_size(text))
 
 
-def _generate(spec: str, n_points: int | None, dims: int | None, count: int, seed: int,
-              threads: int = DEFAULT_THREADS, isa: str = "auto", backend: str = "auto",
-              input: str = "auto", max_bytes: float | None = None,  # noqa: A002
-              ) -> tuple[np.ndarray, str, object]:
+def _generate(
+    spec: str,
+    n_points: int | None,
+    dims: int | None,
+    count: int,
+    seed: int,
+    threads: int = DEFAULT_THREADS,
+    isa: str = "auto",
+    backend: str = "auto",
+    input: str = "auto",
+    max_bytes: float | None = None,  # noqa: A002
+) -> tuple[np.ndarray, str, object]:
     """Sets from a dpc model (bundled name or .onnx path) or a baseline name, with a progress
     bar (set c always comes from seed + c, modulo 2^64); returns (sets, name, the loaded model
     or None for a baseline). ``input`` applies to models only. Model sets stay float32."""
@@ -94,20 +109,28 @@ def _generate(spec: str, n_points: int | None, dims: int | None, count: int, see
     if not _is_model(spec):
         if Path(spec).suffix.lower() in _POINT_EXTS:
             raise click.ClickException(f"no such file: {spec}")
-        raise click.ClickException(
-            f"{spec!r} is neither a file, a baseline nor a model (see 'dpc list')")
+        raise click.ClickException(f"{spec!r} is neither a file, a baseline nor a model (see 'dpc list')")
     model = _load_model(spec, threads, isa, backend, input)
     if dims is not None and dims != model.dims:
         raise InvalidArgumentError(f"model {model.name} makes {model.dims}-D points, not {dims}-D")
     from tqdm import tqdm
+
     # One call (the size limit applies to the whole request, before anything is allocated);
     # libdpc reports layers of sets, shown once the run has taken a second.
-    with tqdm(total=count * model.layers, desc=model.name, unit="layer", delay=1.0, leave=False,
-              dynamic_ncols=True, file=sys.stderr) as bar:
+    with tqdm(
+        total=count * model.layers,
+        desc=model.name,
+        unit="layer",
+        delay=1.0,
+        leave=False,
+        dynamic_ncols=True,
+        file=sys.stderr,
+    ) as bar:
+
         def progress(done, total):
             bar.update(done - bar.n)
-        sets = model.generate_batch(count, seed=seed, n_points=n_points, max_bytes=max_bytes,
-                                    progress=progress)
+
+        sets = model.generate_batch(count, seed=seed, n_points=n_points, max_bytes=max_bytes, progress=progress)
     return sets, model.name, model
 
 
@@ -118,31 +141,43 @@ def _ran_on(model) -> str:
 
 
 _stratified_option = click.option(
-    "--stratified/--uniform", default=None,
+    "--stratified/--uniform",
+    default=None,
     help="Input points of models: stratified (one per grid cell, docs/model-format.md §5; "
-         "blue-noise models stay blue at the largest scales for large -n) or uniform. Default: "
-         "what each model was trained on (its metadata dpc.input, uniform without it; of the "
-         "bundled models bnot-2d-stratified says stratified).")
+    "blue-noise models stay blue at the largest scales for large -n) or uniform. Default: "
+    "what each model was trained on (its metadata dpc.input, uniform without it; of the "
+    "bundled models bnot-2d-stratified says stratified).",
+)
 
 
 def _input_kind(stratified: bool | None) -> str:
     return "auto" if stratified is None else ("stratified" if stratified else "uniform")
 
 
-def _read_inputs(specs, n_points, dims, count, seed, bin_dtype, stratified: bool | None = None,
-                 max_bytes: float | None = None,
-                 threads: int = DEFAULT_THREADS) -> list[tuple[str, np.ndarray, object]]:
+def _read_inputs(
+    specs,
+    n_points,
+    dims,
+    count,
+    seed,
+    bin_dtype,
+    stratified: bool | None = None,
+    max_bytes: float | None = None,
+    threads: int = DEFAULT_THREADS,
+) -> list[tuple[str, np.ndarray, object]]:
     """Each input: a point file, or a model (bundled name or .onnx file) or baseline to generate
     from (a model from stratified input points is labelled "NAME (stratified)"). Returns
     (label, sets, the model or None)."""
     out = []
     for spec in specs:
         if Path(spec).is_file() and Path(spec).suffix.lower() != ".onnx":
-            out.append((Path(spec).stem, pointio.read_points(spec, dims=dims, bin_dtype=bin_dtype,
-                                                             progress_bar=True), None))
+            out.append(
+                (Path(spec).stem, pointio.read_points(spec, dims=dims, bin_dtype=bin_dtype, progress_bar=True), None)
+            )
         else:
-            sets, name, model = _generate(spec, n_points, dims, count, seed, threads,
-                                          input=_input_kind(stratified), max_bytes=max_bytes)
+            sets, name, model = _generate(
+                spec, n_points, dims, count, seed, threads, input=_input_kind(stratified), max_bytes=max_bytes
+            )
             label = name + (" (stratified)" if model and model.input == "stratified" else "")
             out.append((label, sets.astype(np.float64), model))
     return out
@@ -162,8 +197,7 @@ def _parse_list(text: str | None, what: str, cast=str) -> list | None:
 def _dump_json(doc, path: Path) -> None:
     text = json.dumps(doc, indent=2, allow_nan=False)
     # Keep arrays of numbers on one line: readable metrics, small files.
-    text = re.sub(r"\[\s+([-+0-9.eE,\s]|null)+?\s*\]",
-                  lambda mt: "[" + " ".join(mt.group(0)[1:-1].split()) + "]", text)
+    text = re.sub(r"\[\s+([-+0-9.eE,\s]|null)+?\s*\]", lambda mt: "[" + " ".join(mt.group(0)[1:-1].split()) + "]", text)
     _atomic.write_text(path, text + "\n")
 
 
@@ -190,39 +224,101 @@ def _table(rows: list[dict], cols: list[str]) -> str:
 
 
 _threads_option = click.option(
-    "-t", "--threads", type=click.IntRange(min=0), default=DEFAULT_THREADS, show_default=True,
+    "-t",
+    "--threads",
+    type=click.IntRange(min=0),
+    default=DEFAULT_THREADS,
+    show_default=True,
     help="Worker threads for models: 1 runs on the calling thread (libdpc's default), 0 = one per "
-         "CPU. The points do not depend on it.")
+    "CPU. The points do not depend on it.",
+)
 
 
 def _analysis_options(f):
     opts = [
-        click.option("--nu-max", type=click.FloatRange(min=0.1), default=4.0, show_default=True,
-                     help="Largest normalised frequency analysed."),
-        click.option("--max-size", type=click.IntRange(min=17), default=513, show_default=True,
-                     help="Largest 2-D spectrum grid per axis (beyond it: frequency stride)."),
-        click.option("--subspace", default="0,1", show_default=True,
-                     help="Two axes for the 2-D spectrum of n-D points."),
-        click.option("--discrepancy", "disc", default=_DISC_DEFAULT,
-                     show_default=True, help="Discrepancies to compute ('none' for none)."),
-        click.option("--disc-budget", type=click.FloatRange(min=0), default=2.0 ** 26,
-                     show_default=True,
-                     help="Pair terms allowed for all discrepancies (O(m^2) per set)."),
-        click.option("-n", "--points", "n_points", type=click.IntRange(min=1), default=None,
-                     help="Points per set, for inputs generated from a model or baseline."),
-        click.option("-d", "--dims", type=click.IntRange(min=1), default=None,
-                     help="Dimension of generated inputs; hint for UTK .bin files."),
-        click.option("-c", "--sets", "count", type=click.IntRange(min=1), default=16,
-                     show_default=True, help="Sets for generated inputs."),
-        click.option("-s", "--seed", type=_SEED, default=0, show_default=True,
-                     help="Seed of generated inputs, 0 .. 2^64-1 (set c from seed + c mod 2^64)."),
-        click.option("--bin-dtype", type=click.Choice(["float64", "float32"]), default=None,
-                     help="Float type of UTK .bin inputs (default: detect)."),
-        click.option("--plot-format", "plot_formats", default="png,pdf", show_default=True,
-                     help="Formats of the plots, comma-separated: png, pdf, svg."),
-        click.option("--max-output", "max_output", default=None, metavar="SIZE",
-                     help="Largest output one model call may allocate, e.g. 16G (default 4G or "
-                          "$DPC_MAX_OUTPUT_BYTES)."),
+        click.option(
+            "--nu-max",
+            type=click.FloatRange(min=0.1),
+            default=4.0,
+            show_default=True,
+            help="Largest normalised frequency analysed.",
+        ),
+        click.option(
+            "--max-size",
+            type=click.IntRange(min=17),
+            default=513,
+            show_default=True,
+            help="Largest 2-D spectrum grid per axis (beyond it: frequency stride).",
+        ),
+        click.option(
+            "--subspace", default="0,1", show_default=True, help="Two axes for the 2-D spectrum of n-D points."
+        ),
+        click.option(
+            "--discrepancy",
+            "disc",
+            default=_DISC_DEFAULT,
+            show_default=True,
+            help="Discrepancies to compute ('none' for none).",
+        ),
+        click.option(
+            "--disc-budget",
+            type=click.FloatRange(min=0),
+            default=2.0**26,
+            show_default=True,
+            help="Pair terms allowed for all discrepancies (O(m^2) per set).",
+        ),
+        click.option(
+            "-n",
+            "--points",
+            "n_points",
+            type=click.IntRange(min=1),
+            default=None,
+            help="Points per set, for inputs generated from a model or baseline.",
+        ),
+        click.option(
+            "-d",
+            "--dims",
+            type=click.IntRange(min=1),
+            default=None,
+            help="Dimension of generated inputs; hint for UTK .bin files.",
+        ),
+        click.option(
+            "-c",
+            "--sets",
+            "count",
+            type=click.IntRange(min=1),
+            default=16,
+            show_default=True,
+            help="Sets for generated inputs.",
+        ),
+        click.option(
+            "-s",
+            "--seed",
+            type=_SEED,
+            default=0,
+            show_default=True,
+            help="Seed of generated inputs, 0 .. 2^64-1 (set c from seed + c mod 2^64).",
+        ),
+        click.option(
+            "--bin-dtype",
+            type=click.Choice(["float64", "float32"]),
+            default=None,
+            help="Float type of UTK .bin inputs (default: detect).",
+        ),
+        click.option(
+            "--plot-format",
+            "plot_formats",
+            default="png,pdf",
+            show_default=True,
+            help="Formats of the plots, comma-separated: png, pdf, svg.",
+        ),
+        click.option(
+            "--max-output",
+            "max_output",
+            default=None,
+            metavar="SIZE",
+            help="Largest output one model call may allocate, e.g. 16G (default 4G or $DPC_MAX_OUTPUT_BYTES).",
+        ),
         _threads_option,
     ]
     for o in reversed(opts):
@@ -232,11 +328,20 @@ def _analysis_options(f):
 
 def _run_analysis(points, label, nu_max, max_size, subspace, disc, disc_budget, seed):
     from .analysis import analyze
+
     sub = _parse_list(subspace, "axes", int)
     methods = _parse_list(disc, "discrepancy names")
-    return analyze(points, label=label, nu_max=nu_max, max_size=max_size,
-                   dims=tuple(sub) if sub else (0, 1), discrepancies=methods,
-                   discrepancy_budget=disc_budget, seed=seed, progress_bar=True)
+    return analyze(
+        points,
+        label=label,
+        nu_max=nu_max,
+        max_size=max_size,
+        dims=tuple(sub) if sub else (0, 1),
+        discrepancies=methods,
+        discrepancy_budget=disc_budget,
+        seed=seed,
+        progress_bar=True,
+    )
 
 
 def _output_dir(path: str) -> Path:
@@ -252,8 +357,7 @@ def _plot_formats(text: str) -> list[str]:
     fmts = _parse_list(text, "plot formats") or []
     bad = [f for f in fmts if f.lower() not in _PLOT_FORMATS]
     if bad or not fmts:
-        raise click.BadParameter(f"{text!r}: choose from {', '.join(_PLOT_FORMATS)}",
-                                 param_hint="--plot-format")
+        raise click.BadParameter(f"{text!r}: choose from {', '.join(_PLOT_FORMATS)}", param_hint="--plot-format")
     return list(dict.fromkeys(f.lower() for f in fmts))
 
 
@@ -271,9 +375,11 @@ def list_cmd():
     import shutil
 
     import dpc
+
     width = max(60, min(shutil.get_terminal_size((100, 24)).columns, 120))
-    click.echo("models:" + (f" (DPC_MODEL_PATH={os.environ['DPC_MODEL_PATH']})"
-                            if os.environ.get("DPC_MODEL_PATH") else ""))
+    click.echo(
+        "models:" + (f" (DPC_MODEL_PATH={os.environ['DPC_MODEL_PATH']})" if os.environ.get("DPC_MODEL_PATH") else "")
+    )
     names = dpc.available_models()
     if not names:
         click.echo("  (none bundled; set DPC_MODEL_PATH or pass a .onnx file)")
@@ -283,13 +389,17 @@ def list_cmd():
         except DpcError as e:
             click.echo(f"  {name:22s} (cannot load: {_one_line(e)})")
             continue
-        click.echo(f"  {name:22s} {m.dims}-D, trained m={m.n_points}, {m.layers} layers, "
-                   f"{m.input} input" + (f", grid {'x'.join(map(str, m.grid_shape))}"
-                                         if m.grid_shape else ""))
+        click.echo(
+            f"  {name:22s} {m.dims}-D, trained m={m.n_points}, {m.layers} layers, "
+            f"{m.input} input" + (f", grid {'x'.join(map(str, m.grid_shape))}" if m.grid_shape else "")
+        )
         desc = " ".join(m.metadata.get("dpc.description", "").split())
         if desc:
-            click.echo(textwrap.fill(desc, width=width, initial_indent=" " * 4,
-                                     subsequent_indent=" " * 4, break_on_hyphens=False))
+            click.echo(
+                textwrap.fill(
+                    desc, width=width, initial_indent=" " * 4, subsequent_indent=" " * 4, break_on_hyphens=False
+                )
+            )
     click.echo("baselines:")
     for name, b in baselines.BASELINES.items():
         extra = ""
@@ -299,45 +409,86 @@ def list_cmd():
 
 
 @cli.command("generate")
-@click.option("-m", "--model", required=True,
-              help="Model: " + _MODEL_HELP + "; or a baseline name (see 'dpc list').")
-@click.option("-n", "--points", "n_points", type=click.IntRange(min=1), default=None,
-              help="Points per set (default: the model's trained count).")
-@click.option("-d", "--dims", type=click.IntRange(min=1), default=None,
-              help="Dimension (baselines; default 2; must match a model).")
-@click.option("-s", "--seed", type=_SEED, default=0, show_default=True,
-              help="Seed, 0 .. 2^64-1; set c comes from seed + c (mod 2^64).")
-@click.option("-c", "--sets", "count", type=click.IntRange(min=1), default=1, show_default=True,
-              help="Number of sets.")
-@click.option("-o", "--output", type=click.Path(dir_okay=False, writable=True), default=None,
-              help="Output file: " + pointio.describe_extensions() + "; default: text on stdout. "
-                   "Written atomically (an existing file stays as it was if anything fails).")
-@click.option("-f", "--format", "fmt", type=_FORMAT_CHOICE, default=None,
-              help="File format (default: from the extension): npy; dat (UTK's text format; "
-                   "txt, text: the same); csv (commas); bin (UTK's binary format).")
-@click.option("--bin-dtype", type=click.Choice(["float64", "float32"]), default="float64",
-              show_default=True, help="Float type of UTK .bin output.")
+@click.option("-m", "--model", required=True, help="Model: " + _MODEL_HELP + "; or a baseline name (see 'dpc list').")
+@click.option(
+    "-n",
+    "--points",
+    "n_points",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Points per set (default: the model's trained count).",
+)
+@click.option(
+    "-d",
+    "--dims",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Dimension (baselines; default 2; must match a model).",
+)
+@click.option(
+    "-s",
+    "--seed",
+    type=_SEED,
+    default=0,
+    show_default=True,
+    help="Seed, 0 .. 2^64-1; set c comes from seed + c (mod 2^64).",
+)
+@click.option("-c", "--sets", "count", type=click.IntRange(min=1), default=1, show_default=True, help="Number of sets.")
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(dir_okay=False, writable=True),
+    default=None,
+    help="Output file: " + pointio.describe_extensions() + "; default: text on stdout. "
+    "Written atomically (an existing file stays as it was if anything fails).",
+)
+@click.option(
+    "-f",
+    "--format",
+    "fmt",
+    type=_FORMAT_CHOICE,
+    default=None,
+    help="File format (default: from the extension): npy; dat (UTK's text format; "
+    "txt, text: the same); csv (commas); bin (UTK's binary format).",
+)
+@click.option(
+    "--bin-dtype",
+    type=click.Choice(["float64", "float32"]),
+    default="float64",
+    show_default=True,
+    help="Float type of UTK .bin output.",
+)
 @_threads_option
-@click.option("--isa", type=click.Choice(["auto", "scalar", "avx2", "avx512"]), default="auto",
-              show_default=True,
-              help="CPU code path for models. Every path gives the same bits (a canonical "
-                   "order of float operations); only speed differs.")
-@click.option("--backend", type=click.Choice(["auto", "cpu", "vulkan"]), default="auto",
-              show_default=True,
-              help="What runs a model: auto (a Vulkan GPU if there is one, else the CPU), cpu, "
-                   "or vulkan (an error where no Vulkan device is usable).")
+@click.option(
+    "--isa",
+    type=click.Choice(["auto", "scalar", "avx2", "avx512"]),
+    default="auto",
+    show_default=True,
+    help="CPU code path for models. Every path gives the same bits (a canonical "
+    "order of float operations); only speed differs.",
+)
+@click.option(
+    "--backend",
+    type=click.Choice(["auto", "cpu", "vulkan"]),
+    default="auto",
+    show_default=True,
+    help="What runs a model: auto (a Vulkan GPU if there is one, else the CPU), cpu, "
+    "or vulkan (an error where no Vulkan device is usable).",
+)
 @_stratified_option
 @_max_output_option
-def generate_cmd(model, n_points, dims, seed, count, output, fmt, bin_dtype, threads, isa, backend,
-                 stratified, max_output):
+def generate_cmd(
+    model, n_points, dims, seed, count, output, fmt, bin_dtype, threads, isa, backend, stratified, max_output
+):
     """Generate point sets from a model or a baseline. A model's sets are float32 (kept so in
     .npy and float32 .bin files; text has 17 significant digits)."""
     if output is not None:
         pointio.resolve_format(output, fmt)  # fail on a bad name before the work
     if stratified is not None and model in baselines.BASELINES:
         raise click.UsageError("--stratified/--uniform apply to models, not to baselines")
-    sets, name, loaded = _generate(model, n_points, dims, count, seed, threads, isa, backend,
-                                   _input_kind(stratified), _max_bytes(max_output))
+    sets, name, loaded = _generate(
+        model, n_points, dims, count, seed, threads, isa, backend, _input_kind(stratified), _max_bytes(max_output)
+    )
     if output is None:
         kind = pointio.resolve_format("-.dat", fmt)
         if kind not in ("dat", "csv"):
@@ -349,27 +500,61 @@ def generate_cmd(model, n_points, dims, seed, count, output, fmt, bin_dtype, thr
             click.echo("\n".join(sep.join(f"{float(v):.17g}" for v in row) for row in sets[s]))
         return
     pointio.write_points(output, sets, fmt, bin_dtype=bin_dtype, progress_bar=True)
-    click.echo(f"wrote {sets.shape[0]} set(s) of {sets.shape[1]} {sets.shape[2]}-D points "
-               f"from {name}{f' ({_ran_on(loaded)})' if loaded else ''} to {output}", err=True)
+    click.echo(
+        f"wrote {sets.shape[0]} set(s) of {sets.shape[1]} {sets.shape[2]}-D points "
+        f"from {name}{f' ({_ran_on(loaded)})' if loaded else ''} to {output}",
+        err=True,
+    )
 
 
 @cli.command("analyze")
-@click.option("-i", "--input", "inputs", multiple=True,
-              help="Point file(s) (" + pointio.describe_extensions() + "), or a model (" + _MODEL_HELP
-                   + ") or baseline to generate from; more may follow as arguments. All inputs "
-                   "form one batch of sets.")
+@click.option(
+    "-i",
+    "--input",
+    "inputs",
+    multiple=True,
+    help="Point file(s) ("
+    + pointio.describe_extensions()
+    + "), or a model ("
+    + _MODEL_HELP
+    + ") or baseline to generate from; more may follow as arguments. All inputs "
+    "form one batch of sets.",
+)
 @click.argument("more", nargs=-1)
-@click.option("-o", "--output", required=True, type=click.Path(file_okay=False),
-              help="Folder for metrics.json and the plots (PNG and PDF by default, see "
-                   "--plot-format); a model's design target is drawn dashed where its metadata "
-                   "has one.")
+@click.option(
+    "-o",
+    "--output",
+    required=True,
+    type=click.Path(file_okay=False),
+    help="Folder for metrics.json and the plots (PNG and PDF by default, see "
+    "--plot-format); a model's design target is drawn dashed where its metadata "
+    "has one.",
+)
 @click.option("--label", default=None, help="Name used in titles (default: first input).")
 @click.option("--no-plots", is_flag=True, help="Only write metrics.json.")
 @_analysis_options
 @_stratified_option
-def analyze_cmd(inputs, more, output, label, no_plots, nu_max, max_size, subspace, disc,
-                disc_budget, n_points, dims, count, seed, bin_dtype, plot_formats, max_output,
-                threads, stratified):
+def analyze_cmd(
+    inputs,
+    more,
+    output,
+    label,
+    no_plots,
+    nu_max,
+    max_size,
+    subspace,
+    disc,
+    disc_budget,
+    n_points,
+    dims,
+    count,
+    seed,
+    bin_dtype,
+    plot_formats,
+    max_output,
+    threads,
+    stratified,
+):
     """Measure point sets: spectra, anisotropy, PCF, minimum distance, discrepancy."""
     specs = list(inputs) + list(more)
     if not specs:
@@ -377,14 +562,16 @@ def analyze_cmd(inputs, more, output, label, no_plots, nu_max, max_size, subspac
     formats = _plot_formats(plot_formats)
     with _atomic.transaction():  # all outputs, or (on any failure) none and no new folder
         out = _output_dir(output)
-        loaded = _read_inputs(specs, n_points, dims, count, seed, bin_dtype, stratified,
-                              _max_bytes(max_output), threads)
+        loaded = _read_inputs(
+            specs, n_points, dims, count, seed, bin_dtype, stratified, _max_bytes(max_output), threads
+        )
         shapes = {a.shape[1:] for _, a, _ in loaded}
         if len(shapes) > 1:
             raise click.ClickException(
                 "inputs differ in points or dimension: "
                 + ", ".join(f"{n}: {a.shape[1]}x{a.shape[2]}" for n, a, _ in loaded)
-                + " (use 'dpc compare' for different inputs)")
+                + " (use 'dpc compare' for different inputs)"
+            )
         sets = np.concatenate([a for _, a, _ in loaded])
         name = label or loaded[0][0]
         res = _run_analysis(sets, name, nu_max, max_size, subspace, disc, disc_budget, seed)
@@ -400,8 +587,7 @@ def analyze_cmd(inputs, more, output, label, no_plots, nu_max, max_size, subspac
             written += _analysis_plots(res, sets, out, nu_max, formats, targets)
     s = res.summary()
     click.echo(f"{name}: {res.n_sets} sets of {res.n_points} {res.dims}-D points")
-    for key in ("E_low<0.5", "E_low<0.75", "peak", "peak_nu", "delta_min",
-                *res.discrepancy.keys()):
+    for key in ("E_low<0.5", "E_low<0.75", "peak", "peak_nu", "delta_min", *res.discrepancy.keys()):
         if key in s and s[key] is not None:
             click.echo(f"  {key:12s} {_fmt(s[key])}")
     for note in res.notes:
@@ -412,6 +598,7 @@ def analyze_cmd(inputs, more, output, label, no_plots, nu_max, max_size, subspac
 def _targets(models) -> list:
     """The design targets of the models (metadata; dpc.analysis.targets), one per distinct one."""
     from .analysis.targets import model_target
+
     out, seen = [], set()
     for m in models:
         t = model_target(m)
@@ -424,13 +611,12 @@ def _targets(models) -> list:
 def _refs(targets, dims: int, sub: tuple) -> list:
     """References for a radial plot of a ``dims``-D spectrum: 2-D targets belong to the
     subspace (0, 1) the models were trained on; n-D ones to the n-D radial spectrum."""
-    return [t.as_reference() for t in targets
-            if t.dims == dims and (dims != 2 or tuple(sub) in ((0, 1), (1, 0)))]
+    return [t.as_reference() for t in targets if t.dims == dims and (dims != 2 or tuple(sub) in ((0, 1), (1, 0)))]
 
 
-def _analysis_plots(res, sets, out: Path, nu_max: float, formats=("png",),
-                    targets=()) -> list[str]:
+def _analysis_plots(res, sets, out: Path, nu_max: float, formats=("png",), targets=()) -> list[str]:
     from .analysis import plots
+
     title = f"{res.label}: m={res.n_points}, {res.n_sets} sets"
     sub = tuple(res.spectrum.dims) if res.spectrum is not None else (0,)
     names: list[str] = []
@@ -439,42 +625,95 @@ def _analysis_plots(res, sets, out: Path, nu_max: float, formats=("png",),
         fn(out / name, *args, formats=formats, **kw)
         names.extend(plots.written(out / name, formats))
 
-    save(plots.save_points, "points.png", sets[0], dims=sub,
-         title=f"{res.label}: set 0 of {res.n_sets}, m={res.n_points}")
+    save(
+        plots.save_points,
+        "points.png",
+        sets[0],
+        dims=sub,
+        title=f"{res.label}: set 0 of {res.n_sets}, m={res.n_points}",
+    )
     if res.spectrum is not None:
         save(plots.save_spectrum2d, "spectrum.png", res.spectrum, title=title)
     curves = [(f"{res.label} (axes {sub[0]},{sub[1]})" if res.dims > 2 else res.label, res.radial)]
-    save(plots.save_radial, "radial.png", curves, title=f"radial mean and anisotropy, {title}",
-         nu_max=nu_max, reference=_refs(targets, len(sub) if res.spectrum is not None else 1, sub)
-         or None)
+    save(
+        plots.save_radial,
+        "radial.png",
+        curves,
+        title=f"radial mean and anisotropy, {title}",
+        nu_max=nu_max,
+        reference=_refs(targets, len(sub) if res.spectrum is not None else 1, sub) or None,
+    )
     if res.radial_nd is not None:
-        save(plots.save_radial, "radial_nd.png", [(f"{res.label} ({res.dims}-D, MC)", res.radial_nd)],
-             title=f"{res.dims}-D radial mean (Monte Carlo), {title}", nu_max=nu_max,
-             reference=_refs(targets, res.dims, sub) or None)
+        save(
+            plots.save_radial,
+            "radial_nd.png",
+            [(f"{res.label} ({res.dims}-D, MC)", res.radial_nd)],
+            title=f"{res.dims}-D radial mean (Monte Carlo), {title}",
+            nu_max=nu_max,
+            reference=_refs(targets, res.dims, sub) or None,
+        )
     if res.pcf is not None:
         save(plots.save_pcf, "pcf.png", [(res.label, res.pcf)], title=f"PCF, {title}")
     if res.projections:
-        save(plots.save_projections, "projections.png",
-             [(f"axis {p.dim}", p) for p in res.projections],
-             title=f"1-D projections, {title}", nu_max=nu_max)
+        save(
+            plots.save_projections,
+            "projections.png",
+            [(f"axis {p.dim}", p) for p in res.projections],
+            title=f"1-D projections, {title}",
+            nu_max=nu_max,
+        )
     return names
 
 
 @cli.command("compare")
-@click.option("-i", "--input", "inputs", multiple=True,
-              help="A point file (" + pointio.describe_extensions() + "), or a model (" + _MODEL_HELP
-                   + ") or baseline generated with -n/-c/-s; repeat, or list more as arguments.")
+@click.option(
+    "-i",
+    "--input",
+    "inputs",
+    multiple=True,
+    help="A point file ("
+    + pointio.describe_extensions()
+    + "), or a model ("
+    + _MODEL_HELP
+    + ") or baseline generated with -n/-c/-s; repeat, or list more as arguments.",
+)
 @click.argument("more", nargs=-1)
-@click.option("-o", "--output", required=True, type=click.Path(file_okay=False),
-              help="Folder for compare.json, compare.md and the plots (PNG and PDF by default); "
-                   "the models' design targets are drawn dashed where their metadata has them.")
-@click.option("--integration/--no-integration", default=True, show_default=True,
-              help="Relative variance of MC integration over each input's sets.")
+@click.option(
+    "-o",
+    "--output",
+    required=True,
+    type=click.Path(file_okay=False),
+    help="Folder for compare.json, compare.md and the plots (PNG and PDF by default); "
+    "the models' design targets are drawn dashed where their metadata has them.",
+)
+@click.option(
+    "--integration/--no-integration",
+    default=True,
+    show_default=True,
+    help="Relative variance of MC integration over each input's sets.",
+)
 @_analysis_options
 @_stratified_option
-def compare_cmd(inputs, more, output, integration, nu_max, max_size, subspace, disc,
-                disc_budget, n_points, dims, count, seed, bin_dtype, plot_formats, max_output,
-                threads, stratified):
+def compare_cmd(
+    inputs,
+    more,
+    output,
+    integration,
+    nu_max,
+    max_size,
+    subspace,
+    disc,
+    disc_budget,
+    n_points,
+    dims,
+    count,
+    seed,
+    bin_dtype,
+    plot_formats,
+    max_output,
+    threads,
+    stratified,
+):
     """Compare several inputs (files, models, baselines) in one table and plots."""
     specs = list(inputs) + list(more)
     if len(specs) < 1:
@@ -482,8 +721,9 @@ def compare_cmd(inputs, more, output, integration, nu_max, max_size, subspace, d
     formats = _plot_formats(plot_formats)
     with _atomic.transaction():  # all outputs, or (on any failure) none and no new folder
         out = _output_dir(output)
-        loaded = _read_inputs(specs, n_points, dims, count, seed, bin_dtype, stratified,
-                              _max_bytes(max_output), threads)
+        loaded = _read_inputs(
+            specs, n_points, dims, count, seed, bin_dtype, stratified, _max_bytes(max_output), threads
+        )
         labels, seen = [], {}
         for name, _, _ in loaded:  # unique labels
             seen[name] = seen.get(name, 0) + 1
@@ -501,9 +741,13 @@ def compare_cmd(inputs, more, output, integration, nu_max, max_size, subspace, d
         click.echo(table)
         _atomic.write_text(out / "compare.md", table + "\n")
         targets = _targets(list(dict.fromkeys(m for _, _, m in loaded if m is not None)))
-        doc = {"dpc_compare": 1, "inputs": specs, "rows": rows,
-               "analyses": [r.to_json() for r, _ in results],
-               "targets": [{"label": t.label, "dims": t.dims} for t in targets]}
+        doc = {
+            "dpc_compare": 1,
+            "inputs": specs,
+            "rows": rows,
+            "analyses": [r.to_json() for r, _ in results],
+            "targets": [{"label": t.label, "dims": t.dims} for t in targets],
+        }
         _dump_json(doc, out / "compare.json")
         names = _compare_plots(results, out, nu_max, formats, targets)
     click.echo(f"wrote compare.md, compare.json, {', '.join(names)} to {out}")
@@ -511,6 +755,7 @@ def compare_cmd(inputs, more, output, integration, nu_max, max_size, subspace, d
 
 def _integration_row(sets: np.ndarray, res, seed: int) -> dict:
     from .analysis.integration import FAMILIES, integrands, relative_variance
+
     if sets.shape[0] < 2 or sets.shape[2] < 2:
         return {}
     d = tuple(res.spectrum.dims) if res.spectrum is not None else (0, 1)
@@ -523,14 +768,22 @@ def _integration_row(sets: np.ndarray, res, seed: int) -> dict:
 
 def _compare_plots(results, out: Path, nu_max: float, formats=("png",), targets=()) -> list[str]:
     from matplotlib.figure import Figure
+
     from .analysis import plots
+
     names: list[str] = []
     radial = [(r.label, r.radial) for r, _ in results if r.radial is not None]
     r0 = results[0][0]
     sub = tuple(r0.spectrum.dims) if r0.spectrum is not None else (0,)
-    plots.save_radial(out / "radial.png", radial, title="radial mean power", anisotropy=False,
-                      nu_max=nu_max, formats=formats,
-                      reference=_refs(targets, len(sub) if r0.spectrum is not None else 1, sub) or None)
+    plots.save_radial(
+        out / "radial.png",
+        radial,
+        title="radial mean power",
+        anisotropy=False,
+        nu_max=nu_max,
+        formats=formats,
+        reference=_refs(targets, len(sub) if r0.spectrum is not None else 1, sub) or None,
+    )
     names += plots.written(out / "radial.png", formats)
     pcfs = [(r.label, r.pcf) for r, _ in results if r.pcf is not None]
     if pcfs:
@@ -543,8 +796,7 @@ def _compare_plots(results, out: Path, nu_max: float, formats=("png",), targets=
         pts = sets[0]
         if pts.shape[1] >= 2:
             d = r.spectrum.dims
-            ax.scatter(pts[:, d[0]], pts[:, d[1]], s=float(np.clip(2000 / len(pts), 0.2, 6)),
-                       c="k", linewidths=0)
+            ax.scatter(pts[:, d[0]], pts[:, d[1]], s=float(np.clip(2000 / len(pts), 0.2, 6)), c="k", linewidths=0)
             ax.set_aspect("equal")
             ax.set_ylim(0, 1)
         else:
@@ -564,22 +816,46 @@ def _compare_plots(results, out: Path, nu_max: float, formats=("png",), targets=
 
 
 @cli.command("mask")
-@click.option("-m", "--mask", "name", default="mask-64", show_default=True,
-              help="Gridded mask model (bundled name or .onnx) or a baseline: void-and-cluster, "
-                   "stbn, white, bayer (see 'dpc mask --list').")
-@click.option("-n", "--size", type=click.IntRange(min=2), default=None,
-              help="Pixels per side (default: a model's trained grid; baselines need it).")
-@click.option("--frames", type=click.IntRange(min=1), default=None,
-              help="Frames of a spatiotemporal mask (default: the model's; stbn needs it).")
-@click.option("--channels", type=click.IntRange(min=1, max=4), default=None,
-              help="Values per pixel, for baselines (white, void-and-cluster).")
-@click.option("-s", "--seed", type=click.IntRange(min=0), default=0, show_default=True,
-              help="Seed of the mask realisation.")
-@click.option("-o", "--output", type=click.Path(dir_okay=False, writable=True), default=None,
-              help="Output: .npy (float64), .png (8/16-bit codes; R, G for 2 values) or .exr "
-                   "(float32). Spatiotemporal masks: one .npy, or stem_000.png ... per frame.")
-@click.option("--bits", type=click.Choice(["8", "16"]), default="16", show_default=True,
-              help="PNG bit depth.")
+@click.option(
+    "-m",
+    "--mask",
+    "name",
+    default="mask-64",
+    show_default=True,
+    help="Gridded mask model (bundled name or .onnx) or a baseline: void-and-cluster, "
+    "stbn, white, bayer (see 'dpc mask --list').",
+)
+@click.option(
+    "-n",
+    "--size",
+    type=click.IntRange(min=2),
+    default=None,
+    help="Pixels per side (default: a model's trained grid; baselines need it).",
+)
+@click.option(
+    "--frames",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Frames of a spatiotemporal mask (default: the model's; stbn needs it).",
+)
+@click.option(
+    "--channels",
+    type=click.IntRange(min=1, max=4),
+    default=None,
+    help="Values per pixel, for baselines (white, void-and-cluster).",
+)
+@click.option(
+    "-s", "--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seed of the mask realisation."
+)
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(dir_okay=False, writable=True),
+    default=None,
+    help="Output: .npy (float64), .png (8/16-bit codes; R, G for 2 values) or .exr "
+    "(float32). Spatiotemporal masks: one .npy, or stem_000.png ... per frame.",
+)
+@click.option("--bits", type=click.Choice(["8", "16"]), default="16", show_default=True, help="PNG bit depth.")
 @click.option("--list", "list_", is_flag=True, help="List the mask sources and exit.")
 def mask_cmd(name, size, frames, channels, seed, output, bits, list_):
     """Write a blue-noise threshold mask (scalar, vector or spatiotemporal) and print its
@@ -596,47 +872,75 @@ def mask_cmd(name, size, frames, channels, seed, output, bits, list_):
     if Path(output).suffix.lower() not in M.MASK_EXTENSIONS:
         raise click.UsageError("-o/--output must end in .npy, .png or .exr")
     arr = M.mask(name, size=size, seed=seed, frames=frames, channels=channels)
-    st = arr.ndim == 3 and (frames is not None or name == "stbn"
-                            or M.kind_of(arr) == "spatiotemporal")
+    st = arr.ndim == 3 and (frames is not None or name == "stbn" or M.kind_of(arr) == "spatiotemporal")
     kind = M.kind_of(arr, st)
     paths = M.write_mask(output, arr, bits=int(bits), spatiotemporal=st)
     if kind == "scalar":
         q = AM.scalar_quality(arr)
-        summary = (f"mask E_low {q['mask_elow']:.5f}, thresholded 1/8..7/8 mean "
-                   f"{q['levels_elow_mean']:.4f} worst {q['levels_elow_max']:.4f}")
+        summary = (
+            f"mask E_low {q['mask_elow']:.5f}, thresholded 1/8..7/8 mean "
+            f"{q['levels_elow_mean']:.4f} worst {q['levels_elow_max']:.4f}"
+        )
     elif kind == "vector":
         q = AM.vector_quality(arr)
-        summary = (f"per channel: mask E_low <= {q['mask_elow_max']:.5f}, thresholded mean <= "
-                   f"{q['levels_elow_mean_max']:.4f}; joint boxes mean {q['joint_elow_mean']:.4f}")
+        summary = (
+            f"per channel: mask E_low <= {q['mask_elow_max']:.5f}, thresholded mean <= "
+            f"{q['levels_elow_mean_max']:.4f}; joint boxes mean {q['joint_elow_mean']:.4f}"
+        )
     else:
         q = AM.spatiotemporal_quality(arr)
-        summary = (f"frames: mask E_low mean {q['mask_elow_mean']:.5f}, thresholded mean "
-                   f"{q['levels_elow_mean']:.4f}; temporal E_low {q['temporal_elow']:.3f}; "
-                   f"accumulated RMSE after {q['frames']} frames {q['accumulated_rmse'][-1]:.4f}")
+        summary = (
+            f"frames: mask E_low mean {q['mask_elow_mean']:.5f}, thresholded mean "
+            f"{q['levels_elow_mean']:.4f}; temporal E_low {q['temporal_elow']:.3f}; "
+            f"accumulated RMSE after {q['frames']} frames {q['accumulated_rmse'][-1]:.4f}"
+        )
     where = str(paths[0]) if len(paths) == 1 else f"{paths[0]} ... {paths[-1]} ({len(paths)} files)"
-    click.echo(f"wrote {where}: {kind} mask {'x'.join(str(d) for d in arr.shape)} from {name} "
-               f"(seed {seed}); {summary}", err=True)
+    click.echo(
+        f"wrote {where}: {kind} mask {'x'.join(str(d) for d in arr.shape)} from {name} (seed {seed}); {summary}",
+        err=True,
+    )
 
 
 @cli.command("dither")
 @click.argument("image", type=click.Path(exists=True, dir_okay=False))
-@click.option("-m", "--model", default="dither-32", show_default=True,
-              help="Mask: a gridded mask model (bundled name or .onnx) or a baseline "
-                   "(void-and-cluster, stbn, white, bayer; see 'dpc mask --list').")
-@click.option("-n", "--size", type=click.IntRange(min=2), default=None,
-              help="Mask pixels per side (default: the model's grid; baselines need it).")
-@click.option("--channel", type=click.IntRange(min=0), default=0, show_default=True,
-              help="Value channel of a vector mask.")
-@click.option("--frame", type=click.IntRange(min=0), default=0, show_default=True,
-              help="Frame of a spatiotemporal mask.")
-@click.option("-s", "--seed", type=click.IntRange(min=0), default=0, show_default=True,
-              help="Seed of the mask realisation.")
-@click.option("-o", "--output", required=True, type=click.Path(dir_okay=False, writable=True),
-              help="Dithered image (.png): black and white.")
-@click.option("--mask-output", type=click.Path(dir_okay=False, writable=True), default=None,
-              help="Also write the mask: .npy (values in (0, 1)) or .png (8-bit grey).")
-@click.option("--white-noise", is_flag=True,
-              help="Use a white-noise mask of the same size instead (for comparison).")
+@click.option(
+    "-m",
+    "--model",
+    default="dither-32",
+    show_default=True,
+    help="Mask: a gridded mask model (bundled name or .onnx) or a baseline "
+    "(void-and-cluster, stbn, white, bayer; see 'dpc mask --list').",
+)
+@click.option(
+    "-n",
+    "--size",
+    type=click.IntRange(min=2),
+    default=None,
+    help="Mask pixels per side (default: the model's grid; baselines need it).",
+)
+@click.option(
+    "--channel", type=click.IntRange(min=0), default=0, show_default=True, help="Value channel of a vector mask."
+)
+@click.option(
+    "--frame", type=click.IntRange(min=0), default=0, show_default=True, help="Frame of a spatiotemporal mask."
+)
+@click.option(
+    "-s", "--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seed of the mask realisation."
+)
+@click.option(
+    "-o",
+    "--output",
+    required=True,
+    type=click.Path(dir_okay=False, writable=True),
+    help="Dithered image (.png): black and white.",
+)
+@click.option(
+    "--mask-output",
+    type=click.Path(dir_okay=False, writable=True),
+    default=None,
+    help="Also write the mask: .npy (values in (0, 1)) or .png (8-bit grey).",
+)
+@click.option("--white-noise", is_flag=True, help="Use a white-noise mask of the same size instead (for comparison).")
 def dither_cmd(image, model, size, channel, frame, seed, output, mask_output, white_noise):
     """Ordered dithering of IMAGE with a blue-noise mask (tiled): a gridded mask model or a
     baseline mask."""
@@ -683,9 +987,12 @@ def dither_cmd(image, model, size, channel, frame, seed, output, mask_output, wh
                     np.save(fh, mask)
                 else:
                     mpimg.imsave(fh, mask, cmap="gray", vmin=0.0, vmax=1.0, format="png")
-    click.echo(f"wrote {output} ({out.shape[1]} x {out.shape[0]}, {out.mean():.3f} white) with a "
-               f"{mask.shape[1]} x {mask.shape[0]} mask from "
-               f"{'white noise' if white_noise else model}", err=True)
+    click.echo(
+        f"wrote {output} ({out.shape[1]} x {out.shape[0]}, {out.mean():.3f} white) with a "
+        f"{mask.shape[1]} x {mask.shape[0]} mask from "
+        f"{'white noise' if white_noise else model}",
+        err=True,
+    )
 
 
 # ---------------------------------------------------------------- entry point

@@ -38,9 +38,9 @@ from .errors import DpcError, InvalidArgumentError, ModelNotFoundError
 
 BASELINE_MASKS = {
     "void-and-cluster": "Ulichney's void-and-cluster (1993), sigma 1.5, toroidal; channels=2: two "
-                        "independent masks; frames=T: T independent masks",
+    "independent masks; frames=T: T independent masks",
     "stbn": "scalar spatiotemporal blue noise (Wolfe et al. 2022): void-and-cluster over (T, N, N) "
-            "with a spatial and a temporal Gaussian energy, sigma 1.9; needs frames",
+    "with a spatial and a temporal Gaussian energy, sigma 1.9; needs frames",
     "white": "white noise, rank-normalised (any shape)",
     "bayer": "Bayer ordered-dither matrix (N a power of two)",
 }
@@ -52,6 +52,7 @@ def rank_normalise(a: np.ndarray, kind: str) -> np.ndarray:
     """(rank + ½)/S per threshold map: the whole array (scalar), per channel (vector, last
     axis) or per frame (spatiotemporal, first axis)."""
     from .analysis.dither import rank_normalise as rn
+
     a = np.asarray(a, dtype=np.float64)
     if kind == "scalar":
         return rn(a)
@@ -75,7 +76,8 @@ def mask_kind(model) -> str:
     raise InvalidArgumentError(
         f"model {model.metadata.get('dpc.name', '?')} is not a mask model: it needs 2 grid axes "
         f"(+ 1 or more value axes) or 3 grid axes (x, y, time) + 1 value axis; it has grid axes "
-        f"{list(axes)} of {model.dims} dims")
+        f"{list(axes)} of {model.dims} dims"
+    )
 
 
 def _model_mask(model, size: int | None, frames: int | None, seed: int) -> np.ndarray:
@@ -111,6 +113,7 @@ def _grid_input(seed: int, grid: tuple, axes: tuple, dims: int) -> np.ndarray:
     """libdpc's input for a gridded model (docs/model-format.md §5) on another grid: the
     uniform points of ``seed``, grid axes at the cell centres (first axis fastest)."""
     import dpc
+
     m = math.prod(grid)
     pts = np.asarray(dpc.uniform(seed, m, dims), dtype=np.float64)
     idx = np.arange(m)
@@ -129,15 +132,14 @@ def _filter_at_any_size(model, pts: np.ndarray) -> np.ndarray:
     package to read the layers (the ``masks`` extra)."""
     from .model_file import read_model
     from .training import layer_forward
+
     try:
         spec = read_model(model.path)
     except ImportError as e:
-        raise InvalidArgumentError(
-            f"a mask model at a size other than its grid needs the onnx package ({e})") from e
+        raise InvalidArgumentError(f"a mask model at a size other than its grid needs the onnx package ({e})") from e
     x = np.ascontiguousarray(pts, dtype=np.float64)
     for layer in spec.layers:
-        x = layer_forward(x, layer.kernels, layer.subspaces, layer.radius, layer.eps, int(layer.fixed),
-                          threads=0)
+        x = layer_forward(x, layer.kernels, layer.subspaces, layer.radius, layer.eps, int(layer.fixed), threads=0)
         x = x - np.floor(x)
     return x
 
@@ -178,6 +180,7 @@ def _baseline_mask(name: str, size, frames, channels, seed: int) -> np.ndarray:
 def available() -> dict[str, str]:
     """Mask sources: the bundled gridded models and the baselines, with one line each."""
     import dpc
+
     out = {}
     for name in dpc.available_models():
         try:
@@ -191,8 +194,9 @@ def available() -> dict[str, str]:
     return out
 
 
-def mask(name: str, size: int | None = None, seed: int = 0, frames: int | None = None,
-         channels: int | None = None) -> np.ndarray:
+def mask(
+    name: str, size: int | None = None, seed: int = 0, frames: int | None = None, channels: int | None = None
+) -> np.ndarray:
     """A rank-normalised mask from a gridded model (bundled name or .onnx path) or a baseline
     (see the module doc). ``size`` (pixels per side) defaults to the model's grid; ``frames``:
     spatiotemporal masks; ``channels``: baselines only (a vector model has its own)."""
@@ -204,12 +208,13 @@ def mask(name: str, size: int | None = None, seed: int = 0, frames: int | None =
     if str(name) in BASELINE_MASKS:
         return _baseline_mask(str(name), size, frames, channels, s)
     import dpc
+
     try:
         model = dpc.load(str(name))
     except ModelNotFoundError:
         raise InvalidArgumentError(
-            f"unknown mask {name!r}: not a bundled model, a model file or one of "
-            f"{', '.join(BASELINE_MASKS)}") from None
+            f"unknown mask {name!r}: not a bundled model, a model file or one of {', '.join(BASELINE_MASKS)}"
+        ) from None
     if not model.grid_axes:
         raise InvalidArgumentError(f"model {name} is not gridded: it has no pixel grid")
     if channels is not None:
@@ -253,6 +258,7 @@ def frame_paths(path, frames: int) -> list[Path]:
 
 def _write_png(path: Path, img: np.ndarray, bits: int) -> None:
     import png  # pypng
+
     codes = quantise(img, bits)
     if codes.ndim == 2:
         rows, grey, planes = codes, True, 1
@@ -261,7 +267,7 @@ def _write_png(path: Path, img: np.ndarray, bits: int) -> None:
         if c > 3:
             raise InvalidArgumentError("PNG output holds at most 3 channels")
         rgb = np.zeros(codes.shape[:2] + (3,), dtype=codes.dtype)
-        rgb[..., :c] = codes                                   # 2 values: R, G (B = 0)
+        rgb[..., :c] = codes  # 2 values: R, G (B = 0)
         rows, grey, planes = rgb.reshape(codes.shape[0], -1), False, 3
     writer = png.Writer(width=codes.shape[1], height=codes.shape[0], greyscale=grey, bitdepth=bits)
     with _atomic.atomic_file(path, "wb") as f:
@@ -271,6 +277,7 @@ def _write_png(path: Path, img: np.ndarray, bits: int) -> None:
 
 def _read_png(path: Path, channels: int | None) -> np.ndarray:
     import png
+
     with open(path, "rb") as fh:  # pypng reads rows lazily: all of them before the file closes
         w, h, rows, info = png.Reader(file=fh).read()
         bits, planes = info["bitdepth"], info["planes"]
@@ -289,6 +296,7 @@ _EXR_CHANNELS = ("R", "G", "B", "A")
 
 def _write_exr(path: Path, img: np.ndarray) -> None:
     import OpenEXR
+
     a = np.asarray(img, dtype=np.float32)
     if a.ndim == 2:
         chans = {"Y": np.ascontiguousarray(a)}
@@ -303,6 +311,7 @@ def _write_exr(path: Path, img: np.ndarray) -> None:
 
 def _read_exr(path: Path) -> np.ndarray:
     import OpenEXR
+
     with OpenEXR.File(str(path)) as f:
         ch = f.channels()
         if "Y" in ch:

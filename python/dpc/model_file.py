@@ -100,18 +100,14 @@ def build_onnx(spec: ModelSpec):
         attrs = dict(subspaces=layer.subspaces, radius=layer.radius, eps=float(layer.eps))
         if layer.fixed:
             attrs["fixed"] = int(layer.fixed)
-        nodes.append(
-            helper.make_node("PointFilter", [prev, kname], [out], name=f"filter_{k}",
-                             domain=DOMAIN, **attrs)
-        )
+        nodes.append(helper.make_node("PointFilter", [prev, kname], [out], name=f"filter_{k}", domain=DOMAIN, **attrs))
         prev = out
     x_in = helper.make_tensor_value_info("points", TensorProto.FLOAT, ["m", spec.dims])
     x_out = helper.make_tensor_value_info("points_out", TensorProto.FLOAT, ["m", spec.dims])
     graph = helper.make_graph(nodes, spec.name or "dpc_cascade", [x_in], [x_out], inits)
     model = helper.make_model(
         graph,
-        opset_imports=[helper.make_opsetid("", DEFAULT_OPSET),
-                       helper.make_opsetid(DOMAIN, FORMAT_VERSION)],
+        opset_imports=[helper.make_opsetid("", DEFAULT_OPSET), helper.make_opsetid(DOMAIN, FORMAT_VERSION)],
         producer_name="dpc",
     )
     model.ir_version = IR_VERSION
@@ -140,14 +136,33 @@ def read_model(path) -> ModelSpec:
         if node.domain != DOMAIN or node.op_type != "PointFilter":
             raise ModelFileError(f"unexpected node {node.domain}:{node.op_type}")
         attrs = {a.name: onnx.helper.get_attribute_value(a) for a in node.attribute}
-        layers.append(Layer(subspaces=list(attrs["subspaces"]), radius=list(attrs["radius"]),
-                            kernels=inits[node.input[1]], eps=float(attrs.get("eps", 1e-4)),
-                            fixed=int(attrs.get("fixed", 0))))
+        layers.append(
+            Layer(
+                subspaces=list(attrs["subspaces"]),
+                radius=list(attrs["radius"]),
+                kernels=inits[node.input[1]],
+                eps=float(attrs.get("eps", 1e-4)),
+                fixed=int(attrs.get("fixed", 0)),
+            )
+        )
     axes = [int(a) for a in meta.get("dpc.grid_axes", "").split(",") if a]
     shape = [int(g) for g in meta.get("dpc.grid_shape", "").split(",") if g]
-    reserved = {"dpc.format_version", "dpc.dims", "dpc.n_points", "dpc.grid_axes",
-                "dpc.grid_shape", "dpc.name", "dpc.description"}
-    return ModelSpec(dims=int(meta["dpc.dims"]), n_points=int(meta["dpc.n_points"]),
-                     layers=layers, grid_axes=axes, grid_shape=shape,
-                     name=meta.get("dpc.name", ""), description=meta.get("dpc.description", ""),
-                     metadata={k: v for k, v in meta.items() if k not in reserved})
+    reserved = {
+        "dpc.format_version",
+        "dpc.dims",
+        "dpc.n_points",
+        "dpc.grid_axes",
+        "dpc.grid_shape",
+        "dpc.name",
+        "dpc.description",
+    }
+    return ModelSpec(
+        dims=int(meta["dpc.dims"]),
+        n_points=int(meta["dpc.n_points"]),
+        layers=layers,
+        grid_axes=axes,
+        grid_shape=shape,
+        name=meta.get("dpc.name", ""),
+        description=meta.get("dpc.description", ""),
+        metadata={k: v for k, v in meta.items() if k not in reserved},
+    )

@@ -36,8 +36,7 @@ from .errors import InvalidArgumentError
 
 FORMATS = ("npy", "dat", "csv", "bin")
 _ALIASES = {"npy": "npy", "dat": "dat", "text": "dat", "txt": "dat", "csv": "csv", "bin": "bin"}
-_EXTENSIONS = {".npy": "npy", ".bin": "bin", ".dat": "dat", ".txt": "dat", ".pts": "dat",
-               ".csv": "csv"}
+_EXTENSIONS = {".npy": "npy", ".bin": "bin", ".dat": "dat", ".txt": "dat", ".pts": "dat", ".csv": "csv"}
 #: Every extension a point file may have, for help texts.
 EXTENSIONS = tuple(_EXTENSIONS)
 #: Every -f/--format name.
@@ -47,6 +46,8 @@ FORMAT_NAMES = tuple(_ALIASES)
 def describe_extensions() -> str:
     """'.npy, .dat/.txt/.pts (text), .csv, .bin (UTK binary)' for help texts."""
     return ".npy, .dat/.txt/.pts (text, UTK's .dat), .csv (comma-separated), .bin (UTK binary)"
+
+
 _BIN_DTYPES = {"float64": "<f8", "float32": "<f4"}
 _MAX_GUESS_DIMS = 64
 _SEPARATOR = re.compile(r"^[ \t]*#[^\n]*(?:\n|$)", re.MULTILINE)
@@ -61,17 +62,16 @@ def resolve_format(path, fmt: str | None = None) -> str:
     if fmt is not None:
         key = str(fmt).lower()
         if key == "utk":
-            raise PointFileError("format 'utk' is ambiguous: UTK's text format is 'dat', its binary "
-                                 "format 'bin'")
+            raise PointFileError("format 'utk' is ambiguous: UTK's text format is 'dat', its binary format 'bin'")
         if key not in _ALIASES:
-            raise PointFileError(
-                f"unknown point format {fmt!r}; choose from {', '.join(sorted(_ALIASES))}")
+            raise PointFileError(f"unknown point format {fmt!r}; choose from {', '.join(sorted(_ALIASES))}")
         return _ALIASES[key]
     ext = Path(path).suffix.lower()
     if ext not in _EXTENSIONS:
         raise PointFileError(
             f"cannot tell the format of {os.fspath(path)!r} from its extension; use one of "
-            f"{', '.join(EXTENSIONS)} or give the format")
+            f"{', '.join(EXTENSIONS)} or give the format"
+        )
     return _EXTENSIONS[ext]
 
 
@@ -93,11 +93,13 @@ def _as_3d(points) -> np.ndarray:
 def _bar(iterable, enabled: bool, desc: str, total: int | None = None):
     """A tqdm bar on stderr, shown only once the loop has run for a second."""
     from tqdm import tqdm
+
     return tqdm(iterable, desc=desc, total=total, disable=not enabled, delay=1.0, leave=False)
 
 
-def write_points(path, points, fmt: str | None = None, *, bin_dtype: str = "float64",
-                 progress_bar: bool = False) -> Path:
+def write_points(
+    path, points, fmt: str | None = None, *, bin_dtype: str = "float64", progress_bar: bool = False
+) -> Path:
     """Write one set (m, n) or several (sets, m, n) to ``path`` in ``fmt`` (default: from the
     extension), atomically: into a temporary file beside it, renamed over ``path`` only when
     complete (an existing file survives any failure). ``.npy`` keeps the array's float type.
@@ -110,7 +112,7 @@ def write_points(path, points, fmt: str | None = None, *, bin_dtype: str = "floa
     if kind == "bin":
         if bin_dtype not in _BIN_DTYPES:
             raise PointFileError(f"bin_dtype must be float64 or float32, got {bin_dtype!r}")
-        if a.shape[1] >= 2 ** 32:
+        if a.shape[1] >= 2**32:
             raise PointFileError("UTK .bin stores the point count as uint32")
     try:
         _write(p, a, kind, bin_dtype, progress_bar)
@@ -152,7 +154,8 @@ def _stack(sets: list[np.ndarray], where: str) -> np.ndarray:
         if s.shape != first:
             raise PointFileError(
                 f"{where}: set {i} has {s.shape[0]} points of dimension {s.shape[1]}, "
-                f"set 0 has {first[0]} of dimension {first[1]}; all sets must match")
+                f"set 0 has {first[0]} of dimension {first[1]}; all sets must match"
+            )
     out = np.stack(sets).astype(np.float64)
     if not np.all(np.isfinite(out)):
         raise PointFileError(f"{where}: contains NaN or infinite coordinates")
@@ -205,7 +208,7 @@ def _parse_bin(data: bytes, n: int, dtype: np.dtype) -> list[np.ndarray] | None:
     while off < len(data):
         if off + 4 > len(data):
             return None
-        count = int.from_bytes(data[off:off + 4], "little")
+        count = int.from_bytes(data[off : off + 4], "little")
         off += 4
         if count == 0 or off + count * item > len(data):
             return None
@@ -236,22 +239,23 @@ def _read_bin(p: Path, dims: int | None, bin_dtype: str | None) -> np.ndarray:
     if len(readings) > 1:
         # Pairs of float32 coordinates read as one float64 are tiny numbers (< 2^-7) and pass
         # the range test, so also ask every axis to reach 1/4 somewhere, as real sets do.
-        plausible = [r for r in readings
-                     if np.all(np.max([s.max(axis=0) for s in r[2]], axis=0) >= 0.25)]
+        plausible = [r for r in readings if np.all(np.max([s.max(axis=0) for s in r[2]], axis=0) >= 0.25)]
         if len(plausible) == 1:
             readings = plausible
     if not readings:
         what = f"dims={dims}" if dims else "any dimension 1..64"
-        raise PointFileError(f"{p}: not a UTK .bin point file ({what}, "
-                             f"{'/'.join(dtypes)}, equal point counts, values in [0, 1])")
+        raise PointFileError(
+            f"{p}: not a UTK .bin point file ({what}, {'/'.join(dtypes)}, equal point counts, values in [0, 1])"
+        )
     if len(readings) > 1:
         opts = ", ".join(f"dims={n} {dt}" for n, dt, _ in readings)
         raise PointFileError(f"{p}: ambiguous UTK .bin file (could be {opts}); give the dimension")
     return _stack(readings[0][2], str(p))
 
 
-def read_points(path, fmt: str | None = None, *, dims: int | None = None,
-                bin_dtype: str | None = None, progress_bar: bool = False) -> np.ndarray:
+def read_points(
+    path, fmt: str | None = None, *, dims: int | None = None, bin_dtype: str | None = None, progress_bar: bool = False
+) -> np.ndarray:
     """Read a point-set file: float64 array (sets, m, n). ``dims``/``bin_dtype`` only help
     reading ``.bin`` files (see the module notes); for other formats ``dims`` is checked."""
     p = Path(path)

@@ -40,19 +40,54 @@ def _array(a, name: str) -> np.ndarray:
         raise InvalidArgumentError(f"{name} must be an array of numbers: {e}") from None
 
 
-def layer_forward(x, kernels, subspaces, radius, eps: float = 0.0, fixed: int = 0, *,
-                  threads: int = DEFAULT_THREADS, isa: str = "auto") -> np.ndarray:
+def layer_forward(
+    x,
+    kernels,
+    subspaces,
+    radius,
+    eps: float = 0.0,
+    fixed: int = 0,
+    *,
+    threads: int = DEFAULT_THREADS,
+    isa: str = "auto",
+) -> np.ndarray:
     """y = layer(x): a new float64 array of x's shape."""
     threads = _integer(threads, "threads", 0, 0xFFFFFFFF)
-    return _core.layer_forward(_array(x, "x"), _array(kernels, "kernels"), list(subspaces),
-                               [float(r) for r in radius], float(eps), fixed, threads, _isa(isa))
+    return _core.layer_forward(
+        _array(x, "x"),
+        _array(kernels, "kernels"),
+        list(subspaces),
+        [float(r) for r in radius],
+        float(eps),
+        fixed,
+        threads,
+        _isa(isa),
+    )
 
 
-def layer_backward(x, kernels, subspaces, radius, eps: float = 0.0, fixed: int = 0, *, grad_y,
-                   threads: int = DEFAULT_THREADS, isa: str = "auto") -> tuple[np.ndarray, np.ndarray]:
+def layer_backward(
+    x,
+    kernels,
+    subspaces,
+    radius,
+    eps: float = 0.0,
+    fixed: int = 0,
+    *,
+    grad_y,
+    threads: int = DEFAULT_THREADS,
+    isa: str = "auto",
+) -> tuple[np.ndarray, np.ndarray]:
     """Gradients of a scalar loss L from grad_y = dL/dy: (dL/dx like x, dL/dkernels (s, b),
     summed over the sets of a batch)."""
     threads = _integer(threads, "threads", 0, 0xFFFFFFFF)
-    return _core.layer_backward(_array(x, "x"), _array(kernels, "kernels"), list(subspaces),
-                                [float(r) for r in radius], float(eps), fixed, _array(grad_y, "grad_y"),
-                                threads, _isa(isa))
+    return _core.layer_backward(
+        _array(x, "x"),
+        _array(kernels, "kernels"),
+        list(subspaces),
+        [float(r) for r in radius],
+        float(eps),
+        fixed,
+        _array(grad_y, "grad_y"),
+        threads,
+        _isa(isa),
+    )

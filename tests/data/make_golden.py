@@ -16,18 +16,20 @@ import importlib.util
 import sys
 from pathlib import Path
 
-import numpy as np
-
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent.parent
 
 # (model, seed, point count); seed 1 with a count other than the trained 1024 where allowed.
 CASES = [
-    ("model_2d", 0, 1024), ("model_2d", 1, 777),
-    ("model_3d_proj", 0, 1024), ("model_3d_proj", 1, 1500),
-    ("model_3d_mixed", 0, 1024), ("model_3d_mixed", 1, 600),
+    ("model_2d", 0, 1024),
+    ("model_2d", 1, 777),
+    ("model_3d_proj", 0, 1024),
+    ("model_3d_proj", 1, 1500),
+    ("model_3d_mixed", 0, 1024),
+    ("model_3d_mixed", 1, 600),
     ("model_grid_3to1", 0, 1024),
-    ("model_10d", 0, 1024), ("model_10d", 1, 600),
+    ("model_10d", 0, 1024),
+    ("model_10d", 1, 600),
 ]
 
 
@@ -37,7 +39,8 @@ def golden_name(model: str, seed: int, n: int) -> str:
 
 def _reference():
     spec = importlib.util.spec_from_file_location(
-        "reference_cascade", ROOT / "tests" / "python" / "reference_cascade.py")
+        "reference_cascade", ROOT / "tests" / "python" / "reference_cascade.py"
+    )
     mod = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = mod
     spec.loader.exec_module(mod)

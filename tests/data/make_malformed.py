@@ -16,23 +16,21 @@ from __future__ import annotations
 
 import copy
 import random
-import struct
 from pathlib import Path
 
 import numpy as np
 import onnx
+import pbwire as pb
 from onnx import AttributeProto, TensorProto, helper
 
-import pbwire as pb
-
 HERE = Path(__file__).resolve().parent
-MODELS = HERE            # where the valid models are read from (--models)
+MODELS = HERE  # where the valid models are read from (--models)
 
 FORMAT = "DPC_ERROR_FORMAT"
 UNSUPPORTED = "DPC_ERROR_UNSUPPORTED"
 LIMIT = "DPC_ERROR_LIMIT"
 
-CASES: list[tuple[str, str, str, bytes]] = []   # (name, expected, why, bytes)
+CASES: list[tuple[str, str, str, bytes]] = []  # (name, expected, why, bytes)
 
 
 def base(name: str) -> onnx.ModelProto:
@@ -206,8 +204,13 @@ def attribute_cases():
     attr(t.graph.node[0], "radius").floats.append(3.0)
     case("radius_count_mismatch", FORMAT, "two radii for one subspace", t)
 
-    for label, value in (("zero", 0.0), ("negative", -2.0), ("nan", float("nan")),
-                         ("inf", float("inf")), ("above_1e6", 2e6)):
+    for label, value in (
+        ("zero", 0.0),
+        ("negative", -2.0),
+        ("nan", float("nan")),
+        ("inf", float("inf")),
+        ("above_1e6", 2e6),
+    ):
         t = copy.deepcopy(m)
         attr(t.graph.node[1], "radius").floats[0] = value
         case(f"radius_{label}", FORMAT, f"radius is {value}, must be in (0, 1e6] and finite", t)
@@ -259,9 +262,15 @@ def metadata_cases():
     set_meta(t, "dpc.format_version", "2")
     case("format_version_2", f"{UNSUPPORTED}|{FORMAT}", "metadata dpc.format_version is '2'", t)
 
-    for label, value in (("0", "0"), ("2pow26_plus1", str((1 << 26) + 1)),
-                         ("huge", "99999999999999999999999999"), ("negative", "-1024"),
-                         ("not_number", "1024x"), ("empty", ""), ("hex", "0x400")):
+    for label, value in (
+        ("0", "0"),
+        ("2pow26_plus1", str((1 << 26) + 1)),
+        ("huge", "99999999999999999999999999"),
+        ("negative", "-1024"),
+        ("not_number", "1024x"),
+        ("empty", ""),
+        ("hex", "0x400"),
+    ):
         t = copy.deepcopy(m)
         set_meta(t, "dpc.n_points", value)
         case(f"n_points_{label}", FORMAT, f"dpc.n_points is '{value}', must be 1..2^26", t)
@@ -282,13 +291,14 @@ def metadata_cases():
 
     g = base("model_grid_3to1")
     for label, axes, shape, why in (
-            ("grid_product_mismatch", "0,1", "32,33", "grid 32x33 = 1056 cells, dpc.n_points 1024"),
-            ("grid_axes_out_of_range", "0,3", "32,32", "grid axis 3 in a 3-D model"),
-            ("grid_axes_not_increasing", "1,0", "32,32", "grid axes must increase"),
-            ("grid_axes_duplicate", "0,0", "32,32", "grid axis 0 listed twice"),
-            ("grid_shape_count_mismatch", "0,1", "1024", "two grid axes, one grid_shape entry"),
-            ("grid_shape_zero", "0,1", "0,32", "a grid_shape entry is 0"),
-            ("grid_axes_without_shape", "0,1", None, "dpc.grid_axes without dpc.grid_shape")):
+        ("grid_product_mismatch", "0,1", "32,33", "grid 32x33 = 1056 cells, dpc.n_points 1024"),
+        ("grid_axes_out_of_range", "0,3", "32,32", "grid axis 3 in a 3-D model"),
+        ("grid_axes_not_increasing", "1,0", "32,32", "grid axes must increase"),
+        ("grid_axes_duplicate", "0,0", "32,32", "grid axis 0 listed twice"),
+        ("grid_shape_count_mismatch", "0,1", "1024", "two grid axes, one grid_shape entry"),
+        ("grid_shape_zero", "0,1", "0,32", "a grid_shape entry is 0"),
+        ("grid_axes_without_shape", "0,1", None, "dpc.grid_axes without dpc.grid_shape"),
+    ):
         t = copy.deepcopy(g)
         set_meta(t, "dpc.grid_axes", axes)
         set_meta(t, "dpc.grid_shape", shape)
@@ -310,8 +320,7 @@ def metadata_cases():
     for i in range(1025 - len(t.metadata_props)):
         set_meta(t, f"extra.{i}", "v")
     assert len(t.metadata_props) == 1025
-    case("metadata_1025_entries", f"{FORMAT}|{LIMIT}",
-         f"{len(t.metadata_props)} metadata entries (at most 1024)", t)
+    case("metadata_1025_entries", f"{FORMAT}|{LIMIT}", f"{len(t.metadata_props)} metadata entries (at most 1024)", t)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -390,8 +399,9 @@ def graph_cases():
     prev = t.graph.input[0].name
     for k in range(4097):
         out = t.graph.output[0].name if k == 4096 else f"{k}"
-        nodes.append(helper.make_node("PointFilter", [prev, "kernels_0"], [out],
-                                      domain="ai.dpc", subspaces=[3], radius=[3.0]))
+        nodes.append(
+            helper.make_node("PointFilter", [prev, "kernels_0"], [out], domain="ai.dpc", subspaces=[3], radius=[3.0])
+        )
         prev = out
     del t.graph.node[:]
     t.graph.node.extend(nodes)
@@ -453,13 +463,13 @@ def split_fields(data: bytes):
             i = j
         elif wire == 2:
             n, j = rd(i)
-            out.append((num, wire, data[start:j], data[j:j + n]))
+            out.append((num, wire, data[start:j], data[j : j + n]))
             i = j + n
         elif wire == 5:
-            out.append((num, wire, data[start:i], data[i:i + 4]))
+            out.append((num, wire, data[start:i], data[i : i + 4]))
             i += 4
         elif wire == 1:
-            out.append((num, wire, data[start:i], data[i:i + 8]))
+            out.append((num, wire, data[start:i], data[i : i + 8]))
             i += 8
         else:
             raise ValueError("unexpected wire type")
@@ -484,33 +494,70 @@ def raw_cases():
     case("raw_empty", FORMAT, "zero bytes", b"")
     case("raw_text", FORMAT, "a line of text, not protobuf", b"this is not an ONNX model\n")
     rng = random.Random(20190611)
-    case("raw_random", FORMAT, "2048 random bytes (fixed seed)",
-         bytes(rng.randrange(256) for _ in range(2048)))
-    case("raw_trailing_garbage", FORMAT, "a valid model followed by 0xff bytes (unterminated varint)",
-         good + b"\xff" * 12)
-    case("raw_field_number_0", FORMAT, "a valid model followed by a field with number 0",
-         good + b"\x00\x00")
-    case("raw_wire_type_7", FORMAT, "a valid model followed by a field of wire type 7",
-         good + pb.tag(99, 7) + b"\x00")
-    case("raw_wire_type_group", FORMAT, "a valid model followed by a start-group field (ONNX has none)",
-         good + pb.tag(99, 3) + pb.tag(99, 4))
+    case("raw_random", FORMAT, "2048 random bytes (fixed seed)", bytes(rng.randrange(256) for _ in range(2048)))
+    case(
+        "raw_trailing_garbage",
+        FORMAT,
+        "a valid model followed by 0xff bytes (unterminated varint)",
+        good + b"\xff" * 12,
+    )
+    case("raw_field_number_0", FORMAT, "a valid model followed by a field with number 0", good + b"\x00\x00")
+    case("raw_wire_type_7", FORMAT, "a valid model followed by a field of wire type 7", good + pb.tag(99, 7) + b"\x00")
+    case(
+        "raw_wire_type_group",
+        FORMAT,
+        "a valid model followed by a start-group field (ONNX has none)",
+        good + pb.tag(99, 3) + pb.tag(99, 4),
+    )
 
-    case("raw_graph_len_past_end", FORMAT, "graph length 1000 bytes beyond the end of the file",
-         with_field(top, 7, lambda h, p: pb.tag(7, 2) + pb.varint(len(p) + 1000) + p))
-    case("raw_graph_len_2pow62", FORMAT, "graph length 2^62",
-         with_field(top, 7, lambda h, p: pb.tag(7, 2) + pb.varint(1 << 62) + p))
-    case("raw_graph_len_10byte_max", FORMAT, "graph length is the 10-byte varint 2^64-1",
-         with_field(top, 7, lambda h, p: pb.tag(7, 2) + pb.varint((1 << 64) - 1) + p))
-    case("raw_graph_len_11byte", FORMAT, "graph length is an 11-byte (overlong) varint",
-         with_field(top, 7, lambda h, p: pb.tag(7, 2) + b"\xff" * 10 + b"\x01" + p))
-    case("raw_ir_version_overlong", FORMAT, "ir_version is an 11-byte varint",
-         with_field(top, 1, lambda h, p: pb.tag(1, 0) + b"\x88" + b"\x80" * 9 + b"\x00"))
-    case("raw_ir_version_65bit", FORMAT, "ir_version varint has more than 64 bits",
-         with_field(top, 1, lambda h, p: pb.tag(1, 0) + b"\x88" + b"\x80" * 8 + b"\x7f"))
-    case("raw_graph_as_varint", FORMAT, "graph (field 7) encoded with wire type 0",
-         with_field(top, 7, lambda h, p: pb.field_varint(7, 5)))
-    case("raw_ir_version_as_bytes", FORMAT, "ir_version (field 1) encoded as length-delimited",
-         with_field(top, 1, lambda h, p: pb.field_len(1, b"\x08")))
+    case(
+        "raw_graph_len_past_end",
+        FORMAT,
+        "graph length 1000 bytes beyond the end of the file",
+        with_field(top, 7, lambda h, p: pb.tag(7, 2) + pb.varint(len(p) + 1000) + p),
+    )
+    case(
+        "raw_graph_len_2pow62",
+        FORMAT,
+        "graph length 2^62",
+        with_field(top, 7, lambda h, p: pb.tag(7, 2) + pb.varint(1 << 62) + p),
+    )
+    case(
+        "raw_graph_len_10byte_max",
+        FORMAT,
+        "graph length is the 10-byte varint 2^64-1",
+        with_field(top, 7, lambda h, p: pb.tag(7, 2) + pb.varint((1 << 64) - 1) + p),
+    )
+    case(
+        "raw_graph_len_11byte",
+        FORMAT,
+        "graph length is an 11-byte (overlong) varint",
+        with_field(top, 7, lambda h, p: pb.tag(7, 2) + b"\xff" * 10 + b"\x01" + p),
+    )
+    case(
+        "raw_ir_version_overlong",
+        FORMAT,
+        "ir_version is an 11-byte varint",
+        with_field(top, 1, lambda h, p: pb.tag(1, 0) + b"\x88" + b"\x80" * 9 + b"\x00"),
+    )
+    case(
+        "raw_ir_version_65bit",
+        FORMAT,
+        "ir_version varint has more than 64 bits",
+        with_field(top, 1, lambda h, p: pb.tag(1, 0) + b"\x88" + b"\x80" * 8 + b"\x7f"),
+    )
+    case(
+        "raw_graph_as_varint",
+        FORMAT,
+        "graph (field 7) encoded with wire type 0",
+        with_field(top, 7, lambda h, p: pb.field_varint(7, 5)),
+    )
+    case(
+        "raw_ir_version_as_bytes",
+        FORMAT,
+        "ir_version (field 1) encoded as length-delimited",
+        with_field(top, 1, lambda h, p: pb.field_len(1, b"\x08")),
+    )
 
     # Inside the graph: the first initializer's raw_data length exceeds its tensor.
     def bad_tensor_len(tensor_payload: bytes, new_len: int) -> bytes:
@@ -529,23 +576,41 @@ def raw_cases():
         new_graph = b"".join(parts)
         return with_field(top, 7, lambda h, p: pb.field_len(7, new_graph))
 
-    case("raw_tensor_data_len_past_end", FORMAT,
-         "kernels raw_data length 2^40, the tensor is a few hundred bytes",
-         graph_with_first_init(lambda p: bad_tensor_len(p, 1 << 40)))
+    case(
+        "raw_tensor_data_len_past_end",
+        FORMAT,
+        "kernels raw_data length 2^40, the tensor is a few hundred bytes",
+        graph_with_first_init(lambda p: bad_tensor_len(p, 1 << 40)),
+    )
 
     def tensor_dims(p: bytes, dims) -> bytes:
         tf = [f for f in split_fields(p) if f[0] != 1]
         return b"".join(pb.field_varint(1, d) for d in dims) + join_fields(tf)
 
-    case("raw_tensor_dims_huge", FORMAT, "kernels dims [1, 2^40] with 32 floats of data",
-         graph_with_first_init(lambda p: tensor_dims(p, [1, 1 << 40])))
-    case("raw_tensor_dims_product_overflow", FORMAT,
-         "kernels dims [2^32, 2^32 + 32]: the product overflows 64 bits",
-         graph_with_first_init(lambda p: tensor_dims(p, [1 << 32, (1 << 32) + 32])))
-    case("raw_tensor_dims_negative", FORMAT, "kernels dims [1, -32]",
-         graph_with_first_init(lambda p: tensor_dims(p, [1, -32])))
-    case("raw_tensor_100_dims", FORMAT, "kernels tensor with 100 dims of 1",
-         graph_with_first_init(lambda p: tensor_dims(p, [1] * 98 + [1, 32])))
+    case(
+        "raw_tensor_dims_huge",
+        FORMAT,
+        "kernels dims [1, 2^40] with 32 floats of data",
+        graph_with_first_init(lambda p: tensor_dims(p, [1, 1 << 40])),
+    )
+    case(
+        "raw_tensor_dims_product_overflow",
+        FORMAT,
+        "kernels dims [2^32, 2^32 + 32]: the product overflows 64 bits",
+        graph_with_first_init(lambda p: tensor_dims(p, [1 << 32, (1 << 32) + 32])),
+    )
+    case(
+        "raw_tensor_dims_negative",
+        FORMAT,
+        "kernels dims [1, -32]",
+        graph_with_first_init(lambda p: tensor_dims(p, [1, -32])),
+    )
+    case(
+        "raw_tensor_100_dims",
+        FORMAT,
+        "kernels tensor with 100 dims of 1",
+        graph_with_first_init(lambda p: tensor_dims(p, [1] * 98 + [1, 32])),
+    )
 
     # The first metadata entry's key length points past the end of the entry.
     first_meta = True
@@ -558,16 +623,24 @@ def raw_cases():
         ef = split_fields(p)
         inner = with_field(ef, 1, lambda h2, p2: pb.tag(1, 2) + pb.varint(len(p2) + 50) + p2)
         return pb.field_len(14, inner)
-    case("raw_metadata_key_len_past_entry", FORMAT,
-         "a metadata entry whose key length runs 50 bytes past the entry", with_field(top, 14, bad_entry))
+
+    case(
+        "raw_metadata_key_len_past_entry",
+        FORMAT,
+        "a metadata entry whose key length runs 50 bytes past the entry",
+        with_field(top, 14, bad_entry),
+    )
 
     # Deep nesting: the graph is a chain of 3000 nested length-delimited field-1 messages.
     nested = b""
     for _ in range(3000):
         nested = pb.field_len(1, nested)
-    case("raw_deep_nesting_graph", FORMAT,
-         "the graph is 3000 levels of nested field-1 messages (garbage nodes)",
-         with_field(top, 7, lambda h, p: pb.field_len(7, nested)))
+    case(
+        "raw_deep_nesting_graph",
+        FORMAT,
+        "the graph is 3000 levels of nested field-1 messages (garbage nodes)",
+        with_field(top, 7, lambda h, p: pb.field_len(7, nested)),
+    )
 
 
 def main() -> None:

@@ -41,10 +41,9 @@ ROOT = HERE.parent.parent
 
 def _load_model_file():
     """python/dpc/model_file.py by path: `import dpc` would need the compiled extension."""
-    spec = importlib.util.spec_from_file_location("dpc_model_file",
-                                                  ROOT / "python" / "dpc" / "model_file.py")
+    spec = importlib.util.spec_from_file_location("dpc_model_file", ROOT / "python" / "dpc" / "model_file.py")
     mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod          # dataclasses look their module up by name
+    sys.modules[spec.name] = mod  # dataclasses look their module up by name
     spec.loader.exec_module(mod)
     return mod
 
@@ -52,13 +51,21 @@ def _load_model_file():
 mf = _load_model_file()
 Layer, ModelSpec, subspace_mask = mf.Layer, mf.ModelSpec, mf.subspace_mask
 
-REQUIRED_LAST = ["dpc.format_version", "dpc.grid_axes", "dpc.grid_shape", "dpc.dims",
-                 "dpc.n_points"]
+REQUIRED_LAST = ["dpc.format_version", "dpc.grid_axes", "dpc.grid_shape", "dpc.dims", "dpc.n_points"]
 
 
-def kernel(b: int, rho: float, *, rep: float, rep_w: float, att: float = 0.0,
-           att_c: float = 1.5, att_w: float = 0.4, wiggle: float = 0.0,
-           phase: float = 0.0) -> np.ndarray:
+def kernel(
+    b: int,
+    rho: float,
+    *,
+    rep: float,
+    rep_w: float,
+    att: float = 0.0,
+    att_c: float = 1.5,
+    att_w: float = 0.4,
+    wiggle: float = 0.0,
+    phase: float = 0.0,
+) -> np.ndarray:
     """Kernel table w[q] = f(q * rho / (b - 1)); f takes the distance in units of the spacing.
 
     Negative values repel, positive attract (docs/model-format.md §3): a repulsion of peak
@@ -69,8 +76,8 @@ def kernel(b: int, rho: float, *, rep: float, rep_w: float, att: float = 0.0,
     s = np.linspace(0.0, rho, b)
     a = s / rep_w
     f = -rep * a * np.exp(0.5 - 0.5 * a * a)
-    inner = 1.0 - np.exp(-(s / 0.3) ** 2)
-    f += inner * att * np.exp(-((s - att_c) / att_w) ** 2)
+    inner = 1.0 - np.exp(-((s / 0.3) ** 2))
+    f += inner * att * np.exp(-(((s - att_c) / att_w) ** 2))
     f += inner * wiggle * np.sin(2.3 * s + phase)
     f *= (1.0 - (s / rho) ** 2) ** 2
     return f.astype(np.float32)
@@ -79,19 +86,29 @@ def kernel(b: int, rho: float, *, rep: float, rep_w: float, att: float = 0.0,
 def model_2d() -> ModelSpec:
     xy = subspace_mask("xy")
     layers = [
-        Layer([xy], [3.0], kernel(32, 3.0, rep=0.20, rep_w=0.9, att=0.03, att_c=1.6,
-                                  wiggle=0.01)[None]),
-        Layer([xy], [2.5], kernel(48, 2.5, rep=0.15, rep_w=0.8, att=0.02, att_c=1.3,
-                                  wiggle=0.008, phase=1.0)[None], eps=0.02),
-        Layer([xy], [4.0], kernel(64, 4.0, rep=0.12, rep_w=1.0, att=0.025, att_c=1.9,
-                                  wiggle=0.005, phase=2.0)[None]),
-        Layer([xy], [3.5], kernel(16, 3.5, rep=0.10, rep_w=1.1, att=0.02, att_c=1.7,
-                                  wiggle=0.006, phase=0.5)[None], eps=0.0),
+        Layer([xy], [3.0], kernel(32, 3.0, rep=0.20, rep_w=0.9, att=0.03, att_c=1.6, wiggle=0.01)[None]),
+        Layer(
+            [xy],
+            [2.5],
+            kernel(48, 2.5, rep=0.15, rep_w=0.8, att=0.02, att_c=1.3, wiggle=0.008, phase=1.0)[None],
+            eps=0.02,
+        ),
+        Layer([xy], [4.0], kernel(64, 4.0, rep=0.12, rep_w=1.0, att=0.025, att_c=1.9, wiggle=0.005, phase=2.0)[None]),
+        Layer(
+            [xy],
+            [3.5],
+            kernel(16, 3.5, rep=0.10, rep_w=1.1, att=0.02, att_c=1.7, wiggle=0.006, phase=0.5)[None],
+            eps=0.0,
+        ),
     ]
-    return ModelSpec(dims=2, n_points=1024, layers=layers, name="test-2d",
-                     description="Test model: 2-D repulsion/attraction cascade, one subspace.",
-                     metadata={"dpc.loss": "none (analytic test kernels)",
-                               "test.kernels": "tests/data/make_models.py"})
+    return ModelSpec(
+        dims=2,
+        n_points=1024,
+        layers=layers,
+        name="test-2d",
+        description="Test model: 2-D repulsion/attraction cascade, one subspace.",
+        metadata={"dpc.loss": "none (analytic test kernels)", "test.kernels": "tests/data/make_models.py"},
+    )
 
 
 def model_3d_proj() -> ModelSpec:
@@ -99,12 +116,29 @@ def model_3d_proj() -> ModelSpec:
     layers = []
     for li, (b, base_rho, eps) in enumerate([(32, 3.0, 1e-4), (24, 2.5, 0.03), (40, 4.0, 1e-4)]):
         rhos = [base_rho, base_rho + 0.5, base_rho + 1.0]
-        kern = np.stack([kernel(b, rhos[t], rep=0.30 - 0.05 * t, rep_w=0.9 + 0.1 * t,
-                                att=0.02, att_c=1.4 + 0.2 * t, wiggle=0.006,
-                                phase=li + 0.7 * t) for t in range(3)])
+        kern = np.stack(
+            [
+                kernel(
+                    b,
+                    rhos[t],
+                    rep=0.30 - 0.05 * t,
+                    rep_w=0.9 + 0.1 * t,
+                    att=0.02,
+                    att_c=1.4 + 0.2 * t,
+                    wiggle=0.006,
+                    phase=li + 0.7 * t,
+                )
+                for t in range(3)
+            ]
+        )
         layers.append(Layer(subs, rhos, kern, eps=eps))
-    return ModelSpec(dims=3, n_points=1024, layers=layers, name="test-3d-proj",
-                     description="Test model: 3-D, 2-D projections xy, xz, yz.")
+    return ModelSpec(
+        dims=3,
+        n_points=1024,
+        layers=layers,
+        name="test-3d-proj",
+        description="Test model: 3-D, 2-D projections xy, xz, yz.",
+    )
 
 
 def model_3d_mixed() -> ModelSpec:
@@ -112,15 +146,20 @@ def model_3d_mixed() -> ModelSpec:
     specs = [(32, 2.5, 5.0, 1e-4), (48, 3.0, 4.0, 0.002), (20, 2.8, 6.0, 1e-4)]
     layers = []
     for li, (b, rho3, rho1, eps) in enumerate(specs):
-        kern = np.stack([
-            kernel(b, rho3, rep=0.12, rep_w=0.9, att=0.015, att_c=1.5, wiggle=0.004,
-                   phase=li),
-            kernel(b, rho1, rep=0.25, rep_w=1.0, att=0.03, att_c=2.0, wiggle=0.01,
-                   phase=li + 2.0),
-        ])
+        kern = np.stack(
+            [
+                kernel(b, rho3, rep=0.12, rep_w=0.9, att=0.015, att_c=1.5, wiggle=0.004, phase=li),
+                kernel(b, rho1, rep=0.25, rep_w=1.0, att=0.03, att_c=2.0, wiggle=0.01, phase=li + 2.0),
+            ]
+        )
         layers.append(Layer(subs, [rho3, rho1], kern, eps=eps))
-    return ModelSpec(dims=3, n_points=1024, layers=layers, name="test-3d-mixed",
-                     description="Test model: 3-D full space plus the 1-D subspace x.")
+    return ModelSpec(
+        dims=3,
+        n_points=1024,
+        layers=layers,
+        name="test-3d-mixed",
+        description="Test model: 3-D full space plus the 1-D subspace x.",
+    )
 
 
 def model_grid_3to1() -> ModelSpec:
@@ -130,32 +169,56 @@ def model_grid_3to1() -> ModelSpec:
     for li, (b, eps) in enumerate([(32, 1e-4), (40, 0.0), (24, 1e-4)]):
         rhos = [5.0, 3.0, 3.0, 2.5]
         amps = [0.25, 0.14, 0.14, 0.10]
-        kern = np.stack([kernel(b, rhos[t], rep=amps[t], rep_w=1.0, att=0.02, att_c=1.8,
-                                wiggle=0.006, phase=li + t) for t in range(4)])
+        kern = np.stack(
+            [
+                kernel(b, rhos[t], rep=amps[t], rep_w=1.0, att=0.02, att_c=1.8, wiggle=0.006, phase=li + t)
+                for t in range(4)
+            ]
+        )
         layers.append(Layer(subs, rhos, kern, eps=eps, fixed=fixed))
-    return ModelSpec(dims=3, n_points=1024, layers=layers, grid_axes=[0, 1],
-                     grid_shape=[32, 32], name="test-grid-3to1",
-                     description="Test model: x, y on a 32x32 grid, one value dimension z.")
+    return ModelSpec(
+        dims=3,
+        n_points=1024,
+        layers=layers,
+        grid_axes=[0, 1],
+        grid_shape=[32, 32],
+        name="test-grid-3to1",
+        description="Test model: x, y on a 32x32 grid, one value dimension z.",
+    )
 
 
 def model_10d() -> ModelSpec:
     pairs = [subspace_mask([2 * p, 2 * p + 1]) for p in range(5)]
-    subs = pairs + [subspace_mask([0]), subspace_mask([5]), subspace_mask([2, 5, 8]),
-                    subspace_mask(list(range(10)))]
+    subs = pairs + [subspace_mask([0]), subspace_mask([5]), subspace_mask([2, 5, 8]), subspace_mask(list(range(10)))]
     # rho per subspace; the full 10-D space has h = 1024^(-1/10) = 0.5, so rho 0.9 -> r = 0.45.
     rhos = [3.0, 2.5, 3.5, 3.0, 2.8, 5.0, 4.0, 2.5, 0.9]
     layers = []
     for li, (b, eps) in enumerate([(24, 1e-4), (32, 0.002), (16, 1e-4)]):
         rows = []
         for t, rho in enumerate(rhos):
-            if t == len(rhos) - 1:   # full space: distances are ~0.5-0.9 h; gentle repulsion
+            if t == len(rhos) - 1:  # full space: distances are ~0.5-0.9 h; gentle repulsion
                 rows.append(kernel(b, rho, rep=0.3, rep_w=0.6, wiggle=0.01, phase=li))
             else:
-                rows.append(kernel(b, rho, rep=0.25 + 0.02 * (t % 3), rep_w=0.9, att=0.02,
-                                   att_c=1.5, wiggle=0.006, phase=li + 0.5 * t))
+                rows.append(
+                    kernel(
+                        b,
+                        rho,
+                        rep=0.25 + 0.02 * (t % 3),
+                        rep_w=0.9,
+                        att=0.02,
+                        att_c=1.5,
+                        wiggle=0.006,
+                        phase=li + 0.5 * t,
+                    )
+                )
         layers.append(Layer(list(subs), list(rhos), np.stack(rows), eps=eps))
-    return ModelSpec(dims=10, n_points=1024, layers=layers, name="test-10d",
-                     description="Test model: 10-D, pairs, 1-D, 3-D and full-space subspaces.")
+    return ModelSpec(
+        dims=10,
+        n_points=1024,
+        layers=layers,
+        name="test-10d",
+        description="Test model: 10-D, pairs, 1-D, 3-D and full-space subspaces.",
+    )
 
 
 MODELS = {
@@ -172,7 +235,7 @@ def build(spec: ModelSpec):
     proto = mf.build_onnx(spec)
     entries = [(p.key, p.value) for p in proto.metadata_props]
     rank = {k: i for i, k in enumerate(REQUIRED_LAST)}
-    entries.sort(key=lambda kv: rank.get(kv[0], -1))   # stable: optional keys keep their order
+    entries.sort(key=lambda kv: rank.get(kv[0], -1))  # stable: optional keys keep their order
     del proto.metadata_props[:]
     for k, v in entries:
         e = proto.metadata_props.add()
@@ -183,12 +246,10 @@ def build(spec: ModelSpec):
 def _variants(out: Path) -> list[tuple[str, str, str, bytes]]:
     """Files that encode a base model differently but equivalently: the reader must accept each
     one and produce exactly the base model's points. (name, base, why, bytes)."""
-    import copy
 
     import onnx
-    from onnx import helper
-
     import pbwire as pb
+    from onnx import helper
 
     def load(name):
         return onnx.load(str(out / name))
@@ -202,28 +263,42 @@ def _variants(out: Path) -> list[tuple[str, str, str, bytes]]:
 
     v = []
     m = kernels_to_float_data(load("model_2d.onnx"))
-    v.append(("float_data", "model_2d.onnx", "kernels in float_data (packed) instead of raw_data",
-              pb.encode(m)))
-    v.append(("float_data_unpacked", "model_2d.onnx",
-              "kernels in float_data with one fixed32 field per value", pb.encode(m, packed="none")))
+    v.append(("float_data", "model_2d.onnx", "kernels in float_data (packed) instead of raw_data", pb.encode(m)))
+    v.append(
+        (
+            "float_data_unpacked",
+            "model_2d.onnx",
+            "kernels in float_data with one fixed32 field per value",
+            pb.encode(m, packed="none"),
+        )
+    )
     m = kernels_to_float_data(load("model_3d_proj.onnx"))
-    v.append(("packed_repeated", "model_3d_proj.onnx",
-              "every repeated scalar packed (attribute ints/floats, tensor dims)",
-              pb.encode(m, packed="all")))
-    v.append(("fields_reversed", "model_3d_mixed.onnx",
-              "every message's fields written in decreasing field-number order",
-              pb.encode(load("model_3d_mixed.onnx"), reverse=True)))
+    v.append(
+        (
+            "packed_repeated",
+            "model_3d_proj.onnx",
+            "every repeated scalar packed (attribute ints/floats, tensor dims)",
+            pb.encode(m, packed="all"),
+        )
+    )
+    v.append(
+        (
+            "fields_reversed",
+            "model_3d_mixed.onnx",
+            "every message's fields written in decreasing field-number order",
+            pb.encode(load("model_3d_mixed.onnx"), reverse=True),
+        )
+    )
     m = load("model_2d.onnx")
     for vi in (m.graph.input[0], m.graph.output[0]):
         dims = vi.type.tensor_type.shape.dim
         dims.insert(0, onnx.TensorShapeProto.Dimension(dim_param="batch"))
-    v.append(("batch_shape", "model_2d.onnx", "graph input/output declared [batch, m, n]",
-              m.SerializeToString()))
+    v.append(("batch_shape", "model_2d.onnx", "graph input/output declared [batch, m, n]", m.SerializeToString()))
     m = load("model_10d.onnx")
     for node in m.graph.node:
         eps = [a for a in node.attribute if a.name == "eps"]
         if eps and eps[0].f == np.float32(1e-4):
-            node.attribute.remove(eps[0])                  # the default
+            node.attribute.remove(eps[0])  # the default
         node.attribute.append(helper.make_attribute("fixed", 0))
         node.attribute.append(helper.make_attribute("future_attr", [1.5, 2.5]))
         node.doc_string = "a PointFilter"
@@ -232,24 +307,40 @@ def _variants(out: Path) -> list[tuple[str, str, str, bytes]]:
     e.key, e.value = "vendor.note", "unknown keys are kept"
     m.producer_version = "9.9"
     m.doc_string = "variant with optional and unknown parts"
-    v.append(("extras_and_defaults", "model_10d.onnx",
-              "eps 1e-4 left to its default, fixed=0, unknown attribute/initializer/metadata",
-              m.SerializeToString()))
+    v.append(
+        (
+            "extras_and_defaults",
+            "model_10d.onnx",
+            "eps 1e-4 left to its default, fixed=0, unknown attribute/initializer/metadata",
+            m.SerializeToString(),
+        )
+    )
     m = load("model_grid_3to1.onnx")
     m.ir_version = 3
     keep = [o for o in m.opset_import if o.domain == "ai.dpc"]
     del m.opset_import[:]
     m.opset_import.extend(keep)
-    v.append(("ir3_dpc_opset_only", "model_grid_3to1.onnx",
-              "ir_version 3 and no default-domain opset", m.SerializeToString()))
+    v.append(
+        (
+            "ir3_dpc_opset_only",
+            "model_grid_3to1.onnx",
+            "ir_version 3 and no default-domain opset",
+            m.SerializeToString(),
+        )
+    )
     m = load("model_2d.onnx")
     m.ir_version = 13
     nested = b""
     for _ in range(3000):
         nested = pb.field_len(1, nested)
-    v.append(("ir13_unknown_deep_field", "model_2d.onnx",
-              "ir_version 13 and an unknown top-level field 99 nesting 3000 levels deep "
-              "(skipped without recursing)", m.SerializeToString() + pb.field_len(99, nested)))
+    v.append(
+        (
+            "ir13_unknown_deep_field",
+            "model_2d.onnx",
+            "ir_version 13 and an unknown top-level field 99 nesting 3000 levels deep (skipped without recursing)",
+            m.SerializeToString() + pb.field_len(99, nested),
+        )
+    )
     return v
 
 

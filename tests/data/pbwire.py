@@ -75,7 +75,7 @@ def encode(msg, *, packed: str = "native", reverse: bool = False) -> bytes:
     repeated scalar packed) or "none" (every repeated scalar one field per value).
     reverse: write the fields of every message in decreasing field-number order."""
     parts = []
-    fields = msg.ListFields()          # (descriptor, value), sorted by field number
+    fields = msg.ListFields()  # (descriptor, value), sorted by field number
     if reverse:
         fields = fields[::-1]
     for fd, value in fields:

@@ -45,8 +45,17 @@ def main() -> None:
     cpu0 = time.process_time()
     time.sleep(0.5)
     cpu_after = time.process_time() - cpu0
-    print(json.dumps({"interrupted": True, "raise_s": round(raised - sent["t"], 4),
-                      "cpu_after_s": round(cpu_after, 4), "n_points": n, "count": count}))
+    print(
+        json.dumps(
+            {
+                "interrupted": True,
+                "raise_s": round(raised - sent["t"], 4),
+                "cpu_after_s": round(cpu_after, 4),
+                "n_points": n,
+                "count": count,
+            }
+        )
+    )
 
 
 if __name__ == "__main__":

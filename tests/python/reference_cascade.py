@@ -34,9 +34,9 @@ _MIX2 = _U64(0x94D049BB133111EB)
 
 @dataclass
 class RefLayer:
-    subspaces: list[int]          # bitmask per subspace
-    radius: list[float]           # rho_t, in units of the mean spacing h_t
-    kernels: np.ndarray           # float64 [s, b] (the file's float32 values, widened exactly)
+    subspaces: list[int]  # bitmask per subspace
+    radius: list[float]  # rho_t, in units of the mean spacing h_t
+    kernels: np.ndarray  # float64 [s, b] (the file's float32 values, widened exactly)
     eps: float = DEFAULT_EPS
     fixed: int = 0
 
@@ -81,17 +81,21 @@ def load_reference(path) -> RefModel:
         radius = [float(v) for v in attrs["radius"]]
         if kern.ndim != 2 or kern.shape[0] != len(subspaces) or len(radius) != len(subspaces):
             raise ValueError("kernels / subspaces / radius shapes disagree")
-        layers.append(RefLayer(subspaces=subspaces, radius=radius,
-                               kernels=kern.astype(np.float64),
-                               eps=float(attrs.get("eps", DEFAULT_EPS)),
-                               fixed=int(attrs.get("fixed", 0))))
+        layers.append(
+            RefLayer(
+                subspaces=subspaces,
+                radius=radius,
+                kernels=kern.astype(np.float64),
+                eps=float(attrs.get("eps", DEFAULT_EPS)),
+                fixed=int(attrs.get("fixed", 0)),
+            )
+        )
     if prev != proto.graph.output[0].name:
         raise ValueError("the last PointFilter does not produce the graph output")
 
     axes = [int(a) for a in meta.get("dpc.grid_axes", "").split(",") if a.strip()]
     shape = [int(g) for g in meta.get("dpc.grid_shape", "").split(",") if g.strip()]
-    return RefModel(dims=dims, n_points=n_points, layers=layers, grid_axes=axes,
-                    grid_shape=shape, metadata=meta)
+    return RefModel(dims=dims, n_points=n_points, layers=layers, grid_axes=axes, grid_shape=shape, metadata=meta)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -160,19 +164,19 @@ def filter_layer(x: np.ndarray, layer: RefLayer, chunk: int = 256) -> np.ndarray
     subs = []
     for t, mask in enumerate(layer.subspaces):
         dims = [k for k in range(n) if (mask >> k) & 1]
-        h = float(m) ** (-1.0 / len(dims))          # mean spacing h_t = m^(-1/k_t)
-        r = min(layer.radius[t] * h, 0.5)           # receptive radius r_t
-        e = layer.eps * h                           # cut-off e_t
+        h = float(m) ** (-1.0 / len(dims))  # mean spacing h_t = m^(-1/k_t)
+        r = min(layer.radius[t] * h, 0.5)  # receptive radius r_t
+        e = layer.eps * h  # cut-off e_t
         subs.append((dims, h, r, e, layer.kernels[t]))
 
-    total = np.zeros((m, n), dtype=np.float64)      # sum over subspaces of Delta_i^t[k]
-    xt = np.ascontiguousarray(x.T)                  # (n, m)
+    total = np.zeros((m, n), dtype=np.float64)  # sum over subspaces of Delta_i^t[k]
+    xt = np.ascontiguousarray(x.T)  # (n, m)
     for i0 in range(0, m, chunk):
         i1 = min(i0 + chunk, m)
         delta = xt[:, None, :] - xt[:, i0:i1, None]  # (n, c, m): x_jk - x_ik
         tmp = delta + 0.5
         np.floor(tmp, out=tmp)
-        delta -= tmp                                # toroidal difference, in [-1/2, 1/2)
+        delta -= tmp  # toroidal difference, in [-1/2, 1/2)
         del tmp
         for dims, h, r, e, w in subs:
             d2 = delta[dims[0]] ** 2
@@ -187,20 +191,20 @@ def filter_layer(x: np.ndarray, layer: RefLayer, chunk: int = 256) -> np.ndarray
             u = dd * (b - 1) / r
             q = np.minimum(np.floor(u), b - 2).astype(np.int64)
             f = u - q
-            g = w[q] + f * (w[q + 1] - w[q])        # linear interpolation of the kernel
+            g = w[q] + f * (w[q + 1] - w[q])  # linear interpolation of the kernel
             coef = h * g / dd
             rows = i0 + ci
             for k in dims:
                 total[:, k] += np.bincount(rows, weights=coef * delta[k][ci, j], minlength=m)
 
-    count = np.zeros(n, dtype=np.int64)             # c_k: subspaces containing dimension k
+    count = np.zeros(n, dtype=np.int64)  # c_k: subspaces containing dimension k
     for dims, *_ in subs:
         count[dims] += 1
     y = x.copy()
     for k in range(n):
         if count[k] > 0 and not (layer.fixed >> k) & 1:
-            y[:, k] += total[:, k] / count[k]       # normalised sum
-    y -= np.floor(y)                                # wrap to [0, 1)
+            y[:, k] += total[:, k] / count[k]  # normalised sum
+    y -= np.floor(y)  # wrap to [0, 1)
     y[y >= 1.0] = 0.0
     return y
 

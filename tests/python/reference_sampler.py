@@ -55,7 +55,7 @@ class ReferenceSampler:
             pts = m.generate(seed=mix64(self.base + (k + 1) * SET_STEP), n_points=spp)
             for a in range(0, m.dims - 1, 2):
                 if len(self.tables) < dims:
-                    self.tables.append(stratify(pts[:, a:a + 2].astype(F32)))
+                    self.tables.append(stratify(pts[:, a : a + 2].astype(F32)))
             k += 1
         self.mask = dpc.Sampler.mask()
 

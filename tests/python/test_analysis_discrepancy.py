@@ -25,16 +25,20 @@ def test_squared_scipy_discrepancies_are_rooted(sets, method):
 
 
 def test_l2_star_is_scipys(sets):
-    np.testing.assert_allclose(analysis.discrepancy_per_set(sets, "L2-star"),
-                               [qmc.discrepancy(s, method="L2-star") for s in sets], rtol=1e-12)
+    np.testing.assert_allclose(
+        analysis.discrepancy_per_set(sets, "L2-star"), [qmc.discrepancy(s, method="L2-star") for s in sets], rtol=1e-12
+    )
 
 
 @pytest.mark.parametrize("n", [1, 2, 3])
 def test_generalized_l2_is_the_sum_over_projections_of_scipys_l2_star(n):
     # Hickernell's modified L2: GL2^2 = sum over non-empty axis subsets u of L2-star(x_u)^2.
     x = np.random.default_rng(n).random((61, n))
-    total = sum(qmc.discrepancy(x[:, list(u)], method="L2-star") ** 2
-                for k in range(1, n + 1) for u in itertools.combinations(range(n), k))
+    total = sum(
+        qmc.discrepancy(x[:, list(u)], method="L2-star") ** 2
+        for k in range(1, n + 1)
+        for u in itertools.combinations(range(n), k)
+    )
     assert analysis.generalized_l2(x) ** 2 == pytest.approx(total, rel=1e-10)
 
 
@@ -42,7 +46,7 @@ def test_generalized_l2_block_sum_is_independent_of_block_size(monkeypatch):
     d = importlib.import_module("dpc.analysis.discrepancy")  # the name is also a function
     x = np.random.default_rng(9).random((333, 3))
     full = d.generalized_l2(x), d.unanchored_l2(x)
-    monkeypatch.setattr(d, "_BLOCK_ELEMS", 333 * 7)          # 7-row blocks, ragged last block
+    monkeypatch.setattr(d, "_BLOCK_ELEMS", 333 * 7)  # 7-row blocks, ragged last block
     assert (d.generalized_l2(x), d.unanchored_l2(x)) == pytest.approx(full, rel=1e-12)
 
 
@@ -54,7 +58,7 @@ def test_unanchored_l2_against_its_definition_1d():
     lo, hi = np.meshgrid(a, a, indexing="ij")
     keep = lo < hi
     inside = ((x[:, 0] >= lo[..., None]) & (x[:, 0] < hi[..., None])).sum(-1) / 5.0
-    want = (((hi - lo - inside) ** 2) * keep).sum() / g ** 2
+    want = (((hi - lo - inside) ** 2) * keep).sum() / g**2
     assert analysis.unanchored_l2(x) ** 2 == pytest.approx(want, rel=2e-3)
 
 

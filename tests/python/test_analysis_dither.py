@@ -39,7 +39,7 @@ def test_white_noise_masks_score_one_and_bayer_is_periodic():
     b = D.bayer(32)
     assert np.allclose(np.sort(b.ravel()), (np.arange(1024) + 0.5) / 1024)
     qb = D.mask_quality(b)
-    assert qb["levels_elow_mean"] < 1e-12          # all power in a few high-frequency spikes
+    assert qb["levels_elow_mean"] < 1e-12  # all power in a few high-frequency spikes
     assert qb["levels_peak_mean"] > 50 * q["levels_peak_mean"]
     with pytest.raises(InvalidArgumentError):
         D.bayer(12)

@@ -13,8 +13,7 @@ def _midpoint_grid(g, n=2):
     return np.stack(np.meshgrid(*([a] * n), indexing="ij"), axis=-1).reshape(-1, n)
 
 
-@pytest.mark.parametrize("family, rtol", [("gaussian", 1e-6), ("heaviside", 2e-3),
-                                          ("disk", 2e-3)])
+@pytest.mark.parametrize("family, rtol", [("gaussian", 1e-6), ("heaviside", 2e-3), ("disk", 2e-3)])
 def test_exact_integrals_match_quadrature(family, rtol):
     fam = analysis.integrands(family, 8, dims=2, seed=5)
     grid = _midpoint_grid(1000)
@@ -56,9 +55,15 @@ def _slope(m, v):
 def test_variance_convergence_rates():
     counts = [16, 64, 256, 1024]
     study = analysis.integration_study(
-        {"white": lambda c, m, s: baselines.generate("white", m, count=c, seed=s),
-         "jitter": lambda c, m, s: baselines.generate("jitter", m, count=c, seed=s)},
-        counts, integrands_per_family=6, realisations=96, seed=3)
+        {
+            "white": lambda c, m, s: baselines.generate("white", m, count=c, seed=s),
+            "jitter": lambda c, m, s: baselines.generate("jitter", m, count=c, seed=s),
+        },
+        counts,
+        integrands_per_family=6,
+        realisations=96,
+        seed=3,
+    )
     rv = study.rel_var
     assert study.points == {"white": counts, "jitter": counts}
     for fam in analysis.FAMILIES:
@@ -73,10 +78,11 @@ def test_variance_convergence_rates():
 
 def test_study_records_the_actual_point_count_of_fixed_size_samplers():
     def fib(count, m, seed):
-        return baselines.generate("fibonacci", baselines.nearest_fibonacci(m), count=count,
-                                  seed=seed)
-    study = analysis.integration_study({"fibonacci": fib}, [100, 250], realisations=8,
-                                       integrands_per_family=2, families=("disk",))
+        return baselines.generate("fibonacci", baselines.nearest_fibonacci(m), count=count, seed=seed)
+
+    study = analysis.integration_study(
+        {"fibonacci": fib}, [100, 250], realisations=8, integrands_per_family=2, families=("disk",)
+    )
     assert study.points["fibonacci"] == [89, 233]
     assert len(study.rel_var["disk"]["fibonacci"]) == 2
 
@@ -85,8 +91,7 @@ def test_bad_arguments():
     with pytest.raises(InvalidArgumentError):
         analysis.integrands("cosine", 3)
     with pytest.raises(InvalidArgumentError):
-        analysis.relative_variance(np.random.default_rng(0).random((1, 10, 2)),
-                                   analysis.integrands("disk", 2))
+        analysis.relative_variance(np.random.default_rng(0).random((1, 10, 2)), analysis.integrands("disk", 2))
     with pytest.raises(InvalidArgumentError):
         analysis.estimates(np.zeros((3, 10, 3)), analysis.integrands("disk", 2, dims=2))
     with pytest.raises(InvalidArgumentError):

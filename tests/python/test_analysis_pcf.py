@@ -13,18 +13,17 @@ from dpc.errors import InvalidArgumentError
 def _brute_min_distance(x):
     d = x[:, None, :] - x[None, :, :]
     d -= np.rint(d)
-    dist = np.sqrt((d ** 2).sum(-1))
+    dist = np.sqrt((d**2).sum(-1))
     np.fill_diagonal(dist, np.inf)
     return dist.min()
 
 
 def test_max_packing_distance_2d_formula_and_1d():
     for m in (16, 256, 1024, 4096):
-        assert analysis.max_packing_distance(m, 2) == pytest.approx(
-            math.sqrt(2.0 / (math.sqrt(3.0) * m)), rel=1e-12)
+        assert analysis.max_packing_distance(m, 2) == pytest.approx(math.sqrt(2.0 / (math.sqrt(3.0) * m)), rel=1e-12)
     assert analysis.max_packing_distance(100, 1) == pytest.approx(0.01)
     # 3-D: face-centred cubic with m = 4 k^3 points reaches it exactly (spacing sqrt(2)/(2k)).
-    assert analysis.max_packing_distance(4 * 8 ** 3, 3) == pytest.approx(math.sqrt(2) / 16)
+    assert analysis.max_packing_distance(4 * 8**3, 3) == pytest.approx(math.sqrt(2) / 16)
     with pytest.raises(InvalidArgumentError):
         analysis.max_packing_distance(100, 11)
 
@@ -34,7 +33,7 @@ def test_white_noise_pcf_is_one():
     p = analysis.pcf(x, r_max=2.5, bins=50)
     assert p.d_max == pytest.approx(analysis.max_packing_distance(1024, 2))
     assert abs(np.average(p.g, weights=p.pairs + 1) - 1.0) < 0.01
-    assert np.all(np.abs(p.g[5:] - 1.0) < 0.12)         # small first shells hold few pairs
+    assert np.all(np.abs(p.g[5:] - 1.0) < 0.12)  # small first shells hold few pairs
     assert np.abs(p.g - 1.0).mean() < 0.05
     np.testing.assert_allclose(p.r_norm, p.r / p.d_max)
 
@@ -53,7 +52,7 @@ def test_pcf_pair_counts_match_brute_force():
     for s in range(2):
         d = x[s][:, None] - x[s][None]
         d -= np.rint(d)
-        dist = np.sqrt((d ** 2).sum(-1))[~np.eye(300, dtype=bool)]
+        dist = np.sqrt((d**2).sum(-1))[~np.eye(300, dtype=bool)]
         count += np.histogram(dist, bins=p.edges)[0]
     np.testing.assert_array_equal(p.pairs, count)
 
@@ -63,7 +62,7 @@ def test_blue_noise_pcf_is_empty_below_the_minimum_distance():
     p = analysis.pcf(sets, r_max=2.5, bins=100)
     md = analysis.min_distance(sets)
     assert np.all(p.g[p.edges[1:] < md.distances.min()] == 0)
-    assert p.g.max() > 2.0                              # the first-neighbour peak
+    assert p.g.max() > 2.0  # the first-neighbour peak
 
 
 def test_min_distance_matches_brute_force_and_design_value():

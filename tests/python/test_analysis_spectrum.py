@@ -28,8 +28,8 @@ def test_separable_2d_matches_direct_sum(stride):
     fast = analysis.power_spectrum_2d(x, nu_max=1.2, stride=stride, dtype=np.float64)
     direct = analysis.power_spectrum_direct(x, _grid_q(fast.freqs)).reshape(fast.power.shape)
     k = fast.freqs.size // 2
-    assert direct[k, k] == pytest.approx(150.0)      # DC of the direct sum is m ...
-    direct[k, k] = 0.0                               # ... and removed in the spectrum
+    assert direct[k, k] == pytest.approx(150.0)  # DC of the direct sum is m ...
+    direct[k, k] = 0.0  # ... and removed in the spectrum
     np.testing.assert_allclose(fast.power, direct, rtol=1e-9, atol=1e-9)
     assert np.array_equal(fast.freqs, stride * np.arange(-k, k + 1))
 
@@ -66,17 +66,16 @@ def test_1d_projection_blocked_product_matches_direct_sum(stride):
 def test_1d_two_band_sampling_beyond_max_freqs():
     x = np.random.default_rng(14).random((2, 257, 1))
     s1 = analysis.power_spectrum_1d(x, nu_max=4.0, max_freqs=200, dtype=np.float64)
-    assert np.array_equal(s1.freqs[:100], np.arange(1, 101))          # every integer first
+    assert np.array_equal(s1.freqs[:100], np.arange(1, 101))  # every integer first
     assert np.all(np.diff(s1.freqs[100:]) == s1.stride) and s1.stride == 10
     assert s1.freqs[-1] >= 4 * 257 and s1.freqs.size <= 200
-    np.testing.assert_allclose(s1.power, analysis.power_spectrum_direct(x, s1.freqs),
-                               rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(s1.power, analysis.power_spectrum_direct(x, s1.freqs), rtol=1e-9, atol=1e-9)
 
 
 def test_spectrum_symmetry_and_dc():
     x = np.random.default_rng(5).random((4, 64, 2))
     s = analysis.power_spectrum_2d(x, dtype=np.float64)
-    np.testing.assert_allclose(s.power, s.power[::-1, ::-1], rtol=1e-12)   # P(q) = P(-q)
+    np.testing.assert_allclose(s.power, s.power[::-1, ::-1], rtol=1e-12)  # P(q) = P(-q)
     k = s.freqs.size // 2
     assert s.power[k, k] == 0.0
     assert s.freqs[-1] >= 4 * math.sqrt(64) + 1
@@ -87,7 +86,7 @@ def test_white_noise_is_flat_at_one_within_2_percent(white_100x1024):
     s = analysis.power_spectrum_2d(white_100x1024)
     assert s.stride == 1 and s.n_sets == 100
     nu = np.hypot(*np.meshgrid(s.freqs, s.freqs, indexing="ij")) / 32.0
-    for lo in np.arange(0.0, 4.0, 0.5):                   # every band of width 0.5 in (0, 4]
+    for lo in np.arange(0.0, 4.0, 0.5):  # every band of width 0.5 in (0, 4]
         band = (nu > lo) & (nu <= lo + 0.5)
         assert abs(s.power[band].mean() - 1.0) < 0.02, (lo, s.power[band].mean())
     r = s.radial(4.0)
@@ -107,7 +106,7 @@ def test_white_noise_projection_and_mc_radial_are_flat(white_100x1024):
 
 
 def _analytic_jitter(freqs, k):
-    a = np.sinc(freqs / k) ** 2                          # numpy sinc(x) = sin(pi x)/(pi x)
+    a = np.sinc(freqs / k) ** 2  # numpy sinc(x) = sin(pi x)/(pi x)
     p = 1.0 - a[:, None] * a[None, :]
     c = freqs.size // 2
     p[c, c] = 0.0
@@ -117,8 +116,9 @@ def _analytic_jitter(freqs, k):
 def test_jittered_32x32_matches_its_analytic_spectrum():
     x = baselines.generate("jitter", 1024, dims=2, count=64, seed=7)
     s = analysis.power_spectrum_2d(x)
-    ref = sp.Spectrum2D(power=_analytic_jitter(s.freqs, 32), freqs=s.freqs, stride=1,
-                        n_points=1024, n_sets=1, dims=(0, 1))
+    ref = sp.Spectrum2D(
+        power=_analytic_jitter(s.freqs, 32), freqs=s.freqs, stride=1, n_points=1024, n_sets=1, dims=(0, 1)
+    )
     got, want = s.radial(4.0), ref.radial(4.0)
     ratio = got.mean / want.mean
     assert np.all(np.abs(ratio[1:] - 1.0) < 0.15), np.abs(ratio - 1).max()
@@ -148,15 +148,15 @@ def test_bnot_sets_match_the_bnot_radial_target():
     sets = baselines.reference_sets("bnot", 1024, 2)
     assert sets.shape == (10, 1024, 2)
     r = analysis.power_spectrum_2d(sets).radial(4.0)
-    tgt = reference_radial_spectrum("bnot", 1024, 2)       # DC row (= m) dropped
-    assert tgt.radius[0] == 1 and np.array_equal(r.radius, tgt.radius[:r.radius.size])
-    diff = np.abs(r.mean - tgt.power[:r.mean.size])
+    tgt = reference_radial_spectrum("bnot", 1024, 2)  # DC row (= m) dropped
+    assert tgt.radius[0] == 1 and np.array_equal(r.radius, tgt.radius[: r.radius.size])
+    diff = np.abs(r.mean - tgt.power[: r.mean.size])
     assert diff.mean() < 0.03
     assert diff[r.nu < 0.5].max() < 0.01
-    assert abs(int(np.argmax(r.mean)) - int(np.argmax(tgt.power[:r.mean.size]))) <= 2
+    assert abs(int(np.argmax(r.mean)) - int(np.argmax(tgt.power[: r.mean.size]))) <= 2
     # The comparison discriminates: white noise is nowhere near the target.
     w = analysis.power_spectrum_2d(np.random.default_rng(9).random((10, 1024, 2))).radial(4.0)
-    assert np.abs(w.mean - tgt.power[:w.mean.size]).mean() > 0.3
+    assert np.abs(w.mean - tgt.power[: w.mean.size]).mean() > 0.3
 
 
 def test_bnot_256_low_frequency_energy_and_peak():
@@ -185,8 +185,9 @@ def test_stride_kicks_in_for_large_sets_and_stays_exact():
 
 
 # ------------------------------------------------------------------ input validation
-@pytest.mark.parametrize("bad", [np.full((5, 2), np.nan), np.full((5, 2), 1.5),
-                                 np.zeros((2, 2, 2, 2)), np.array([["a", "b"]])])
+@pytest.mark.parametrize(
+    "bad", [np.full((5, 2), np.nan), np.full((5, 2), 1.5), np.zeros((2, 2, 2, 2)), np.array([["a", "b"]])]
+)
 def test_bad_points_raise_typed_errors(bad):
     with pytest.raises(InvalidArgumentError):
         analysis.power_spectrum_2d(bad)
@@ -202,5 +203,5 @@ def test_bad_options_raise_typed_errors():
         analysis.power_spectrum_1d(x, nu_max=0)
     with pytest.raises(InvalidArgumentError):
         analysis.power_spectrum_direct(x, [[0.5, 1, 2]])
-    one = analysis.power_spectrum_2d(np.where(x == 0, 1.0, x)[:, :2])   # 1.0 wraps to 0.0
+    one = analysis.power_spectrum_2d(np.where(x == 0, 1.0, x)[:, :2])  # 1.0 wraps to 0.0
     assert np.isfinite(one.power).all()

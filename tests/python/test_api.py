@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cpu_isa import HAVE_AVX2, HAVE_AVX512, VECTOR_ISAS  # noqa: E402,F401
 
 import dpc
+from cpu_isa import HAVE_AVX2, HAVE_AVX512, VECTOR_ISAS  # noqa: E402,F401
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 M2D = DATA / "model_2d.onnx"
@@ -19,11 +19,14 @@ GRID = DATA / "model_grid_3to1.onnx"
 M10 = DATA / "model_10d.onnx"
 
 
-
-
 def _is_c_float32(a: np.ndarray, shape) -> bool:
-    return (isinstance(a, np.ndarray) and a.dtype == np.float32 and a.shape == tuple(shape)
-            and a.flags["C_CONTIGUOUS"] and a.flags["WRITEABLE"])
+    return (
+        isinstance(a, np.ndarray)
+        and a.dtype == np.float32
+        and a.shape == tuple(shape)
+        and a.flags["C_CONTIGUOUS"]
+        and a.flags["WRITEABLE"]
+    )
 
 
 # ---- arrays ---------------------------------------------------------------------------------
@@ -78,7 +81,7 @@ def test_same_seed_same_bits_and_seeds_differ():
 @pytest.mark.parametrize("path,n", [(M2D, None), (M2D, 300), (GRID, None), (M10, 200)])
 def test_batch_set_c_is_generate_of_seed_plus_c(path, n):
     m = dpc.load(path, threads=2)
-    for seed in (0, 2**64 - 2):   # the second wraps to 0, 1 within the batch
+    for seed in (0, 2**64 - 2):  # the second wraps to 0, 1 within the batch
         b = m.generate_batch(4, seed=seed, n_points=n)
         for c in range(4):
             assert np.array_equal(b[c], m.generate((seed + c) % 2**64, n)), f"set {c}, seed {seed}"
@@ -200,16 +203,14 @@ def test_vector_isa_request_matches_the_cpu(isa, have):
             dpc.load(M2D, isa=isa)
 
 
-@pytest.mark.parametrize("path,n", [(M2D, None), (M2D, 5000), (DATA / "model_3d_proj.onnx", None),
-                                    (GRID, None)])
+@pytest.mark.parametrize("path,n", [(M2D, None), (M2D, 5000), (DATA / "model_3d_proj.onnx", None), (GRID, None)])
 def test_thread_count_does_not_change_bits(path, n):
     one = dpc.load(path, threads=1)
     eight = dpc.load(path, threads=8)
     assert (one.threads, eight.threads) == (1, 8)
     for seed in (0, 7):
         assert np.array_equal(one.generate(seed, n), eight.generate(seed, n))
-    assert np.array_equal(one.generate_batch(3, seed=2, n_points=n),
-                          eight.generate_batch(3, seed=2, n_points=n))
+    assert np.array_equal(one.generate_batch(3, seed=2, n_points=n), eight.generate_batch(3, seed=2, n_points=n))
 
 
 # ---- the GIL --------------------------------------------------------------------------------
@@ -253,8 +254,7 @@ def test_gil_is_released_while_c_runs():
     # second slip through around the call. Released: the thread counts during the whole call,
     # about 5e5 per second on a 2-core machine.
     rate = (c1 - c0) / elapsed
-    assert c1 - c0 > 50000 and rate > 5e4, (
-        f"counter advanced {c1 - c0} times during a {elapsed:.3f} s generate call")
+    assert c1 - c0 > 50000 and rate > 5e4, f"counter advanced {c1 - c0} times during a {elapsed:.3f} s generate call"
 
 
 def test_stratified_input_points_and_the_load_option():
@@ -268,8 +268,8 @@ def test_stratified_input_points_and_the_load_option():
         while (g + 1) ** n <= m:
             g += 1
         cells = (np.minimum((x * g).astype(np.int64), g - 1) * g ** np.arange(n)).sum(axis=1)
-        counts = np.bincount(cells, minlength=g ** n)
-        assert set(np.unique(counts)) <= {m // g ** n, m // g ** n + 1}, (m, n)
+        counts = np.bincount(cells, minlength=g**n)
+        assert set(np.unique(counts)) <= {m // g**n, m // g**n + 1}, (m, n)
         np.testing.assert_allclose(x * g - np.floor(x * g), dpc.uniform(4, m, n), atol=2e-5)
     np.testing.assert_array_equal(dpc.stratified(4, 5, 64), dpc.uniform(4, 5, 64))  # no grid fits
     assert dpc.load("bnot-2d").input == "uniform"  # auto: the bundled models were trained on uniform points
@@ -288,14 +288,24 @@ def test_input_auto_follows_the_files_dpc_input(tmp_path):
     """input="auto" (default) is what the model was trained on: metadata dpc.input, uniform
     without it; a bad value or stratified with grid axes is a format error."""
     from dpc import model_file as mf
+
     layers = [mf.Layer([0b11], [3.0], -0.02 * np.ones((1, 8), dtype=np.float32))]
     paths = {}
-    for tag, meta, grid in [("none", {}, False), ("strat", {"dpc.input": "stratified"}, False),
-                            ("bad", {"dpc.input": "sobol"}, False),
-                            ("grid", {"dpc.input": "stratified"}, True)]:
+    for tag, meta, grid in [
+        ("none", {}, False),
+        ("strat", {"dpc.input": "stratified"}, False),
+        ("bad", {"dpc.input": "sobol"}, False),
+        ("grid", {"dpc.input": "stratified"}, True),
+    ]:
         ls = [mf.Layer([0b10], [3.0], -0.02 * np.ones((1, 8), dtype=np.float32), fixed=0b01)] if grid else layers
-        spec = mf.ModelSpec(dims=2, n_points=64, layers=ls, name=tag, metadata=meta,
-                            **(dict(grid_axes=[0], grid_shape=[64]) if grid else {}))
+        spec = mf.ModelSpec(
+            dims=2,
+            n_points=64,
+            layers=ls,
+            name=tag,
+            metadata=meta,
+            **(dict(grid_axes=[0], grid_shape=[64]) if grid else {}),
+        )
         paths[tag] = tmp_path / f"{tag}.onnx"
         mf.write_model(spec, paths[tag])
     assert dpc.load(paths["none"]).input == "uniform"

@@ -67,8 +67,8 @@ def test_halton_is_scipys():
 
 def test_poisson_disk_keeps_its_radius_away_from_the_boundary():
     x = baselines.generate("poisson-disk", 256, dims=2, seed=2)[0]
-    d = x[:, None] - x[None]                    # scipy's sampler is not periodic: plain distance
-    dist = np.sqrt((d ** 2).sum(-1)) + np.eye(256)
+    d = x[:, None] - x[None]  # scipy's sampler is not periodic: plain distance
+    dist = np.sqrt((d**2).sum(-1)) + np.eye(256)
     d_max = math.sqrt(2 / (math.sqrt(3) * 256))
     assert dist.min() > 0.5 * d_max
 
@@ -85,7 +85,7 @@ def test_rank1_lattice_structure():
     # P_2-optimal generators beat a poor one (a = 1: all points on the diagonal).
     d = x[:, None] - x[None]
     d -= np.rint(d)
-    dist = np.sqrt((d ** 2).sum(-1)) + np.eye(1024)
+    dist = np.sqrt((d**2).sum(-1)) + np.eye(1024)
     assert dist.min() > 0.8 * math.sqrt(2 / (math.sqrt(3) * 1024))
 
 
@@ -108,11 +108,11 @@ def test_reference_sets_are_the_vendored_files():
     x = baselines.reference_sets("bnot", 1024, 2)
     first = np.loadtxt(str(root / "pcf-bnot-d2-n1024" / "pointset-bnot-d2-n1024-00001.txt"))
     np.testing.assert_array_equal(x[0], first)
-    assert baselines.reference_sets("bnot", 256, 2).shape == (20, 256, 2)   # pcf- and test-pcf-
+    assert baselines.reference_sets("bnot", 256, 2).shape == (20, 256, 2)  # pcf- and test-pcf-
     assert baselines.reference_sets("bnot", 256, 1).shape == (101, 256, 1)
     ref = baselines.get("ref-step")
     assert ref.available() == [(1024, 2, 8)]
-    got = ref.generate_batch(3, seed=7)               # sets 7, 0, 1 (cyclic)
+    got = ref.generate_batch(3, seed=7)  # sets 7, 0, 1 (cyclic)
     np.testing.assert_array_equal(got, baselines.reference_sets("step", 1024, 2)[[7, 0, 1]])
     with pytest.raises(InvalidArgumentError, match="8 sets"):
         ref.generate_batch(9)

@@ -39,11 +39,9 @@ def test_list_shows_models_and_baselines(capsys):
 @pytest.mark.parametrize("ext", [".npy", ".txt", ".bin"])
 def test_generate_baseline_in_every_format(tmp_path, capsys, ext):
     f = tmp_path / f"sobol{ext}"
-    rc, _, err = run(capsys, "generate", "-m", "sobol", "-n", 128, "-d", 3, "-s", 4, "-c", 3,
-                     "-o", f)
+    rc, _, err = run(capsys, "generate", "-m", "sobol", "-n", 128, "-d", 3, "-s", 4, "-c", 3, "-o", f)
     assert rc == 0 and "wrote 3 set(s)" in err
-    np.testing.assert_array_equal(read_points(f),
-                                  baselines.generate("sobol", 128, dims=3, count=3, seed=4))
+    np.testing.assert_array_equal(read_points(f), baselines.generate("sobol", 128, dims=3, count=3, seed=4))
 
 
 def test_generate_utk_text_format_option_and_float32_bin(tmp_path, capsys):
@@ -102,25 +100,22 @@ def test_generate_to_stdout_reads_back(tmp_path, capsys):
     assert rc == 0
     f = tmp_path / "o.txt"
     f.write_text(out)
-    np.testing.assert_array_equal(read_points(f), baselines.generate("jitter", 16, count=2,
-                                                                     seed=1))
+    np.testing.assert_array_equal(read_points(f), baselines.generate("jitter", 16, count=2, seed=1))
 
 
 def test_analyze_writes_metrics_and_plots(tmp_path, capsys):
     sets = baselines.generate("jitter", 256, count=6, seed=2)
     a, b = tmp_path / "a.npy", tmp_path / "b.txt"
     np.save(a, sets[:4])
-    (tmp_path / "b.txt").write_text("\n#\n".join(
-        "\n".join(f"{x!r} {y!r}" for x, y in s.tolist()) for s in sets[4:]))
+    (tmp_path / "b.txt").write_text("\n#\n".join("\n".join(f"{x!r} {y!r}" for x, y in s.tolist()) for s in sets[4:]))
     out = tmp_path / "out"
-    rc, stdout, err = run(capsys, "analyze", "-i", a, b, "-o", out)   # two inputs, one batch
+    rc, stdout, err = run(capsys, "analyze", "-i", a, b, "-o", out)  # two inputs, one batch
     assert rc == 0, err
     doc = json.loads((out / "metrics.json").read_text())
     assert doc["input"]["sets"] == 6 and doc["input"]["points"] == 256
     want = analysis.power_spectrum_2d(sets).low_frequency_energy(0.5)
     assert doc["summary"]["E_low<0.5"] == pytest.approx(want, rel=1e-9)
-    assert doc["min_distance"]["mean_ratio"] == pytest.approx(
-        analysis.min_distance_ratio(sets), rel=1e-12)
+    assert doc["min_distance"]["mean_ratio"] == pytest.approx(analysis.min_distance_ratio(sets), rel=1e-12)
     assert doc["discrepancy"]["CD"] == pytest.approx(analysis.discrepancy(sets, "CD"))
     assert len(doc["radial"]["nu"]) == len(doc["radial"]["mean"]) > 50
     assert doc["radial"]["nu"][-1] == pytest.approx(4.0)
@@ -133,8 +128,7 @@ def test_analyze_3d_baseline_and_bin_input(tmp_path, capsys):
     f = tmp_path / "h.bin"
     assert run(capsys, "generate", "-m", "halton", "-n", 200, "-d", 3, "-c", 3, "-o", f)[0] == 0
     out = tmp_path / "o3"
-    rc, _, err = run(capsys, "analyze", "-i", f, "-o", out, "--subspace", "2,0",
-                     "--discrepancy", "GL2")
+    rc, _, err = run(capsys, "analyze", "-i", f, "-o", out, "--subspace", "2,0", "--discrepancy", "GL2")
     assert rc == 0, err
     doc = json.loads((out / "metrics.json").read_text())
     assert doc["spectrum_2d"]["dims"] == [2, 0] and doc["radial_nd"]["method"] == "monte-carlo"
@@ -146,8 +140,23 @@ def test_compare_table_and_plots(tmp_path, capsys):
     f = tmp_path / "w.npy"
     np.save(f, baselines.generate("white", 256, count=4, seed=9))
     out = tmp_path / "cmp"
-    rc, stdout, err = run(capsys, "compare", "-i", f, "-i", "jitter", "ref-bnot", "-n", 256,
-                          "-c", 4, "-o", out, "--discrepancy", "CD,L2-star")
+    rc, stdout, err = run(
+        capsys,
+        "compare",
+        "-i",
+        f,
+        "-i",
+        "jitter",
+        "ref-bnot",
+        "-n",
+        256,
+        "-c",
+        4,
+        "-o",
+        out,
+        "--discrepancy",
+        "CD,L2-star",
+    )
     assert rc == 0, err
     table = (out / "compare.md").read_text()
     assert table.strip() == stdout.strip().split("\nwrote")[0].strip()
@@ -161,19 +170,22 @@ def test_compare_table_and_plots(tmp_path, capsys):
         assert (out / png).read_bytes()[:8] == PNG
 
 
-@pytest.mark.parametrize("args, code", [
-    (["generate", "-x"], 2),
-    (["generate", "-m", "white"], 2),                       # a baseline needs -n
-    (["generate", "-m", "white", "-n", "abc"], 2),
-    (["analyze", "-o", "OUT"], 2),                           # no input
-    (["generate", "-m", "no-such-model", "-n", "5"], 1),
-    (["generate", "-m", "jitter", "-n", "1000"], 1),
-    (["generate", "-m", "white", "-n", "5", "-o", "x.unknown"], 1),
-    (["analyze", "-i", "missing.npy", "-o", "OUT"], 1),
-    (["analyze", "-i", "BAD", "-o", "OUT"], 1),
-    (["analyze", "-i", "OK", "-o", "OUT", "--subspace", "0,7"], 1),
-    (["compare", "-i", "ref-bnot", "-o", "OUT"], 1),         # ambiguous without -n
-])
+@pytest.mark.parametrize(
+    "args, code",
+    [
+        (["generate", "-x"], 2),
+        (["generate", "-m", "white"], 2),  # a baseline needs -n
+        (["generate", "-m", "white", "-n", "abc"], 2),
+        (["analyze", "-o", "OUT"], 2),  # no input
+        (["generate", "-m", "no-such-model", "-n", "5"], 1),
+        (["generate", "-m", "jitter", "-n", "1000"], 1),
+        (["generate", "-m", "white", "-n", "5", "-o", "x.unknown"], 1),
+        (["analyze", "-i", "missing.npy", "-o", "OUT"], 1),
+        (["analyze", "-i", "BAD", "-o", "OUT"], 1),
+        (["analyze", "-i", "OK", "-o", "OUT", "--subspace", "0,7"], 1),
+        (["compare", "-i", "ref-bnot", "-o", "OUT"], 1),  # ambiguous without -n
+    ],
+)
 def test_errors_are_one_line(tmp_path, capsys, args, code):
     bad = tmp_path / "bad.txt"
     bad.write_text("0.1 0.2\n0.3\n")
@@ -188,12 +200,14 @@ def test_errors_are_one_line(tmp_path, capsys, args, code):
 
 def test_cli_default_discrepancies_are_all_methods():
     from dpc import cli
+
     assert cli._DISC_DEFAULT.split(",") == list(analysis.DISCREPANCY_METHODS)
 
 
 def test_module_and_console_script_entry_points(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "dpc.cli", "generate", "-m", "nope", "-n", "3"],
-                       capture_output=True, text=True)
+    r = subprocess.run(
+        [sys.executable, "-m", "dpc.cli", "generate", "-m", "nope", "-n", "3"], capture_output=True, text=True
+    )
     assert r.returncode == 1 and r.stderr.startswith("dpc: error:")
     exe = shutil.which("dpc")
     if exe is None:
@@ -219,8 +233,24 @@ def test_generate_from_stratified_input(tmp_path, capsys):
 
 def test_compare_with_stratified_model_inputs(tmp_path, capsys):
     out = tmp_path / "cmp"
-    rc, _, err = run(capsys, "compare", "-i", "bnot-2d", "-i", "jitter", "-n", 1024, "-c", 2,
-                     "--stratified", "--no-integration", "--discrepancy", "none", "-o", out)
+    rc, _, err = run(
+        capsys,
+        "compare",
+        "-i",
+        "bnot-2d",
+        "-i",
+        "jitter",
+        "-n",
+        1024,
+        "-c",
+        2,
+        "--stratified",
+        "--no-integration",
+        "--discrepancy",
+        "none",
+        "-o",
+        out,
+    )
     assert rc == 0, err
     rows = {r["label"]: r for r in json.loads((out / "compare.json").read_text())["rows"]}
     assert set(rows) == {"bnot-2d (stratified)", "jitter"}, rows.keys()

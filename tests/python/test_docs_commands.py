@@ -21,7 +21,7 @@ def blocks():
     out = []
     for doc in [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]:
         for mt in MARK.finditer(doc.read_text(encoding="utf-8")):
-            line = doc.read_text(encoding="utf-8")[:mt.start()].count("\n") + 1
+            line = doc.read_text(encoding="utf-8")[: mt.start()].count("\n") + 1
             out.append(pytest.param(mt.group(1), mt.group(2), id=f"{doc.name}:{line}"))
     return out
 
@@ -31,11 +31,23 @@ def checkout(tmp_path_factory):
     """The files of the repository that git does not ignore, or the tree without build output."""
     dst = tmp_path_factory.mktemp("docs-checkout")
     try:
-        files = subprocess.run(["git", "ls-files", "-z", "--cached", "--others", "--exclude-standard"], cwd=REPO,
-                               capture_output=True, check=True, timeout=60).stdout.decode().split("\0")
+        files = (
+            subprocess.run(
+                ["git", "ls-files", "-z", "--cached", "--others", "--exclude-standard"],
+                cwd=REPO,
+                capture_output=True,
+                check=True,
+                timeout=60,
+            )
+            .stdout.decode()
+            .split("\0")
+        )
     except (OSError, subprocess.CalledProcessError):
-        files = [str(p.relative_to(REPO)) for p in REPO.rglob("*")
-                 if p.is_file() and p.relative_to(REPO).parts[0] not in ("build", "runs", ".git")]
+        files = [
+            str(p.relative_to(REPO))
+            for p in REPO.rglob("*")
+            if p.is_file() and p.relative_to(REPO).parts[0] not in ("build", "runs", ".git")
+        ]
     for f in filter(None, files):
         src = REPO / f
         if src.is_file():

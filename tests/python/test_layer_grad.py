@@ -21,10 +21,9 @@ import re
 import numpy as np
 import pytest
 
+import dpc
 import reference_cascade as rc
 from cpu_isa import VECTOR_ISAS
-
-import dpc
 from dpc import _core, errors  # noqa: E402
 
 EPS = 1e-4
@@ -36,6 +35,7 @@ def isa(request, monkeypatch):
     """Run the test on one ISA path (the kernels read DPC_ISA on every call)."""
     monkeypatch.setenv("DPC_ISA", request.param)
     return request.param
+
 
 # name: (n, subspaces, radius, fixed, grid shape of the fixed dims or None, m)
 LAYERS = {
@@ -138,8 +138,7 @@ def kink_distance(x, subspaces, radius, eps, fixed, b):
     return worst
 
 
-def smooth_points(n, m, subspaces, radius, fixed, b, margin, grid=None, seam=True, interior=0.0,
-                  start=0):
+def smooth_points(n, m, subspaces, radius, fixed, b, margin, grid=None, seam=True, interior=0.0, start=0):
     """A deterministic random set whose pairs all lie `margin` away from every kink."""
     for seed in range(start, start + 500):
         rng = np.random.default_rng(seed)
@@ -233,26 +232,31 @@ def _layer_function():
         @staticmethod
         def backward(ctx, grad_y):
             x, w = ctx.saved_tensors
-            gx, gk = _core.layer_backward(x.detach().numpy(), w.detach().numpy(), *ctx.layer,
-                                          grad_y.contiguous().numpy(), 1)
+            gx, gk = _core.layer_backward(
+                x.detach().numpy(), w.detach().numpy(), *ctx.layer, grad_y.contiguous().numpy(), 1
+            )
             return t.from_numpy(gx), t.from_numpy(gk), None, None, None, None
 
     return CLayer
 
 
-@pytest.mark.parametrize("case", [
-    (2, [0b11], [2.5], 0, None, 24, 6),
-    (3, [0b111, 0b100], [2.0, 3.0], 0, None, 20, 5),
-    (3, [0b011, 0b100], [2.0, 3.0], 0b011, (4, 4), 16, 5),
-])
+@pytest.mark.parametrize(
+    "case",
+    [
+        (2, [0b11], [2.5], 0, None, 24, 6),
+        (3, [0b111, 0b100], [2.0, 3.0], 0, None, 20, 5),
+        (3, [0b011, 0b100], [2.0, 3.0], 0b011, (4, 4), 16, 5),
+    ],
+)
 def test_gradcheck(case):
     t = _torch()
     n, subs, rad, fixed, grid, m, b = case
     # gradcheck perturbs inputs by 1e-6 and does not undo the wrap: stay clear of the seam, and of
     # outputs near it (checked below).
     for start in range(0, 5000, 500):
-        x, rng = smooth_points(n, m, subs, rad, fixed, b, margin=2e-5, grid=grid, seam=False,
-                               interior=0.05, start=start)
+        x, rng = smooth_points(
+            n, m, subs, rad, fixed, b, margin=2e-5, grid=grid, seam=False, interior=0.05, start=start
+        )
         w = kernels_for(rng, len(subs), b, scale=0.2)
         y = _core.layer_forward(x, w, subs, rad, EPS, fixed, 1)
         if np.minimum(y, 1 - y).min() > 1e-3:
@@ -260,8 +264,9 @@ def test_gradcheck(case):
     xt = t.tensor(x, dtype=t.float64, requires_grad=True)
     wt = t.tensor(w, dtype=t.float64, requires_grad=True)
     fn = _layer_function()
-    assert t.autograd.gradcheck(lambda a, k: fn.apply(a, k, subs, rad, EPS, fixed), (xt, wt),
-                                eps=1e-6, atol=1e-6, rtol=1e-5)
+    assert t.autograd.gradcheck(
+        lambda a, k: fn.apply(a, k, subs, rad, EPS, fixed), (xt, wt), eps=1e-6, atol=1e-6, rtol=1e-5
+    )
 
 
 # ------------------------------------------------------------------------------------------------
@@ -279,11 +284,14 @@ def _both(x, w, subs, rad, fixed, g, threads):
     return y, gx, gk
 
 
-@pytest.mark.parametrize("shape,subs,rad", [
-    ((20000, 2), [0b11], [3.0]),                      # one big set: chunks across threads
-    ((2, 9000, 3), [0b011, 0b101, 0b110], [2.0, 2.0, 2.0]),  # fewer sets than threads, big sets
-    ((5, 1500, 3), [0b111, 0b100], [2.0, 3.0]),        # sets across threads
-])
+@pytest.mark.parametrize(
+    "shape,subs,rad",
+    [
+        ((20000, 2), [0b11], [3.0]),  # one big set: chunks across threads
+        ((2, 9000, 3), [0b011, 0b101, 0b110], [2.0, 2.0, 2.0]),  # fewer sets than threads, big sets
+        ((5, 1500, 3), [0b111, 0b100], [2.0, 3.0]),  # sets across threads
+    ],
+)
 def test_thread_count_does_not_change_bits(shape, subs, rad, isa):
     rng = np.random.default_rng(11)
     x = rng.random(shape)
@@ -296,11 +304,14 @@ def test_thread_count_does_not_change_bits(shape, subs, rad, isa):
             assert np.array_equal(_bits(a), _bits(b)), f"threads={threads}"
 
 
-@pytest.mark.parametrize("shape,subs,rad,fixed", [
-    ((3, 1024, 4), [0b1111], [2.0], 0),                 # 4-D all pairs
-    ((2, 700, 10), [0b1111111111, 0b11], [1.0, 3.0], 0),  # 10-D all pairs + a 2-D grid subspace
-    ((2, 1500, 3), [0b111, 0b100], [2.5, 3.0], 0b001),  # 3-D grid, a fixed dimension
-])
+@pytest.mark.parametrize(
+    "shape,subs,rad,fixed",
+    [
+        ((3, 1024, 4), [0b1111], [2.0], 0),  # 4-D all pairs
+        ((2, 700, 10), [0b1111111111, 0b11], [1.0, 3.0], 0),  # 10-D all pairs + a 2-D grid subspace
+        ((2, 1500, 3), [0b111, 0b100], [2.5, 3.0], 0b001),  # 3-D grid, a fixed dimension
+    ],
+)
 def test_vector_thread_count_does_not_change_bits(shape, subs, rad, fixed, monkeypatch):
     rng = np.random.default_rng(13)
     x = rng.random(shape)
@@ -371,8 +382,9 @@ def test_batch_equals_sets():
 
 def _good():
     rng = np.random.default_rng(2)
-    return dict(x=rng.random((50, 3)), kernels=np.zeros((2, 8)), subspaces=[0b111, 0b100],
-                radius=[2.0, 3.0], eps=EPS, fixed=0)
+    return dict(
+        x=rng.random((50, 3)), kernels=np.zeros((2, 8)), subspaces=[0b111, 0b100], radius=[2.0, 3.0], eps=EPS, fixed=0
+    )
 
 
 def _call_both(**kw):
@@ -385,35 +397,38 @@ def _call_both(**kw):
     return str(e1.value), str(e2.value)
 
 
-@pytest.mark.parametrize("kw,match", [
-    (dict(x=np.full((50, 3), np.nan)), "finite and in \\[0, 1\\)"),
-    (dict(x=np.ones((50, 3))), "finite and in \\[0, 1\\)"),
-    (dict(x=-np.full((50, 3), 1e-9)), "finite and in \\[0, 1\\)"),
-    (dict(x=np.zeros((0, 3))), "positive"),
-    (dict(x=np.zeros(5)), "shape"),
-    (dict(x=np.zeros((4, 65)), subspaces=[1, 2]), "dims"),
-    (dict(kernels=np.full((2, 8), np.inf)), "not finite"),
-    (dict(kernels=np.zeros((2, 1))), "bins"),
-    (dict(kernels=np.zeros((2, 8, 1))), "shape"),
-    (dict(kernels=np.zeros((3, 8))), "must agree"),
-    (dict(radius=[2.0]), "must agree"),
-    (dict(subspaces=[0, 4]), "nonzero"),
-    (dict(subspaces=[0b1000, 4]), "nonzero"),
-    (dict(subspaces=[4, 4]), "equal"),
-    (dict(subspaces=[-1, 4]), "negative"),
-    (dict(subspaces=[1.5, 4]), "int"),
-    (dict(radius=[0.0, 3.0]), "radius"),
-    (dict(radius=[-1.0, 3.0]), "radius"),
-    (dict(radius=[np.inf, 3.0]), "radius"),
-    (dict(radius=[np.nan, 3.0]), "radius"),
-    (dict(radius=[2e6, 3.0]), "radius"),
-    (dict(eps=-1e-4), "eps"),
-    (dict(eps=np.nan), "eps"),
-    (dict(eps=np.inf), "eps"),
-    (dict(fixed=0b1000), "fixed"),
-    (dict(fixed=-1), "negative"),
-    (dict(fixed=2**64), "64 bits"),
-])
+@pytest.mark.parametrize(
+    "kw,match",
+    [
+        (dict(x=np.full((50, 3), np.nan)), "finite and in \\[0, 1\\)"),
+        (dict(x=np.ones((50, 3))), "finite and in \\[0, 1\\)"),
+        (dict(x=-np.full((50, 3), 1e-9)), "finite and in \\[0, 1\\)"),
+        (dict(x=np.zeros((0, 3))), "positive"),
+        (dict(x=np.zeros(5)), "shape"),
+        (dict(x=np.zeros((4, 65)), subspaces=[1, 2]), "dims"),
+        (dict(kernels=np.full((2, 8), np.inf)), "not finite"),
+        (dict(kernels=np.zeros((2, 1))), "bins"),
+        (dict(kernels=np.zeros((2, 8, 1))), "shape"),
+        (dict(kernels=np.zeros((3, 8))), "must agree"),
+        (dict(radius=[2.0]), "must agree"),
+        (dict(subspaces=[0, 4]), "nonzero"),
+        (dict(subspaces=[0b1000, 4]), "nonzero"),
+        (dict(subspaces=[4, 4]), "equal"),
+        (dict(subspaces=[-1, 4]), "negative"),
+        (dict(subspaces=[1.5, 4]), "int"),
+        (dict(radius=[0.0, 3.0]), "radius"),
+        (dict(radius=[-1.0, 3.0]), "radius"),
+        (dict(radius=[np.inf, 3.0]), "radius"),
+        (dict(radius=[np.nan, 3.0]), "radius"),
+        (dict(radius=[2e6, 3.0]), "radius"),
+        (dict(eps=-1e-4), "eps"),
+        (dict(eps=np.nan), "eps"),
+        (dict(eps=np.inf), "eps"),
+        (dict(fixed=0b1000), "fixed"),
+        (dict(fixed=-1), "negative"),
+        (dict(fixed=2**64), "64 bits"),
+    ],
+)
 def test_bad_inputs_raise_typed_errors(kw, match):
     m1, m2 = _call_both(**kw)
     assert re.search(match, m1), m1
@@ -446,8 +461,10 @@ def test_public_layer_ops_take_the_isa_as_an_argument(monkeypatch):
         want = _both(x, w, [0b111, 0b011], [2.0, 3.0], 0b100, g, 2)
         for other in ISAS:
             monkeypatch.setenv("DPC_ISA", other)
-            got = (training.layer_forward(*args, threads=2, isa=isa_name),
-                   *training.layer_backward(*args, grad_y=g, threads=2, isa=isa_name))
+            got = (
+                training.layer_forward(*args, threads=2, isa=isa_name),
+                *training.layer_backward(*args, grad_y=g, threads=2, isa=isa_name),
+            )
             for a, b in zip(want, got):
                 assert np.array_equal(_bits(a), _bits(b)), (isa_name, other)
     monkeypatch.delenv("DPC_ISA")

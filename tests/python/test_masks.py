@@ -105,8 +105,7 @@ def test_mask_from_baselines_and_bad_input():
     assert M.mask("void-and-cluster", size=16, frames=3).shape == (3, 16, 16)
     assert M.mask("stbn", size=8, frames=4).shape == (4, 8, 8)
     assert M.mask("white", size=8, frames=2).shape == (2, 8, 8)
-    for kwargs in ({"size": None}, {"size": 1}, {"size": 16, "seed": -1},
-                   {"size": 16, "channels": 2, "frames": 2}):
+    for kwargs in ({"size": None}, {"size": 1}, {"size": 16, "seed": -1}, {"size": 16, "channels": 2, "frames": 2}):
         with pytest.raises(InvalidArgumentError):
             M.mask("void-and-cluster", **kwargs)
     with pytest.raises(InvalidArgumentError):
@@ -114,11 +113,12 @@ def test_mask_from_baselines_and_bad_input():
     with pytest.raises(InvalidArgumentError):
         M.mask("no-such-mask", size=8)
     with pytest.raises(InvalidArgumentError):
-        M.mask("bnot-2d")                         # not gridded
+        M.mask("bnot-2d")  # not gridded
 
 
 def test_mask_from_a_gridded_model_at_its_size_and_another():
     from pathlib import Path
+
     grid = Path(__file__).resolve().parents[1] / "data" / "model_grid_3to1.onnx"
     model = dpc.load(grid)
     a = M.mask(str(grid), seed=1)
@@ -138,7 +138,7 @@ def test_files_read_back_exactly(tmp_path, shape):
     else:
         a = B.white_mask(shape, 5)
     for ext in (".npy", ".exr", ".png"):
-        for bits in ((8, 16) if ext == ".png" else (16,)):
+        for bits in (8, 16) if ext == ".png" else (16,):
             paths = M.write_mask(tmp_path / f"m{bits}{ext}", a, bits=bits, spatiotemporal=st)
             assert len(paths) == (shape[0] if st and ext != ".npy" else 1)
             r = M.read_mask(paths if len(paths) > 1 else paths[0])
@@ -194,6 +194,7 @@ def test_mask_command_writes_and_reports(tmp_path, capsys):
 
 def test_dither_command_with_a_baseline_mask(tmp_path, capsys):
     import matplotlib.image as mpimg
+
     ramp = np.tile(np.linspace(0, 1, 64), (32, 1))
     src = tmp_path / "ramp.png"
     mpimg.imsave(src, ramp, cmap="gray", vmin=0, vmax=1)
@@ -223,8 +224,10 @@ def _disk_full(monkeypatch):
     monkeypatch.setattr(_atomic.os, "fsync", full)
 
 
-@pytest.mark.parametrize("name, shape", [("m.npy", (16, 16)), ("m.png", (16, 16)), ("m.exr", (16, 16, 2)),
-                                         ("st.png", (3, 8, 8)), ("st.exr", (3, 8, 8))])
+@pytest.mark.parametrize(
+    "name, shape",
+    [("m.npy", (16, 16)), ("m.png", (16, 16)), ("m.exr", (16, 16, 2)), ("st.png", (3, 8, 8)), ("st.exr", (3, 8, 8))],
+)
 def test_write_mask_is_atomic(tmp_path, monkeypatch, name, shape):
     """A failing write_mask leaves every existing file as it was and adds nothing (no temporary,
     no first frame of a spatiotemporal mask); then the same call succeeds."""
@@ -251,6 +254,7 @@ def test_write_mask_is_atomic(tmp_path, monkeypatch, name, shape):
 def test_dither_command_is_atomic(tmp_path, monkeypatch, capsys, mask_ext):
     """dpc dither writes the image and --mask-output together, or neither."""
     import matplotlib.image as mpimg
+
     ramp = np.tile(np.linspace(0, 1, 32), (16, 1))
     src = tmp_path / "ramp.png"
     mpimg.imsave(src, ramp, cmap="gray", vmin=0, vmax=1)
@@ -275,22 +279,37 @@ def test_c_example_bakes_the_same_ranks_as_dpc_mask(tmp_path):
     import shutil
     import subprocess
     from pathlib import Path
+
     root = Path(__file__).resolve().parents[2]
     # a plain (not sanitizer-instrumented) build: the Python package's, else any other
-    libs = [p for p in sorted(root.glob("build/py-*/libdpc/libdpc.so")) + sorted(root.glob("build/**/libdpc/libdpc.so"))
-            if "san" not in str(p.relative_to(root))]
+    libs = [
+        p
+        for p in sorted(root.glob("build/py-*/libdpc/libdpc.so")) + sorted(root.glob("build/**/libdpc/libdpc.so"))
+        if "san" not in str(p.relative_to(root))
+    ]
     cc = shutil.which("cc")
     if not libs or cc is None:
         pytest.skip("needs a C compiler and a built libdpc (build/py-*/libdpc/libdpc.so)")
     lib = libs[0].parent
     exe = tmp_path / "bake_mask"
-    subprocess.run([cc, "-std=c11", "-O2", str(root / "docs/examples/bake_mask.c"),
-                    f"-I{root / 'libdpc/include'}", f"-L{lib}", "-ldpc", f"-Wl,-rpath,{lib}",
-                    "-o", str(exe)], check=True)
+    subprocess.run(
+        [
+            cc,
+            "-std=c11",
+            "-O2",
+            str(root / "docs/examples/bake_mask.c"),
+            f"-I{root / 'libdpc/include'}",
+            f"-L{lib}",
+            "-ldpc",
+            f"-Wl,-rpath,{lib}",
+            "-o",
+            str(exe),
+        ],
+        check=True,
+    )
     grid = root / "tests" / "data" / "model_grid_3to1.onnx"
     out = subprocess.run([str(exe), str(grid), "5"], check=True, capture_output=True, text=True).stdout
-    ranks = np.array([int(v) for line in out.splitlines() if not line.startswith("#")
-                      for v in line.split()])
+    ranks = np.array([int(v) for line in out.splitlines() if not line.startswith("#") for v in line.split()])
     a = M.mask(str(grid), seed=5)
     assert np.array_equal(ranks.reshape(a.shape), np.round(a * a.size - 0.5).astype(int))
 
@@ -311,9 +330,12 @@ def test_mask_64_is_a_tileable_rank_normalised_blue_noise_mask():
     assert AM.seam_ratio(ms) < 1.3
 
 
-@pytest.mark.xfail(strict=True, reason="issue 13's goal is not reached: mask-64 at 64 x 64 has "
-                   "mask / thresholded low-band energies ~0.07 / 0.07 against void-and-cluster's "
-                   "0.00015 / 0.025 (docs/masks.md). Strict: remove this marker when a model meets it.")
+@pytest.mark.xfail(
+    strict=True,
+    reason="issue 13's goal is not reached: mask-64 at 64 x 64 has "
+    "mask / thresholded low-band energies ~0.07 / 0.07 against void-and-cluster's "
+    "0.00015 / 0.025 (docs/masks.md). Strict: remove this marker when a model meets it.",
+)
 def test_mask_64_at_least_as_good_as_void_and_cluster():
     _bundled("mask-64")
     ours = mask_quality(np.stack([M.mask("mask-64", seed=s) for s in range(4)]))
@@ -324,7 +346,7 @@ def test_mask_64_at_least_as_good_as_void_and_cluster():
 
 def test_mask_vector_64_is_blue_per_channel_and_jointly_bluer_than_two_void_and_cluster_masks():
     _bundled("mask-vector-64")
-    ms = np.stack([M.mask("mask-vector-64", seed=s) for s in range(2)])   # ~2 s each
+    ms = np.stack([M.mask("mask-vector-64", seed=s) for s in range(2)])  # ~2 s each
     assert ms.shape == (2, 64, 64, 2)
     assert all(_exact_levels(m[..., c]) for m in ms for c in range(2))
     q = AM.vector_quality(ms)
@@ -338,7 +360,7 @@ def test_mask_vector_64_is_blue_per_channel_and_jointly_bluer_than_two_void_and_
 
 def test_mask_st_32x16_frames_are_rank_normalised_and_blue():
     _bundled("mask-st-32x16")
-    vs = np.stack([M.mask("mask-st-32x16", seed=s) for s in range(2)])   # ~3 s each
+    vs = np.stack([M.mask("mask-st-32x16", seed=s) for s in range(2)])  # ~3 s each
     assert vs.shape == (2, 16, 32, 32) and all(_exact_levels(f) for v in vs for f in v)
     q = AM.spatiotemporal_quality(vs)
     # measured (4 volumes): frames 0.360 / 0.353 (white noise 1.0)
@@ -346,9 +368,12 @@ def test_mask_st_32x16_frames_are_rank_normalised_and_blue():
     assert AM.seam_ratio(vs[0]) < 1.3
 
 
-@pytest.mark.xfail(strict=True, reason="issue 13's goal is not reached: mask-st-32x16's frames "
-                   "(0.36 / 0.35) and accumulated 16-frame error (0.103, white noise 0.105) are far "
-                   "from STBN's (0.022 / 0.146, 0.039; docs/masks.md). Strict: remove when met.")
+@pytest.mark.xfail(
+    strict=True,
+    reason="issue 13's goal is not reached: mask-st-32x16's frames "
+    "(0.36 / 0.35) and accumulated 16-frame error (0.103, white noise 0.105) are far "
+    "from STBN's (0.022 / 0.146, 0.039; docs/masks.md). Strict: remove when met.",
+)
 def test_mask_st_32x16_at_least_as_good_as_stbn():
     _bundled("mask-st-32x16")
     ours = AM.spatiotemporal_quality(np.stack([M.mask("mask-st-32x16", seed=s) for s in range(2)]))

@@ -32,7 +32,7 @@ def test_renders_from_a_scene_dict_unbiased():
     ref = np.array(mi.render(_scene({"type": "independent"}, 16384))).mean(-1)
     imgs = np.stack([np.array(mi.render(_scene({"type": "dpc", "seed": s}, 4))).mean(-1) for s in range(64)])
     assert np.all(np.isfinite(imgs))
-    se = imgs.std(0, ddof=1) / 8 + 1e-3          # + the reference's own error, at most ~1e-3 here
+    se = imgs.std(0, ddof=1) / 8 + 1e-3  # + the reference's own error, at most ~1e-3 here
     assert np.abs((imgs.mean(0) - ref) / se).max() < 4
     totals = imgs.mean(axis=(1, 2))
     assert abs(totals.mean() - ref.mean()) < 4 * (totals.std(ddof=1) / 8 + 1e-4)
@@ -66,12 +66,12 @@ def test_values_are_those_of_dpc_sampler():
     seeded like Mitsuba's renderer seeds pixel (x, y) of block b gives dpc.Sampler's values."""
     plugin = mi.load_dict({"type": "dpc", "sample_count": 4, "seed": 9, "dimensions": 3})
     ref = dpc.Sampler("bnot-2d-stratified", samples_per_pixel=4, dimensions=3, seed=9)
-    block_base = 5 * 1024 + 77   # a fork's first seed starts a block, whatever the render seed
+    block_base = 5 * 1024 + 77  # a fork's first seed starts a block, whatever the render seed
     fork = plugin.fork()
     fork.seed(block_base)
     for morton, (x, y) in [(0, (0, 0)), (1, (1, 0)), (2, (0, 1)), (11, (1, 3)), (1023, (31, 31))]:
         fork.seed(block_base + morton)
-        for i in range(5):                       # index 4 is a second pass
+        for i in range(5):  # index 4 is a second pass
             got = [fork.next_2d(), fork.next_1d(), fork.next_2d()]
             assert np.array_equal(np.array(got[0]), ref.get_2d(x, y, i, 0))
             assert np.float32(got[1]) == ref.get_1d(x, y, i, 1)
@@ -80,8 +80,12 @@ def test_values_are_those_of_dpc_sampler():
 
 
 def test_bad_properties_say_what_is_wrong():
-    for props, says in [({"model": "no-such-model"}, "no-such-model"), ({"dimensions": 0}, "dimensions"),
-                        ({"block_size": 48}, "block_size"), ({"sample_count": 0}, "samples_per_pixel")]:
+    for props, says in [
+        ({"model": "no-such-model"}, "no-such-model"),
+        ({"dimensions": 0}, "dimensions"),
+        ({"block_size": 48}, "block_size"),
+        ({"sample_count": 0}, "samples_per_pixel"),
+    ]:
         with pytest.raises(Exception, match=says):
             mi.load_dict({"type": "dpc", **props})
 

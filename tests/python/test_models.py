@@ -49,7 +49,8 @@ def test_card_names_the_shipped_file(name):
     found = re.search(r"sha256 `([0-9a-f]{64})`", section)
     assert found, f"no sha256 in the card of {name}"
     assert found.group(1) == hashlib.sha256((REPO / "models" / f"{name}.onnx").read_bytes()).hexdigest(), (
-        f"docs/models.md describes another {name}.onnx: run python models/model_cards.py {name}")
+        f"docs/models.md describes another {name}.onnx: run python models/model_cards.py {name}"
+    )
 
 
 def test_headline_quality_of_the_2d_blue_noise_models():
@@ -126,8 +127,10 @@ def test_vulkan_gives_the_same_quality_not_the_same_points():
     for label, (sets, elow, dmin) in rows.items():
         d = np.abs(sets.astype(np.float64) - ref_sets)
         d = np.minimum(d, 1.0 - d)
-        print(f"[ info ] bnot-2d {label}: E_low(0.5) {elow.mean():.5f}, delta_min {dmin.mean():.4f}, "
-              f"vs cpu max |diff| {d.max():.3g}, median {np.median(d):.3g}")
+        print(
+            f"[ info ] bnot-2d {label}: E_low(0.5) {elow.mean():.5f}, delta_min {dmin.mean():.4f}, "
+            f"vs cpu max |diff| {d.max():.3g}, median {np.median(d):.3g}"
+        )
         se = lambda a, b: 4.0 * np.hypot(a.std(ddof=1), b.std(ddof=1)) / np.sqrt(len(a))  # noqa: E731
         assert abs(elow.mean() - ref_elow.mean()) <= se(elow, ref_elow), (label, elow.mean(), ref_elow.mean())
         assert abs(dmin.mean() - ref_dmin.mean()) <= se(dmin, ref_dmin), (label, dmin.mean(), ref_dmin.mean())
@@ -145,8 +148,10 @@ def test_stratified_input_keeps_large_sets_blue_at_the_largest_scales():
     got = {}
     for kind in ("uniform", "stratified"):
         sets = dpc.load("bnot-2d", input=kind).generate_batch(4, seed=0, n_points=m)
-        got[kind] = (float(np.mean(analysis.power_spectrum_direct(sets, lowest))),
-                     analysis.radial_spectrum(sets, nu_max=4.0).low_frequency_energy(0.5))
+        got[kind] = (
+            float(np.mean(analysis.power_spectrum_direct(sets, lowest))),
+            analysis.radial_spectrum(sets, nu_max=4.0).low_frequency_energy(0.5),
+        )
     print(f"[ info ] bnot-2d at {m} points, (P(|q|=1), E_low(0.5)): {got}")
     assert got["uniform"][0] > 0.3
     assert got["stratified"][0] < 0.05

@@ -15,10 +15,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import dpc
 import reference_cascade as rc
 from cpu_isa import HAVE_AVX2, HAVE_AVX512, VECTOR_ISAS  # noqa: E402,F401
-
-import dpc
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 MODELS = ["model_2d", "model_3d_proj", "model_3d_mixed", "model_grid_3to1", "model_10d"]
@@ -70,8 +69,7 @@ def test_reference_rng_is_bit_exact_with_dpc_uniform(seed, shape):
 
 def test_reference_rng_known_splitmix64_values():
     # Seed 0 gives the classic SplitMix64 stream from state 0 (mix(0) = 0).
-    assert [int(v) for v in rc.splitmix_values(0, 3)] == [
-        0xE220A8397B1DCDAF, 0x6E789E6AA1B965F4, 0x06C45D188009454F]
+    assert [int(v) for v in rc.splitmix_values(0, 3)] == [0xE220A8397B1DCDAF, 0x6E789E6AA1B965F4, 0x06C45D188009454F]
 
 
 def test_reference_grid_fill_is_first_axis_fastest():
@@ -122,8 +120,7 @@ def _seam_points(ref: rc.RefModel, seed: int) -> np.ndarray:
     free = [k for k in range(ref.dims) if k not in ref.grid_axes]
     rng = np.random.default_rng(seed)
     h = m ** (-1.0 / ref.dims)
-    edge = np.array([1e-7, 1 - 1e-7, 0.0, np.nextafter(np.float32(1), np.float32(0)), 2e-7, 1 - 3e-7],
-                    dtype=np.float32)
+    edge = np.array([1e-7, 1 - 1e-7, 0.0, np.nextafter(np.float32(1), np.float32(0)), 2e-7, 1 - 3e-7], dtype=np.float32)
     rows = np.arange(0, 48)
     for r in rows:
         for k in free:
@@ -166,12 +163,12 @@ def test_eps_cut_off_on_a_two_point_model(tmp_path):
     path = tmp_path / "two_points.onnx"
     write_model(spec, path)
     ref = rc.load_reference(path)
-    h = 2 ** -0.5
+    h = 2**-0.5
     for isa in ISAS:
         model = dpc.load(path, isa=isa)
-        near = np.array([[0.5, 0.5], [0.5 + 0.2 * h, 0.5]], np.float32)     # 0.2 h < eps h
+        near = np.array([[0.5, 0.5], [0.5 + 0.2 * h, 0.5]], np.float32)  # 0.2 h < eps h
         assert np.array_equal(model.filter(near), near)
-        far = np.array([[0.5, 0.5], [0.5 + 0.4 * h, 0.5]], np.float32)      # 0.4 h > eps h
+        far = np.array([[0.5, 0.5], [0.5 + 0.4 * h, 0.5]], np.float32)  # 0.4 h > eps h
         got = model.filter(far)
         expect = rc.run_cascade(ref, far)
         # hand value: d = 0.4 h, u = d (b-1) / r with r = 0.7 h, q = 4, g = -0.2; each point moves
@@ -188,8 +185,13 @@ def test_eps_cut_off_on_a_two_point_model(tmp_path):
 
 
 def _same_model(a: rc.RefModel, b: rc.RefModel) -> bool:
-    if (a.dims, a.n_points, a.grid_axes, a.grid_shape, a.metadata) != \
-            (b.dims, b.n_points, b.grid_axes, b.grid_shape, b.metadata):
+    if (a.dims, a.n_points, a.grid_axes, a.grid_shape, a.metadata) != (
+        b.dims,
+        b.n_points,
+        b.grid_axes,
+        b.grid_shape,
+        b.metadata,
+    ):
         return False
     if len(a.layers) != len(b.layers):
         return False
@@ -197,8 +199,7 @@ def _same_model(a: rc.RefModel, b: rc.RefModel) -> bool:
         if (x.subspaces, x.radius, x.eps, x.fixed) != (y.subspaces, y.radius, y.eps, y.fixed):
             return False
         # kernels come from numpy exp/sin: allow an ulp of platform difference
-        if x.kernels.shape != y.kernels.shape or not np.allclose(x.kernels, y.kernels, rtol=1e-6,
-                                                                 atol=1e-9):
+        if x.kernels.shape != y.kernels.shape or not np.allclose(x.kernels, y.kernels, rtol=1e-6, atol=1e-9):
             return False
     return True
 
@@ -208,15 +209,34 @@ def test_committed_files_are_what_the_scripts_make(tmp_path):
     import sys
 
     env_root = Path(__file__).resolve().parents[2]
-    subprocess.run([sys.executable, str(DATA / "make_models.py"), "--out", str(tmp_path)],
-                   check=True, cwd=env_root, capture_output=True)
-    subprocess.run([sys.executable, str(DATA / "make_golden.py"), "--models", str(tmp_path),
-                    "--out", str(tmp_path / "golden")], check=True, cwd=env_root, capture_output=True)
-    assert sorted(p.name for p in (tmp_path / "golden").glob("*.f32")) == \
-        sorted(p.name for p in (DATA / "golden").glob("*.f32")), "golden/ has other files"
-    subprocess.run([sys.executable, str(DATA / "make_malformed.py"), "--models", str(tmp_path),
-                    "--out", str(tmp_path / "malformed")], check=True, cwd=env_root,
-                   capture_output=True)
+    subprocess.run(
+        [sys.executable, str(DATA / "make_models.py"), "--out", str(tmp_path)],
+        check=True,
+        cwd=env_root,
+        capture_output=True,
+    )
+    subprocess.run(
+        [sys.executable, str(DATA / "make_golden.py"), "--models", str(tmp_path), "--out", str(tmp_path / "golden")],
+        check=True,
+        cwd=env_root,
+        capture_output=True,
+    )
+    assert sorted(p.name for p in (tmp_path / "golden").glob("*.f32")) == sorted(
+        p.name for p in (DATA / "golden").glob("*.f32")
+    ), "golden/ has other files"
+    subprocess.run(
+        [
+            sys.executable,
+            str(DATA / "make_malformed.py"),
+            "--models",
+            str(tmp_path),
+            "--out",
+            str(tmp_path / "malformed"),
+        ],
+        check=True,
+        cwd=env_root,
+        capture_output=True,
+    )
     for name in MODELS:
         assert _same_model(rc.load_reference(tmp_path / f"{name}.onnx"), ref_model(name)), name
     for sub in ("variants", "malformed"):
@@ -224,5 +244,5 @@ def test_committed_files_are_what_the_scripts_make(tmp_path):
         assert made == (DATA / sub / "manifest.tsv").read_text(), f"{sub}/manifest.tsv is stale"
         names = sorted(p.name for p in (tmp_path / sub).glob("*.onnx"))
         assert names == sorted(p.name for p in (DATA / sub).glob("*.onnx")), sub
-        for n in names:   # same sizes: same structure (kernel bytes may differ by an ulp)
+        for n in names:  # same sizes: same structure (kernel bytes may differ by an ulp)
             assert (tmp_path / sub / n).stat().st_size == (DATA / sub / n).stat().st_size, n

@@ -35,7 +35,7 @@ def test_single_set_npy_is_two_dimensional(tmp_path):
     assert np.load(tmp_path / "one.npy").shape == (5, 2)
     write_points(tmp_path / "two.npy", np.zeros((2, 5, 2)))
     assert np.load(tmp_path / "two.npy").shape == (2, 5, 2)
-    np.save(tmp_path / "flat.npy", np.linspace(0, 0.9, 10))     # (m,) = m 1-D points
+    np.save(tmp_path / "flat.npy", np.linspace(0, 0.9, 10))  # (m,) = m 1-D points
     assert read_points(tmp_path / "flat.npy").shape == (1, 10, 1)
 
 
@@ -50,14 +50,13 @@ def test_text_written_with_hash_between_sets_like_utk(tmp_path):
     f = tmp_path / "s.txt"
     write_points(f, np.full((3, 2, 2), 0.25))
     lines = f.read_text().splitlines()
-    assert lines == ["0.25 0.25", "0.25 0.25", "#", "0.25 0.25", "0.25 0.25", "#",
-                     "0.25 0.25", "0.25 0.25"]
+    assert lines == ["0.25 0.25", "0.25 0.25", "#", "0.25 0.25", "0.25 0.25", "#", "0.25 0.25", "0.25 0.25"]
 
 
 def test_reads_the_authors_plain_text_files():
     from importlib import resources
-    f = (resources.files("dpc") / "data" / "deepsampling" / "pcf" / "pcf-step-d2-n1024"
-         / "pointset-step-n1024-0001.txt")
+
+    f = resources.files("dpc") / "data" / "deepsampling" / "pcf" / "pcf-step-d2-n1024" / "pointset-step-n1024-0001.txt"
     assert read_points(str(f)).shape == (1, 1024, 2)
 
 
@@ -71,10 +70,8 @@ def test_bin_layout_is_utk_v1(tmp_path):
     np.testing.assert_array_equal(np.frombuffer(raw[4:], "<f8"), a.ravel())
     # A file written the way UTK writes it reads back.
     g = tmp_path / "w.bin"
-    g.write_bytes(b"".join((3).to_bytes(4, "little") + np.full(6, v, "<f8").tobytes()
-                           for v in (0.3, 0.6)))
-    np.testing.assert_array_equal(read_points(g, dims=2),
-                                  np.stack([np.full((3, 2), 0.3), np.full((3, 2), 0.6)]))
+    g.write_bytes(b"".join((3).to_bytes(4, "little") + np.full(6, v, "<f8").tobytes() for v in (0.3, 0.6)))
+    np.testing.assert_array_equal(read_points(g, dims=2), np.stack([np.full((3, 2), 0.3), np.full((3, 2), 0.6)]))
 
 
 def test_format_names_and_extensions(tmp_path):
@@ -94,13 +91,16 @@ def test_format_names_and_extensions(tmp_path):
         pointio.resolve_format("a.txt", "hdf5")
 
 
-@pytest.mark.parametrize("content, match", [
-    ("0.1 0.2\n0.3\n", "columns"),
-    ("0.1 0.2\n#\n0.1 0.2 0.3\n", "all sets must match"),
-    ("0.1 zero\n", "set 0"),
-    ("", "no points"),
-    ("0.1 nan\n", "NaN"),
-])
+@pytest.mark.parametrize(
+    "content, match",
+    [
+        ("0.1 0.2\n0.3\n", "columns"),
+        ("0.1 0.2\n#\n0.1 0.2 0.3\n", "all sets must match"),
+        ("0.1 zero\n", "set 0"),
+        ("", "no points"),
+        ("0.1 nan\n", "NaN"),
+    ],
+)
 def test_bad_text_files(tmp_path, content, match):
     f = tmp_path / "bad.txt"
     f.write_text(content)
@@ -109,7 +109,7 @@ def test_bad_text_files(tmp_path, content, match):
 
 
 def test_bad_binary_and_npy_files(tmp_path):
-    (tmp_path / "t.bin").write_bytes(b"\x05\x00\x00\x00" + b"\x00" * 7)     # truncated
+    (tmp_path / "t.bin").write_bytes(b"\x05\x00\x00\x00" + b"\x00" * 7)  # truncated
     with pytest.raises(PointFileError, match="not a UTK .bin"):
         read_points(tmp_path / "t.bin")
     (tmp_path / "z.bin").write_bytes(b"")

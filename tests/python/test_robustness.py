@@ -19,7 +19,6 @@ import shutil
 import signal
 import subprocess
 import sys
-import textwrap
 import time
 from pathlib import Path
 
@@ -43,24 +42,44 @@ def run(capsys, *args):
 
 def cli(*args, limit=None, env=None, cwd=None, timeout=300):
     """The dpc command in a subprocess; limit: RLIMIT_FSIZE in bytes (writes beyond fail)."""
+
     def pre():
         if limit is not None:
             resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
-    return subprocess.run(DPC + [str(a) for a in args], capture_output=True, text=True,
-                          preexec_fn=pre, env={**os.environ, **(env or {})}, cwd=cwd, timeout=timeout)
+
+    return subprocess.run(
+        DPC + [str(a) for a in args],
+        capture_output=True,
+        text=True,
+        preexec_fn=pre,
+        env={**os.environ, **(env or {})},
+        cwd=cwd,
+        timeout=timeout,
+    )
 
 
 def snapshot(folder: Path) -> dict:
-    return {p.relative_to(folder).as_posix(): p.read_bytes() for p in sorted(folder.rglob("*"))
-            if p.is_file()}
+    return {p.relative_to(folder).as_posix(): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
 
 
 # ---------------------------------------------------------------- item 3: workflow
 def test_analyze_and_compare_take_onnx_paths_and_overlay_targets(tmp_path, capsys):
     onnx = tmp_path / "my-model.onnx"
     shutil.copy(REPO / "models" / "bnot-2d.onnx", onnx)
-    rc, out, err = run(capsys, "analyze", "-i", onnx, "-c", 2, "-o", tmp_path / "a",
-                       "--discrepancy", "none", "--plot-format", "png,pdf,svg")
+    rc, out, err = run(
+        capsys,
+        "analyze",
+        "-i",
+        onnx,
+        "-c",
+        2,
+        "-o",
+        tmp_path / "a",
+        "--discrepancy",
+        "none",
+        "--plot-format",
+        "png,pdf,svg",
+    )
     assert rc == 0, err
     doc = json.loads((tmp_path / "a" / "metrics.json").read_text())
     assert doc["targets"][0]["label"].startswith("target: bnot"), doc.get("targets")
@@ -72,8 +91,21 @@ def test_analyze_and_compare_take_onnx_paths_and_overlay_targets(tmp_path, capsy
     # legend entries and axis labels are text in the SVG (matplotlib keeps labels as paths by
     # default, so look for the ids it writes for them)
     assert "legend" in svg and "axes_1" in svg and "axes_2" in svg, "two panels, with a legend"
-    rc, out, err = run(capsys, "compare", "-i", onnx, "-i", "jitter-2d", "-c", 2,
-                       "-o", tmp_path / "c", "--discrepancy", "none", "--no-integration")
+    rc, out, err = run(
+        capsys,
+        "compare",
+        "-i",
+        onnx,
+        "-i",
+        "jitter-2d",
+        "-c",
+        2,
+        "-o",
+        tmp_path / "c",
+        "--discrepancy",
+        "none",
+        "--no-integration",
+    )
     assert rc == 0, err
     doc = json.loads((tmp_path / "c" / "compare.json").read_text())
     labels = [t["label"] for t in doc["targets"]]
@@ -83,10 +115,11 @@ def test_analyze_and_compare_take_onnx_paths_and_overlay_targets(tmp_path, capsy
 
 def test_targets_come_from_the_model_metadata():
     from dpc.analysis.targets import model_target
+
     t = model_target(dpc.load("bnot-2d"))
     ref = dpc.analysis.reference.reference_radial_spectrum("bnot", 1024, 2)
-    np.testing.assert_allclose(t.power, ref.power[:len(t.power)])
-    np.testing.assert_allclose(t.nu, ref.nu[:len(t.nu)])
+    np.testing.assert_allclose(t.power, ref.power[: len(t.power)])
+    np.testing.assert_allclose(t.nu, ref.nu[: len(t.nu)])
     assert model_target(dpc.load("bnot-3d")).dims == 3
     assert model_target(dpc.load("font-2d")) is None  # Eq. 5 variance: no radial target
     assert model_target(dpc.load("repulsion-2d")) is None  # hand-made: no loss
@@ -100,8 +133,21 @@ def test_every_model_option_takes_a_name_from_dpc_model_path(tmp_path, capsys, m
     assert "my-blue" in dpc.available_models()
     rc, out, err = run(capsys, "generate", "-m", "my-blue", "-n", 64, "-o", tmp_path / "p.npy")
     assert rc == 0, err
-    rc, out, err = run(capsys, "analyze", "-i", "my-blue", "-c", 2, "-n", 256, "-o", tmp_path / "a",
-                       "--discrepancy", "none", "--no-plots")
+    rc, out, err = run(
+        capsys,
+        "analyze",
+        "-i",
+        "my-blue",
+        "-c",
+        2,
+        "-n",
+        256,
+        "-o",
+        tmp_path / "a",
+        "--discrepancy",
+        "none",
+        "--no-plots",
+    )
     assert rc == 0, err
     rc, out, _ = run(capsys, "list")
     assert "my-blue" in out and f"DPC_MODEL_PATH={folder}" in out
@@ -165,14 +211,19 @@ def test_analysis_write_failure_changes_nothing(tmp_path, command):
     assert not (tmp_path / "new").exists(), "the folders the failed command created are gone"
     r = cli(*args, "-o", existing)
     assert r.returncode == 0, r.stderr
-    assert json.loads((existing / "metrics.json" if command == "analyze" else existing / "compare.json")
-                      .read_text())
+    assert json.loads((existing / "metrics.json" if command == "analyze" else existing / "compare.json").read_text())
 
 
 def test_training_export_and_checkpoint_write_failures_keep_the_old_files(tmp_path):
-    train = [sys.executable, str(REPO / "training" / "train.py"), "--config",
-             str(REPO / "training" / "configs" / "tiny-test.toml"), "--run-dir", str(tmp_path / "run"),
-             "--no-progress"]
+    train = [
+        sys.executable,
+        str(REPO / "training" / "train.py"),
+        "--config",
+        str(REPO / "training" / "configs" / "tiny-test.toml"),
+        "--run-dir",
+        str(tmp_path / "run"),
+        "--no-progress",
+    ]
     r = subprocess.run(train + ["--steps", "10"], capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
     ckpt = tmp_path / "run" / "checkpoint.pt"
@@ -181,16 +232,22 @@ def test_training_export_and_checkpoint_write_failures_keep_the_old_files(tmp_pa
     def limited(n):
         return lambda: resource.setrlimit(resource.RLIMIT_FSIZE, (n, n))
 
-    r = subprocess.run(train + ["--steps", "20", "--resume"], capture_output=True, text=True,
-                       timeout=300, preexec_fn=limited(len(good) // 2))
+    r = subprocess.run(
+        train + ["--steps", "20", "--resume"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        preexec_fn=limited(len(good) // 2),
+    )
     assert r.returncode == 2 and "File too large" in r.stderr, r.stderr
     assert ckpt.read_bytes() == good
     _no_temporaries(tmp_path / "run")
     export = [sys.executable, str(REPO / "training" / "export.py"), str(ckpt)]
     model = tmp_path / "m.onnx"
     model.write_bytes(b"old model")
-    r = subprocess.run(export + ["-o", str(model)], capture_output=True, text=True, timeout=300,
-                       preexec_fn=limited(256))
+    r = subprocess.run(
+        export + ["-o", str(model)], capture_output=True, text=True, timeout=300, preexec_fn=limited(256)
+    )
     assert r.returncode == 2 and "File too large" in r.stderr, r.stderr
     assert model.read_bytes() == b"old model"
     _no_temporaries(tmp_path)
@@ -203,8 +260,9 @@ def test_patched_writer_failure_in_process(tmp_path, monkeypatch):
     """The same guarantee in one process: fsync fails (as on a full disk) for every writer."""
     import errno
 
-    from dpc.analysis import plots
     from matplotlib.figure import Figure
+
+    from dpc.analysis import plots
 
     def full(fd):
         raise OSError(errno.ENOSPC, "No space left on device")
@@ -269,8 +327,12 @@ def test_max_output_bytes_from_the_environment(monkeypatch):
 
 def test_ctrl_c_stops_the_cli_within_half_a_second_without_output(tmp_path):
     out = tmp_path / "big.npy"
-    p = subprocess.Popen(DPC + ["generate", "-m", "bnot-2d", "-n", "2000000", "-t", "1", "-o", str(out)],
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    p = subprocess.Popen(
+        DPC + ["generate", "-m", "bnot-2d", "-n", "2000000", "-t", "1", "-o", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     time.sleep(3.0)  # started, loaded, inside libdpc
     assert p.poll() is None, p.communicate()
     t = time.perf_counter()
@@ -285,8 +347,7 @@ def test_ctrl_c_stops_the_cli_within_half_a_second_without_output(tmp_path):
 
 def test_ctrl_c_in_python_raises_at_once_and_libdpc_stops_between_sets():
     probe = REPO / "tests" / "python" / "interrupt_probe.py"
-    r = subprocess.run([sys.executable, str(probe), "5000", "400"], capture_output=True, text=True,
-                       timeout=300)
+    r = subprocess.run([sys.executable, str(probe), "5000", "400"], capture_output=True, text=True, timeout=300)
     res = json.loads(r.stdout.strip().splitlines()[-1])
     print(res)
     assert res["interrupted"] and res["raise_s"] < 0.5, res
@@ -338,8 +399,7 @@ def test_nul_in_paths_is_refused(tmp_path, capsys):
 @pytest.mark.parametrize("n", [2**26 + 1, 2**40, 2**62, 2**70])
 def test_oversize_counts_are_limit_errors_before_allocation(n):
     m = dpc.load("bnot-2d")
-    for call in (lambda: m.generate(0, n), lambda: m.generate_batch(2, n_points=n),
-                 lambda: dpc.stratified(0, n, 2)):
+    for call in (lambda: m.generate(0, n), lambda: m.generate_batch(2, n_points=n), lambda: dpc.stratified(0, n, 2)):
         with pytest.raises(dpc.LimitError):
             call()
     with pytest.raises(dpc.LimitError):
@@ -350,6 +410,7 @@ def test_oversize_counts_are_limit_errors_before_allocation(n):
 
 def _wide_model(tmp_path, radius):
     from dpc import model_file as mf
+
     kern = (-0.05 * np.sin(np.pi * np.linspace(0.0, 1.0, 16)))[None, :]
     layers = [mf.Layer([0b11], [radius], kern) for _ in range(3)]
     path = tmp_path / f"wide-{radius:g}.onnx"
@@ -422,8 +483,9 @@ def test_csv_is_comma_separated_and_npy_keeps_float32(tmp_path, capsys):
     assert rc == 0, err
     lines = (tmp_path / "p.csv").read_text().splitlines()
     assert lines[0].count(",") == 1 and " " not in lines[0] and lines[20] == "#"
-    np.testing.assert_array_equal(pointio.read_points(tmp_path / "p.csv"),
-                                  m.generate_batch(2, n_points=20).astype(np.float64))
+    np.testing.assert_array_equal(
+        pointio.read_points(tmp_path / "p.csv"), m.generate_batch(2, n_points=20).astype(np.float64)
+    )
     rc, _, _ = run(capsys, "generate", "-m", "bnot-2d", "-n", 20, "-o", tmp_path / "p.npy")
     a = np.load(tmp_path / "p.npy")
     assert a.dtype == np.float32 and np.array_equal(a, m.generate(0, 20))

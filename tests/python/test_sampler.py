@@ -18,13 +18,16 @@ DATA = Path(__file__).resolve().parents[1] / "data"
 BNOT = dpc.model_path("bnot-2d-stratified")
 
 
-@pytest.mark.parametrize("models,spp,dims,seed", [
-    ([BNOT], 16, 4, 0),
-    ([BNOT], 5, 3, 12345),                                   # spp not a power of two
-    ([BNOT], 1, 2, 7),
-    ([dpc.model_path("bnot-4d"), BNOT], 8, 5, 2**64 - 1),    # 4-D model fills two slots per set
-    ([DATA / "model_3d_mixed.onnx"], 12, 3, 99),             # odd dims: the last is left out
-])
+@pytest.mark.parametrize(
+    "models,spp,dims,seed",
+    [
+        ([BNOT], 16, 4, 0),
+        ([BNOT], 5, 3, 12345),  # spp not a power of two
+        ([BNOT], 1, 2, 7),
+        ([dpc.model_path("bnot-4d"), BNOT], 8, 5, 2**64 - 1),  # 4-D model fills two slots per set
+        ([DATA / "model_3d_mixed.onnx"], 12, 3, 99),  # odd dims: the last is left out
+    ],
+)
 def test_lookups_match_the_reference_bit_for_bit(models, spp, dims, seed):
     s = dpc.Sampler(models, samples_per_pixel=spp, dimensions=dims, seed=seed)
     ref = ReferenceSampler(models, spp, dims, seed)
@@ -34,7 +37,7 @@ def test_lookups_match_the_reference_bit_for_bit(models, spp, dims, seed):
     x = np.concatenate([rng.integers(-70, 300, 40), [0, 31, 32, -1, 2**31 - 1]])
     y = rng.integers(-70, 300, len(x))
     index = np.concatenate([rng.integers(0, 3 * spp, len(x) - 5), [0, spp - 1, spp, 2**32 - 1, 7 * spp + 1]])
-    dim = rng.integers(0, 3 * dims + 2, len(x))              # past D: tables reused with their own keys
+    dim = rng.integers(0, 3 * dims + 2, len(x))  # past D: tables reused with their own keys
     v2, v1 = s.get_2d(x, y, index, dim), s.get_1d(x, y, index, dim)
     for a in range(len(x)):
         want2 = ref.get_2d(int(x[a]), int(y[a]), int(index[a]), int(dim[a]))
@@ -89,11 +92,22 @@ def test_same_options_same_values_and_threads_agree():
         assert np.array_equal(r, a.get_2d(xs, ys, k % 32, k % 6))
 
 
-@pytest.mark.parametrize("kwargs", [
-    dict(samples_per_pixel=0), dict(samples_per_pixel=2**16 + 1), dict(samples_per_pixel=4.0),
-    dict(samples_per_pixel=True), dict(dimensions=0), dict(dimensions=5000), dict(dimensions="8"),
-    dict(seed=-1), dict(seed=2**64), dict(seed=1.5), dict(models=[]),
-])
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        dict(samples_per_pixel=0),
+        dict(samples_per_pixel=2**16 + 1),
+        dict(samples_per_pixel=4.0),
+        dict(samples_per_pixel=True),
+        dict(dimensions=0),
+        dict(dimensions=5000),
+        dict(dimensions="8"),
+        dict(seed=-1),
+        dict(seed=2**64),
+        dict(seed=1.5),
+        dict(models=[]),
+    ],
+)
 def test_bad_options_are_invalid_argument_errors(kwargs):
     with pytest.raises(dpc.InvalidArgumentError):
         dpc.Sampler(**kwargs)
@@ -106,7 +120,7 @@ def test_models_a_sampler_cannot_use_are_refused_with_the_reason():
         dpc.Sampler("no-such-model")
     s = dpc.Sampler(samples_per_pixel=4, dimensions=2)
     with pytest.raises(dpc.InvalidArgumentError):
-        s.get_2d(0, 0, -1, 0)          # indices are not wrapped
+        s.get_2d(0, 0, -1, 0)  # indices are not wrapped
     with pytest.raises(dpc.InvalidArgumentError):
         s.get_2d(0, 0, 0, 2**32)
     with pytest.raises(dpc.InvalidArgumentError):
@@ -128,16 +142,24 @@ def test_mean_image_over_seeds_converges_to_the_integral():
     is within 4.5 standard errors of the exact integral at every pixel."""
     W, n, seeds = 24, 4, 64
     xs, ys = np.meshgrid(np.arange(W), np.arange(W))
-    cx = 0.25 + 0.5 * xs / W                          # a disc edge moving across the screen
+    cx = 0.25 + 0.5 * xs / W  # a disc edge moving across the screen
 
     def f(p):
-        return (((p[..., 0] - cx[..., None]) ** 2 + (p[..., 1] - 0.5) ** 2) > 0.3 ** 2).astype(float)
+        return (((p[..., 0] - cx[..., None]) ** 2 + (p[..., 1] - 0.5) ** 2) > 0.3**2).astype(float)
 
     g = (np.arange(400) + 0.5) / 400
     U, V = np.meshgrid(g, g)
     exact = np.array([[(((U - c) ** 2 + (V - 0.5) ** 2) > 0.09).mean() for c in row] for row in cx])
-    est = np.stack([f(dpc.Sampler(samples_per_pixel=n, dimensions=1, seed=s)
-                      .get_2d(xs[..., None], ys[..., None], np.arange(n), 0)).mean(-1) for s in range(seeds)])
+    est = np.stack(
+        [
+            f(
+                dpc.Sampler(samples_per_pixel=n, dimensions=1, seed=s).get_2d(
+                    xs[..., None], ys[..., None], np.arange(n), 0
+                )
+            ).mean(-1)
+            for s in range(seeds)
+        ]
+    )
     z = (est.mean(0) - exact) / (est.std(0, ddof=1) / np.sqrt(seeds) + 1e-9)
     assert np.abs(z).max() < 4.5
 
@@ -158,10 +180,10 @@ def test_one_sample_per_pixel_error_is_blue_noise_in_screen_space():
     W = 128
     xs, ys = np.meshgrid(np.arange(W), np.arange(W))
     cx, cy = 0.25 + 0.5 * xs / W, 0.3 + 0.4 * ys / W
-    exact = 1 - np.pi * 0.25 ** 2                     # the disc lies inside the unit square
+    exact = 1 - np.pi * 0.25**2  # the disc lies inside the unit square
 
     def f(p):
-        return (((p[..., 0] - cx) ** 2 + (p[..., 1] - cy) ** 2) > 0.25 ** 2).astype(float)
+        return (((p[..., 0] - cx) ** 2 + (p[..., 1] - cy) ** 2) > 0.25**2).astype(float)
 
     rng = np.random.default_rng(0)
     dpc_e, white_e = [], []

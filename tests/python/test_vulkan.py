@@ -95,6 +95,7 @@ def test_vulkan_matches_cpu(name):
 def _written_model(tmp_path, name, dims, subspaces, radius, m, bins=24):
     """A 3-layer model with a smooth repulsive kernel (zero at distance 0 and at the radius)."""
     from dpc import model_file
+
     kernel = (-0.05 * np.sin(np.pi * np.linspace(0.0, 1.0, bins)))[None, :]
     kernels = np.repeat(kernel, len(subspaces), axis=0)
     layers = [model_file.Layer(subspaces, [radius] * len(subspaces), kernels) for _ in range(3)]
@@ -103,13 +104,16 @@ def _written_model(tmp_path, name, dims, subspaces, radius, m, bins=24):
     return path
 
 
-@pytest.mark.parametrize("name, dims, subspaces, radius, m", [
-    ("grid-1d", 1, [0b1], 3.0, 2048),            # 1-D cell grid
-    ("grid-4d", 4, [0b1111, 0b0011], 1.2, 4096),  # 4-D cell grid (G = 6, R = 1) and a 2-D one
-    ("pairs-5d", 5, [0b11111, 0b00100], 1.5, 1024),  # all pairs, two vec4s per point; 1-D grid
-    ("pairs-wide", 2, [0b11], 1e6, 512),          # radius clamped to 0.5: all pairs in 2-D
-    ("pairs-split", 10, [0b1111111111], 1.0, 3000),  # all pairs over 8 partner ranges of 375
-])
+@pytest.mark.parametrize(
+    "name, dims, subspaces, radius, m",
+    [
+        ("grid-1d", 1, [0b1], 3.0, 2048),  # 1-D cell grid
+        ("grid-4d", 4, [0b1111, 0b0011], 1.2, 4096),  # 4-D cell grid (G = 6, R = 1) and a 2-D one
+        ("pairs-5d", 5, [0b11111, 0b00100], 1.5, 1024),  # all pairs, two vec4s per point; 1-D grid
+        ("pairs-wide", 2, [0b11], 1e6, 512),  # radius clamped to 0.5: all pairs in 2-D
+        ("pairs-split", 10, [0b1111111111], 1.0, 3000),  # all pairs over 8 partner ranges of 375
+    ],
+)
 def test_vulkan_matches_cpu_on_other_geometries(tmp_path, name, dims, subspaces, radius, m):
     # Subspace shapes the committed test models lack: each grid dimension count 1 .. 4, and
     # all-pairs passes with more than one vec4 per point, a radius covering the torus, or a

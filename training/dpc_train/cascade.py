@@ -51,10 +51,10 @@ class CascadeSpec:
     eps: float = 1e-4
     grid_axes: list = field(default_factory=list)
     grid_shape: list = field(default_factory=list)
-    init: str = "zero"              # "zero" (identity cascade) or "repulsion"
-    init_sigma: float = 0.85        # repulsion: Gaussian width, in mean spacings
-    init_amplitude: float = 0.05    # repulsion: kernel value at d = 0 (units of spacing)
-    input: str = "uniform"          # training inputs: "uniform" or "stratified" (format §5)
+    init: str = "zero"  # "zero" (identity cascade) or "repulsion"
+    init_sigma: float = 0.85  # repulsion: Gaussian width, in mean spacings
+    init_amplitude: float = 0.05  # repulsion: kernel value at d = 0 (units of spacing)
+    input: str = "uniform"  # training inputs: "uniform" or "stratified" (format §5)
 
     def __post_init__(self):
         if not 1 <= self.dims <= 64:
@@ -64,29 +64,29 @@ class CascadeSpec:
         if self.layers < 1 or not 1 <= self.unique_kernels <= self.layers:
             raise FilterConfigError(
                 f"need layers >= 1 and 1 <= unique_kernels <= layers, got layers={self.layers},"
-                f" unique_kernels={self.unique_kernels}")
+                f" unique_kernels={self.unique_kernels}"
+            )
         if not 2 <= self.bins <= 65536:
             raise FilterConfigError(f"bins must be in 2..65536, got {self.bins}")
         self.masks = [parse_subspace(s, self.dims) for s in self.subspaces]
         if len(self.radius) != len(self.masks):
-            raise FilterConfigError(f"radius needs one value per subspace ({len(self.masks)}),"
-                                    f" got {len(self.radius)}")
+            raise FilterConfigError(f"radius needs one value per subspace ({len(self.masks)}), got {len(self.radius)}")
         if len(self.grid_axes) != len(self.grid_shape):
             raise FilterConfigError("grid_axes and grid_shape must have the same length")
         if self.grid_axes:
             if sorted(set(self.grid_axes)) != list(self.grid_axes) or max(self.grid_axes) >= self.dims:
                 raise FilterConfigError(f"grid_axes must be increasing dims < {self.dims}")
             if math.prod(self.grid_shape) != self.n_points:
-                raise FilterConfigError(f"prod(grid_shape) = {math.prod(self.grid_shape)} must "
-                                        f"equal n_points = {self.n_points}")
+                raise FilterConfigError(
+                    f"prod(grid_shape) = {math.prod(self.grid_shape)} must equal n_points = {self.n_points}"
+                )
         if self.init not in ("zero", "repulsion"):
             raise FilterConfigError(f"init must be 'zero' or 'repulsion', got {self.init!r}")
         if self.input not in ("uniform", "stratified"):
             raise FilterConfigError(f"input must be 'uniform' or 'stratified', got {self.input!r}")
         if self.input == "stratified" and self.grid_axes:
             raise FilterConfigError("stratified input is for patterns without grid axes")
-        check_layer(self.dims, torch.zeros(len(self.masks), self.bins), self.masks,
-                    self.radius, self.eps, self.fixed)
+        check_layer(self.dims, torch.zeros(len(self.masks), self.bins), self.masks, self.radius, self.eps, self.fixed)
 
     @property
     def fixed(self) -> int:
@@ -131,8 +131,7 @@ class Cascade(torch.nn.Module):
         f = frac.to(self.theta)[:, None, None]
         return (1 - f) * self.theta[lo] + f * self.theta[hi]
 
-    def forward(self, x: torch.Tensor, impl: str = "torch", return_all: bool = False,
-                skin: float | None = 1.0):
+    def forward(self, x: torch.Tensor, impl: str = "torch", return_all: bool = False, skin: float | None = 1.0):
         """Run all layers. skin (in spacings): reuse neighbour lists across layers while points
         move less than skin/2 (NeighbourCache; same result); None searches afresh per layer."""
         sp = self.spec
@@ -140,14 +139,14 @@ class Cascade(torch.nn.Module):
         cache = NeighbourCache(sp.masks, sp.radius, skin) if skin is not None else None
         outs = []
         for i in range(sp.layers):
-            x = filter_layer(x, tabs[i], sp.masks, sp.radius, sp.eps, sp.fixed, impl=impl,
-                             cache=cache)
+            x = filter_layer(x, tabs[i], sp.masks, sp.radius, sp.eps, sp.fixed, impl=impl, cache=cache)
             if return_all:
                 outs.append(x)
         return outs if return_all else x
 
-    def input_points(self, batch: int, generator: torch.Generator, m: int | None = None,
-                     dtype=torch.float32, device="cpu") -> torch.Tensor:
+    def input_points(
+        self, batch: int, generator: torch.Generator, m: int | None = None, dtype=torch.float32, device="cpu"
+    ) -> torch.Tensor:
         """[batch, m, n] input points: uniform random, gridded dims set to cell centres, or for
         input = "stratified" libdpc's stratified points (format §5) of seeds drawn from the
         generator, so a model trained on them sees what dpc.load(..., input="stratified") feeds it."""

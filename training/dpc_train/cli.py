@@ -46,14 +46,15 @@ def export_main(argv=None) -> int:
     """
     from .export import export
 
-    ap = argparse.ArgumentParser(prog="dpc-export", description=export_main.__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = argparse.ArgumentParser(
+        prog="dpc-export", description=export_main.__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     ap.add_argument("checkpoint", help="runs/NAME/checkpoint.pt")
     ap.add_argument("-o", "--output", required=True, help="model file to write (.onnx)")
-    ap.add_argument("--standard-ops", metavar="FILE",
-                    help="also write a plain-ONNX variant (standard operators, dense all pairs)")
-    ap.add_argument("--batched", action="store_true",
-                    help="standard-ops variant takes [batch, m, n] instead of [m, n]")
+    ap.add_argument(
+        "--standard-ops", metavar="FILE", help="also write a plain-ONNX variant (standard operators, dense all pairs)"
+    )
+    ap.add_argument("--batched", action="store_true", help="standard-ops variant takes [batch, m, n] instead of [m, n]")
     ap.add_argument("--name", help="pattern name stored in the model (default: config's)")
     a = ap.parse_args(argv)
     if not Path(a.checkpoint).is_file():
@@ -74,9 +75,11 @@ def _console(main) -> int:
         return main()
     except ModuleNotFoundError as e:
         if e.name in ("torch", "onnx"):
-            print(f"{e.name} is not installed: the training commands need the train extra "
-                  "(pip install 'deep-point-correlation[train]'; CPU torch first, see docs/training.md)",
-                  file=sys.stderr)
+            print(
+                f"{e.name} is not installed: the training commands need the train extra "
+                "(pip install 'deep-point-correlation[train]'; CPU torch first, see docs/training.md)",
+                file=sys.stderr,
+            )
             return 2
         raise
 

@@ -14,9 +14,10 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
+
+import tomllib
 
 from dpc import DEFAULT_THREADS
 
@@ -57,7 +58,7 @@ class TrainConfig:
     steps: int = 1000
     batch: int = 4
     lr: float = 1e-3
-    lr_final: float = 1e-4     # exponential decay from lr to lr_final over `steps`
+    lr_final: float = 1e-4  # exponential decay from lr to lr_final over `steps`
     seed: int = 0
     device: str = "cpu"
     # torch's intra-op threads and the C op's threads; dpc's one default (dpc.DEFAULT_THREADS, 1),
@@ -66,7 +67,7 @@ class TrainConfig:
     impl: str = "torch"
     checkpoint_every: int = 50
     log_every: int = 1
-    eval_sets: int = 16        # sets used for the measured quality at the end / on export
+    eval_sets: int = 16  # sets used for the measured quality at the end / on export
     run_dir: str = "runs"
     # Divergence without NaN: stop when the batch loss stays above diverge_factor x the best
     # running mean (10 steps; for a negative best: more than (diverge_factor - 1) x its
@@ -86,17 +87,30 @@ class Config:
 
     def cascade_spec(self) -> CascadeSpec:
         p, m = self.pattern, self.model
-        return CascadeSpec(dims=p.dims, n_points=p.points, layers=m.layers,
-                           unique_kernels=m.unique_kernels, bins=m.bins,
-                           subspaces=list(m.subspaces), radius=[float(r) for r in m.radius],
-                           eps=m.eps, grid_axes=list(p.grid_axes), grid_shape=list(p.grid_shape),
-                           init=m.init, init_sigma=m.init_sigma, init_amplitude=m.init_amplitude,
-                           input=m.input)
+        return CascadeSpec(
+            dims=p.dims,
+            n_points=p.points,
+            layers=m.layers,
+            unique_kernels=m.unique_kernels,
+            bins=m.bins,
+            subspaces=list(m.subspaces),
+            radius=[float(r) for r in m.radius],
+            eps=m.eps,
+            grid_axes=list(p.grid_axes),
+            grid_shape=list(p.grid_shape),
+            init=m.init,
+            init_sigma=m.init_sigma,
+            init_amplitude=m.init_amplitude,
+            input=m.input,
+        )
 
     def to_dict(self) -> dict:
-        return {"pattern": dataclasses.asdict(self.pattern),
-                "model": dataclasses.asdict(self.model),
-                "loss": dict(self.loss), "train": dataclasses.asdict(self.train)}
+        return {
+            "pattern": dataclasses.asdict(self.pattern),
+            "model": dataclasses.asdict(self.model),
+            "loss": dict(self.loss),
+            "train": dataclasses.asdict(self.train),
+        }
 
     def base_dir(self) -> Path:
         return Path(self.source_path).parent if self.source_path else Path.cwd()
@@ -107,17 +121,21 @@ def _section(cls, data: dict, name: str):
     unknown = set(data) - set(known)
     if unknown:
         raise ConfigError(f"[{name}]: unknown keys {sorted(unknown)}; known: {sorted(known)}")
-    required = [f.name for f in known.values()
-                if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING]
+    required = [
+        f.name for f in known.values() if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+    ]
     missing = [k for k in required if k not in data]
     if missing:
         raise ConfigError(f"[{name}]: missing required keys {missing}")
     for k, v in data.items():
         f = known[k]
         want = f.type if isinstance(f.type, str) else f.type.__name__
-        ok = {"int": isinstance(v, int) and not isinstance(v, bool),
-              "float": isinstance(v, (int, float)) and not isinstance(v, bool),
-              "str": isinstance(v, str), "list": isinstance(v, list)}.get(want, True)
+        ok = {
+            "int": isinstance(v, int) and not isinstance(v, bool),
+            "float": isinstance(v, (int, float)) and not isinstance(v, bool),
+            "str": isinstance(v, str),
+            "list": isinstance(v, list),
+        }.get(want, True)
         if not ok:
             raise ConfigError(f"[{name}] {k} = {v!r}: expected {want}")
     return cls(**data)
@@ -130,11 +148,13 @@ def config_from_dict(d: dict, source_path: str = "") -> Config:
     for sec in ("pattern", "loss"):
         if sec not in d:
             raise ConfigError(f"missing section [{sec}]")
-    cfg = Config(pattern=_section(PatternConfig, d["pattern"], "pattern"),
-                 model=_section(ModelConfig, d.get("model", {}), "model"),
-                 loss=dict(d["loss"]),
-                 train=_section(TrainConfig, d.get("train", {}), "train"),
-                 source_path=source_path)
+    cfg = Config(
+        pattern=_section(PatternConfig, d["pattern"], "pattern"),
+        model=_section(ModelConfig, d.get("model", {}), "model"),
+        loss=dict(d["loss"]),
+        train=_section(TrainConfig, d.get("train", {}), "train"),
+        source_path=source_path,
+    )
     t = cfg.train
     if t.steps < 1 or t.batch < 1 or t.checkpoint_every < 1 or t.log_every < 1:
         raise ConfigError("[train] steps, batch, checkpoint_every, log_every must be >= 1")

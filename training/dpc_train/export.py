@@ -8,6 +8,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+
 from dpc import model_file
 
 from .filter import mask_dims
@@ -21,8 +22,10 @@ def model_spec_from_checkpoint(st: dict, quality: dict | None = None, name: str 
     model, cfg = cascade_from_checkpoint(st)
     sp = model.spec
     tables = model.tables().detach().cpu().numpy().astype(np.float32)
-    layers = [mf.Layer(subspaces=list(sp.masks), radius=list(sp.radius), kernels=tables[i],
-                       eps=sp.eps, fixed=sp.fixed) for i in range(sp.layers)]
+    layers = [
+        mf.Layer(subspaces=list(sp.masks), radius=list(sp.radius), kernels=tables[i], eps=sp.eps, fixed=sp.fixed)
+        for i in range(sp.layers)
+    ]
     quality = quality if quality is not None else st.get("quality", {})
     meta = {
         "dpc.loss": st.get("loss_source", ""),
@@ -33,15 +36,22 @@ def model_spec_from_checkpoint(st: dict, quality: dict | None = None, name: str 
         "dpc.quality": json.dumps(quality, sort_keys=True),
         "dpc.input": sp.input,  # the input points it was trained on: load it with that input
     }
-    return mf.ModelSpec(dims=sp.dims, n_points=sp.n_points, layers=layers,
-                        grid_axes=list(sp.grid_axes), grid_shape=list(sp.grid_shape),
-                        name=name or cfg.pattern.name, description=cfg.pattern.description,
-                        metadata=meta)
+    return mf.ModelSpec(
+        dims=sp.dims,
+        n_points=sp.n_points,
+        layers=layers,
+        grid_axes=list(sp.grid_axes),
+        grid_shape=list(sp.grid_shape),
+        name=name or cfg.pattern.name,
+        description=cfg.pattern.description,
+        metadata=meta,
+    )
 
 
 # ----------------------------------------------------------------------------------------
 # Plain-ONNX export (standard operators only)
 # ----------------------------------------------------------------------------------------
+
 
 def build_standard_onnx(spec, ir_version: int = 8, opset: int = 17, batched: bool = False):
     """ModelProto computing the same cascade with standard ONNX operators (dense all pairs:
@@ -89,13 +99,12 @@ def build_standard_onnx(spec, ir_version: int = 8, opset: int = 17, batched: boo
             h = node("Pow", [m_f, const(-1.0 / k)])
             r = node("Min", [node("Mul", [h, const(float(rho))]), half])
             e = node("Mul", [h, const(float(layer.eps))])
-            xs = node("Gather", [x, const(dims, np.int64)], axis=-1)          # [.., m, k]
-            xj = node("Unsqueeze", [xs, ax_m3])                                # [.., 1, m, k]
-            xi = node("Unsqueeze", [xs, ax_m2])                                # [.., m, 1, k]
-            diff = node("Sub", [xj, xi])                                       # x_j − x_i
+            xs = node("Gather", [x, const(dims, np.int64)], axis=-1)  # [.., m, k]
+            xj = node("Unsqueeze", [xs, ax_m3])  # [.., 1, m, k]
+            xi = node("Unsqueeze", [xs, ax_m2])  # [.., m, 1, k]
+            diff = node("Sub", [xj, xi])  # x_j − x_i
             delta = node("Sub", [diff, node("Floor", [node("Add", [diff, half])])])
-            d = node("Sqrt", [node("ReduceSum", [node("Mul", [delta, delta]), ax_last],
-                                   keepdims=0)])                               # [.., m, m]
+            d = node("Sqrt", [node("ReduceSum", [node("Mul", [delta, delta]), ax_last], keepdims=0)])  # [.., m, m]
             inside = node("And", [node("Greater", [d, e]), node("Less", [d, r])])
             dsafe = node("Where", [inside, d, one])
             u = node("Div", [node("Mul", [dsafe, const(float(b - 1))]), r])
@@ -108,7 +117,7 @@ def build_standard_onnx(spec, ir_version: int = 8, opset: int = 17, batched: boo
             g = node("Add", [w0, node("Mul", [f, node("Sub", [w1, w0])])])
             coef = node("Where", [inside, node("Div", [node("Mul", [g, h]), dsafe]), zero])
             contrib = node("Mul", [node("Unsqueeze", [coef, ax_last]), delta])  # [.., m, m, k]
-            acc = node("ReduceSum", [contrib, ax_m2], keepdims=0)               # [.., m, k]
+            acc = node("ReduceSum", [contrib, ax_m2], keepdims=0)  # [.., m, k]
             # scatter the k subspace dims into n dims, divided by c_k, fixed dims zeroed
             sel = np.zeros((k, n), dtype=np.float32)
             for a, dim in enumerate(dims):
@@ -127,19 +136,24 @@ def build_standard_onnx(spec, ir_version: int = 8, opset: int = 17, batched: boo
     inp = helper.make_tensor_value_info("points", TensorProto.FLOAT, shape)
     out = helper.make_tensor_value_info("points_out", TensorProto.FLOAT, shape)
     graph = helper.make_graph(nodes, (spec.name or "dpc") + "_standard_ops", [inp], [out], inits)
-    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", opset)],
-                              producer_name="dpc-train")
+    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", opset)], producer_name="dpc-train")
     model.ir_version = ir_version
     helper.set_model_props(model, {**spec.all_metadata(), "dpc.variant": "standard-ops"})
     onnx.checker.check_model(model)
     return model
 
 
-def export(checkpoint, out, standard_ops: str | None = None, name: str | None = None,
-           measure: bool = True, batched: bool = False) -> dict:
+def export(
+    checkpoint,
+    out,
+    standard_ops: str | None = None,
+    name: str | None = None,
+    measure: bool = True,
+    batched: bool = False,
+) -> dict:
     """Write the dpc model file (and optionally the plain-ONNX variant); returns a summary."""
-    from .trainer import cascade_from_checkpoint, load_checkpoint, measure_quality
     from .lossprog import build_loss
+    from .trainer import cascade_from_checkpoint, load_checkpoint, measure_quality
 
     st = load_checkpoint(checkpoint)
     quality = st.get("quality")
@@ -157,8 +171,7 @@ def export(checkpoint, out, standard_ops: str | None = None, name: str | None = 
 
     existed = Path(out).exists()
     atomic_write_bytes(Path(out), data)
-    summary = {"model": str(out), "layers": len(spec.layers), "steps": st["step"],
-               "quality": quality}
+    summary = {"model": str(out), "layers": len(spec.layers), "steps": st["step"], "quality": quality}
     if std is not None:
         try:
             Path(standard_ops).parent.mkdir(parents=True, exist_ok=True)
@@ -169,4 +182,3 @@ def export(checkpoint, out, standard_ops: str | None = None, name: str | None = 
             raise
         summary["standard_ops"] = str(standard_ops)
     return summary
-

@@ -40,8 +40,7 @@ def check_layer(n: int, kernels: torch.Tensor, subspaces, radius, eps: float, fi
     """Validate a layer against the format's MUSTs (typed error, clear message)."""
     s = len(subspaces)
     if kernels.dim() != 2 or kernels.shape[0] != s:
-        raise FilterConfigError(f"kernels must be [s, b] with s = {s} subspaces, got "
-                                f"{tuple(kernels.shape)}")
+        raise FilterConfigError(f"kernels must be [s, b] with s = {s} subspaces, got {tuple(kernels.shape)}")
     if kernels.shape[1] < 2:
         raise FilterConfigError(f"need at least 2 kernel bins, got {kernels.shape[1]}")
     if len(radius) != s:
@@ -86,6 +85,7 @@ def _wrap_diff(d: torch.Tensor) -> torch.Tensor:
 # Neighbour search (no grad)
 # ----------------------------------------------------------------------------------------
 
+
 def _pairs_all(xs: torch.Tensor, r: float, e: float):
     """All pairs (i, j) of one set with e < d < r, by chunked distance computation."""
     m = xs.shape[0]
@@ -109,11 +109,11 @@ def _pairs_grid(x: torch.Tensor, r: float, e: float, g: int):
     dev = x.device
     xs = x.reshape(bsz * m, k)
     cell = torch.clamp((xs * g).long(), 0, g - 1)  # [B·m, k]
-    strides = torch.tensor([g ** a for a in range(k)], device=dev)
-    setoff = torch.arange(bsz, device=dev).repeat_interleave(m) * g ** k
+    strides = torch.tensor([g**a for a in range(k)], device=dev)
+    setoff = torch.arange(bsz, device=dev).repeat_interleave(m) * g**k
     cid = (cell * strides).sum(-1) + setoff
     order = torch.argsort(cid, stable=True)
-    counts = torch.bincount(cid, minlength=bsz * g ** k)
+    counts = torch.bincount(cid, minlength=bsz * g**k)
     starts = torch.cumsum(counts, 0) - counts
     cols = [xs[:, a].contiguous() for a in range(k)]
     out_i, out_j = [], []
@@ -167,6 +167,7 @@ def find_pairs(x: torch.Tensor, dims: list[int], r: float, e: float):
 # ----------------------------------------------------------------------------------------
 # Forward pieces shared by impl="torch" and impl="analytic"
 # ----------------------------------------------------------------------------------------
+
 
 @dataclass
 class _Sub:
@@ -274,8 +275,8 @@ def _as_batch(points: torch.Tensor):
 # impl="torch": autograd on gathered pairs
 # ----------------------------------------------------------------------------------------
 
-def _filter_torch(x: torch.Tensor, kernels: torch.Tensor, subspaces, radius, eps, fixed,
-                  candidates=None):
+
+def _filter_torch(x: torch.Tensor, kernels: torch.Tensor, subspaces, radius, eps, fixed, candidates=None):
     bsz, m, n = x.shape
     flat = x.reshape(bsz * m, n)
     b = kernels.shape[1]
@@ -304,6 +305,7 @@ def _filter_torch(x: torch.Tensor, kernels: torch.Tensor, subspaces, radius, eps
 # ----------------------------------------------------------------------------------------
 # impl="analytic": closed-form backward (paper Appendix A)
 # ----------------------------------------------------------------------------------------
+
 
 class _FilterAnalytic(torch.autograd.Function):
     """Forward as §3; backward from the closed form (no autograd graph over pairs).
@@ -354,7 +356,7 @@ class _FilterAnalytic(torch.autograd.Function):
                 continue
             w = kernels[t]
             gi = gs.index_select(1, dims).index_select(0, sub.ii)  # ∂L/∂v for each pair
-            gdot = (gi * delta).sum(-1)                             # G·δ
+            gdot = (gi * delta).sum(-1)  # G·δ
             dg = (w.index_select(0, q + 1) - w.index_select(0, q)) * ((b - 1) / sub.r)  # g'(d)
             coef_d = sub.h * (dg * gdot / (d * d) - g * gdot / (d * d * d))
             a = coef_d[:, None] * delta + (sub.h * g / d)[:, None] * gi
@@ -371,6 +373,7 @@ class _FilterAnalytic(torch.autograd.Function):
 # ----------------------------------------------------------------------------------------
 # impl="c": libdpc's float64 layer kernels (dpc_layer_forward / dpc_layer_backward)
 # ----------------------------------------------------------------------------------------
+
 
 def to_torus_dtype(y: torch.Tensor, dtype: torch.dtype) -> torch.Tensor:
     """Cast points in [0, 1) to dtype, keeping them in [0, 1): in float32 a float64 value just
@@ -406,8 +409,7 @@ class _FilterC(torch.autograd.Function):
         k64 = kernels.detach().to(torch.float64).contiguous().numpy()
         g64 = grad_y.detach().to(torch.float64).contiguous().numpy()
         gx, gk = layer_backward(x64, k64, *ctx.args, grad_y=g64, threads=torch.get_num_threads())
-        return (torch.from_numpy(gx).to(x.dtype), torch.from_numpy(gk).to(kernels.dtype),
-                None, None, None, None)
+        return (torch.from_numpy(gx).to(x.dtype), torch.from_numpy(gk).to(kernels.dtype), None, None, None, None)
 
 
 # ----------------------------------------------------------------------------------------
@@ -417,9 +419,16 @@ class _FilterC(torch.autograd.Function):
 IMPLS = ("torch", "analytic", "c")
 
 
-def filter_layer(points: torch.Tensor, kernels: torch.Tensor, subspaces, radius,
-                 eps: float = 1e-4, fixed: int = 0, impl: str = "torch",
-                 cache: NeighbourCache | None = None) -> torch.Tensor:
+def filter_layer(
+    points: torch.Tensor,
+    kernels: torch.Tensor,
+    subspaces,
+    radius,
+    eps: float = 1e-4,
+    fixed: int = 0,
+    impl: str = "torch",
+    cache: NeighbourCache | None = None,
+) -> torch.Tensor:
     """Apply one PointFilter layer (docs/model-format.md §3).
 
     points: [m, n] or [batch, m, n] in [0, 1); kernels: [s, b] (kernel values in units of the

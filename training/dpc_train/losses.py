@@ -35,6 +35,7 @@ def _batch(X: torch.Tensor) -> torch.Tensor:
 # Swizzles
 # ----------------------------------------------------------------------------------------
 
+
 def swizzle(X: torch.Tensor, axes: str) -> torch.Tensor:
     """Keep the named dimensions, e.g. swizzle(X, "xz") → [B, m, 2]."""
     X = _batch(X)
@@ -53,13 +54,14 @@ def swizzle_functions(n_letters: int = 4) -> dict:
     for k in range(1, n_letters + 1):
         for combo in itertools.permutations(letters, k):
             name = "".join(combo)
-            out[name] = (lambda X, _n=name: swizzle(X, _n))
+            out[name] = lambda X, _n=name: swizzle(X, _n)
     return out
 
 
 # ----------------------------------------------------------------------------------------
 # Spectra
 # ----------------------------------------------------------------------------------------
+
 
 def power_at(X: torch.Tensor, freqs: torch.Tensor, chunk: int = 4096) -> torch.Tensor:
     """Mean (over the batch) power |Σ_k e^{2πi⟨q,x_k⟩}|²/m at integer frequencies freqs [Q, k]."""
@@ -68,7 +70,7 @@ def power_at(X: torch.Tensor, freqs: torch.Tensor, chunk: int = 4096) -> torch.T
     out = []
     f = freqs.to(X)
     for a in range(0, f.shape[0], chunk):
-        ph = TWO_PI * torch.einsum("bmk,qk->bmq", X, f[a:a + chunk])
+        ph = TWO_PI * torch.einsum("bmk,qk->bmq", X, f[a : a + chunk])
         re, im = torch.cos(ph).sum(1), torch.sin(ph).sum(1)
         out.append(((re * re + im * im) / m).mean(0))
     return torch.cat(out)
@@ -87,26 +89,27 @@ def spec(X: torch.Tensor, K: int | None = None) -> torch.Tensor:
         K = int(math.ceil(2 * m ** (1.0 / k)))
     q = torch.arange(-K, K + 1, dtype=X.dtype, device=X.device)
     if k == 1:
-        ph = TWO_PI * X[..., 0:1] * q                       # [B, m, Q]
+        ph = TWO_PI * X[..., 0:1] * q  # [B, m, Q]
         re, im = torch.cos(ph).sum(1), torch.sin(ph).sum(1)
         P = ((re * re + im * im) / m).mean(0)
-        P = torch.cat([P[:K], P.new_zeros(1), P[K + 1:]])   # DC removed
+        P = torch.cat([P[:K], P.new_zeros(1), P[K + 1 :]])  # DC removed
         return P
     if k == 2:
-        ax = TWO_PI * X[..., 0:1] * q                       # [B, m, Q]
+        ax = TWO_PI * X[..., 0:1] * q  # [B, m, Q]
         ay = TWO_PI * X[..., 1:2] * q
         cx, sx, cy, sy = torch.cos(ax), torch.sin(ax), torch.cos(ay), torch.sin(ay)
         cxt, sxt = cx.transpose(1, 2), sx.transpose(1, 2)
-        re = cxt @ cy - sxt @ sy                            # Σ cos(α+β)
-        im = sxt @ cy + cxt @ sy                            # Σ sin(α+β)
+        re = cxt @ cy - sxt @ sy  # Σ cos(α+β)
+        im = sxt @ cy + cxt @ sy  # Σ sin(α+β)
         P = ((re * re + im * im) / m).mean(0)
         dc = torch.zeros_like(P)
         dc[K, K] = 1.0
         return P * (1 - dc)
     n_freq = (2 * K + 1) ** k
     if n_freq > 4_000_000:
-        raise LossError(f"spec of {k}-D points on a (2K+1)^k = {n_freq} grid is too large; "
-                        f"use radspec (Monte Carlo) or a smaller K")
+        raise LossError(
+            f"spec of {k}-D points on a (2K+1)^k = {n_freq} grid is too large; use radspec (Monte Carlo) or a smaller K"
+        )
     grid = torch.cartesian_prod(*([q] * k)).reshape(-1, k)
     P = power_at(X, grid)
     P = torch.where((grid == 0).all(-1), torch.zeros_like(P), P)
@@ -118,8 +121,9 @@ def radial_bins(m: int, k: int, nu_max: float) -> int:
     return int(math.ceil(nu_max * m ** (1.0 / k))) + 1
 
 
-def radspec(X: torch.Tensor, nu_max: float = 4.0, directions: int = 64,
-            generator: torch.Generator | None = None) -> torch.Tensor:
+def radspec(
+    X: torch.Tensor, nu_max: float = 4.0, directions: int = 64, generator: torch.Generator | None = None
+) -> torch.Tensor:
     """Radially averaged power spectrum: entry ρ = mean of P(q) over floor(|q|) = ρ (ρ = 0 → 0).
 
     k ≤ 2: exact grid quadrature over all integer q with |q| < R + 1. k ≥ 3: Monte Carlo
@@ -146,8 +150,7 @@ def radspec(X: torch.Tensor, nu_max: float = 4.0, directions: int = 64,
     rad = torch.arange(nb, dtype=torch.float64)[:, None, None] + 0.5
     freqs = torch.round(g * rad).reshape(-1, k)
     P = power_at(X, freqs.to(X.device)).reshape(nb, directions)
-    P = torch.where((freqs == 0).all(-1).reshape(nb, directions).to(P.device),
-                    torch.zeros_like(P), P)
+    P = torch.where((freqs == 0).all(-1).reshape(nb, directions).to(P.device), torch.zeros_like(P), P)
     out = P.mean(1)
     return torch.cat([out.new_zeros(1), out[1:]])
 
@@ -155,6 +158,7 @@ def radspec(X: torch.Tensor, nu_max: float = 4.0, directions: int = 64,
 # ----------------------------------------------------------------------------------------
 # Differential domain
 # ----------------------------------------------------------------------------------------
+
 
 def _pair_offsets(X: torch.Tensor, max_dist: float | None):
     """Toroidal offsets x_j ⊖ x_i [P, k] over all pairs i ≠ j of every set (or those with
@@ -186,7 +190,7 @@ def ddom(X: torch.Tensor, nc: int = 64, max_dist: float | None = None) -> torch.
 
     def factor(col):
         diff = centres[None, :] - col[:, None]
-        diff = diff - torch.floor(diff + 0.5)           # periodic Gaussian on the torus
+        diff = diff - torch.floor(diff + 0.5)  # periodic Gaussian on the torus
         return torch.exp(-0.5 * (diff / sigma) ** 2) / (math.sqrt(TWO_PI) * sigma)
 
     norm = B * m * (m - 1)
@@ -195,8 +199,12 @@ def ddom(X: torch.Tensor, nc: int = 64, max_dist: float | None = None) -> torch.
     return factor(d[:, 0]).T @ factor(d[:, 1]) / norm
 
 
-def raddom(X: torch.Tensor, r_max: float = 2.5, nbins: int = 50, sigma: float = 0.05,
-           ) -> torch.Tensor:
+def raddom(
+    X: torch.Tensor,
+    r_max: float = 2.5,
+    nbins: int = 50,
+    sigma: float = 0.05,
+) -> torch.Tensor:
     """Pair correlation function g(r) at nbins radii in (0, r_max] (in mean spacings m^(−1/k)),
     soft-binned with a Gaussian of std sigma (spacings); uniform random points give g ≈ 1.
 
@@ -224,12 +232,15 @@ def pcf_radii(r_max: float = 2.5, nbins: int = 50) -> torch.Tensor:
 # Metrics
 # ----------------------------------------------------------------------------------------
 
+
 def _match(a, b=None):
     if b is None:
         return a
     if a.shape != b.shape:
-        raise LossError(f"shape mismatch {tuple(a.shape)} vs {tuple(b.shape)}: build the target "
-                        f"with the same nu_max / K / bins as the operator")
+        raise LossError(
+            f"shape mismatch {tuple(a.shape)} vs {tuple(b.shape)}: build the target "
+            f"with the same nu_max / K / bins as the operator"
+        )
     return a - b.to(a)
 
 
@@ -255,8 +266,7 @@ def log_l1(a: torch.Tensor, b: torch.Tensor, eps: float = 1e-3) -> torch.Tensor:
     return (torch.log(a.clamp(min=0) + eps) - torch.log(b.to(a).clamp(min=0) + eps)).abs().mean()
 
 
-def lowband_weight(m: int, k: int, nu_max: float = 4.0, nu_low: float = 0.75,
-                   factor: float = 10.0) -> torch.Tensor:
+def lowband_weight(m: int, k: int, nu_max: float = 4.0, nu_low: float = 0.75, factor: float = 10.0) -> torch.Tensor:
     """Per-radial-bin weight: `factor` below nu_low, 1 above (DC bin 0)."""
     nb = radial_bins(m, k, nu_max)
     nu = torch.arange(nb, dtype=torch.float64) / m ** (1.0 / k)

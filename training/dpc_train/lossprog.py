@@ -37,17 +37,20 @@ class LossConfigError(ValueError):
 
 def register(name: str):
     """Decorator: register a loss factory f(m, n, **params) → loss(X)."""
+
     def deco(f):
         REGISTRY[name] = f
         return f
+
     return deco
 
 
 def namespace(m: int, n: int) -> dict:
     ns = {"torch": torch, "math": math, "M": m, "N": n}
     for mod in (L, T):
-        ns.update({k: v for k, v in vars(mod).items()
-                   if not k.startswith("_") and callable(v) and k not in ("annotations",)})
+        ns.update(
+            {k: v for k, v in vars(mod).items() if not k.startswith("_") and callable(v) and k not in ("annotations",)}
+        )
     ns.update(L.swizzle_functions(min(n, 4)))
     return ns
 
@@ -89,16 +92,27 @@ def build_loss(section: dict, m: int, n: int, base_dir: Path | None = None):
 
 
 @register("radspec")
-def radspec_loss(m: int, n: int, target: str = "bnot", axes: str = "", nu_max: float = 4.0,
-                 metric: str = "l1", nu_low: float = 0.75, low_factor: float = 1.0,
-                 pcf_weight: float = 0.0, pcf_target: str = "", pcf_r_max: float = 2.0):
+def radspec_loss(
+    m: int,
+    n: int,
+    target: str = "bnot",
+    axes: str = "",
+    nu_max: float = 4.0,
+    metric: str = "l1",
+    nu_low: float = 0.75,
+    low_factor: float = 1.0,
+    pcf_weight: float = 0.0,
+    pcf_target: str = "",
+    pcf_r_max: float = 2.0,
+):
     """metric(radspec(axes(X)) − target) with an optional low-band weight (factor below ν_low)
     and an optional PCF term pcf_weight·l1(raddom − PCF of the point sets `pcf_target`).
     axes: a swizzle such as "xz"; default every dimension (radspec of the whole n-D set)."""
     if not axes:
         if n > len(AXES):
-            raise LossConfigError(f"radspec over all {n} dims: only the first {len(AXES)} have axis letters; "
-                                  "give params.axes")
+            raise LossConfigError(
+                f"radspec over all {n} dims: only the first {len(AXES)} have axis letters; give params.axes"
+            )
         axes = AXES[:n]  # every dimension (a 10-D pattern: all 10, not the first 4)
     k = len(axes)
     tgt = T.radial_target(target, m, k, nu_max)
@@ -124,4 +138,5 @@ def radspec_loss(m: int, n: int, target: str = "bnot", axes: str = "", nu_max: f
         if pcf_ref is not None:
             val = val + pcf_weight * L.l1(L.raddom(L.swizzle(X, axes), r_max=pcf_r_max), pcf_ref)
         return val
+
     return loss

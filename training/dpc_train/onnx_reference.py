@@ -14,8 +14,9 @@ import numpy as np
 from onnx.reference.op_run import OpRun
 
 
-def point_filter(points: np.ndarray, kernels: np.ndarray, subspaces, radius, eps: float = 1e-4,
-                 fixed: int = 0) -> np.ndarray:
+def point_filter(
+    points: np.ndarray, kernels: np.ndarray, subspaces, radius, eps: float = 1e-4, fixed: int = 0
+) -> np.ndarray:
     """One layer on [m, n] or [batch, m, n]; float64 arithmetic, float32 result."""
     x = np.asarray(points, dtype=np.float64)
     if x.ndim == 2:
@@ -31,9 +32,9 @@ def point_filter(points: np.ndarray, kernels: np.ndarray, subspaces, radius, eps
         h = float(m) ** (-1.0 / len(dims))
         r, e = min(float(rho) * h, 0.5), float(eps) * h
         xs = x[:, :, dims]
-        delta = xs[:, None, :, :] - xs[:, :, None, :]          # [B, i, j, k] = x_j − x_i
+        delta = xs[:, None, :, :] - xs[:, :, None, :]  # [B, i, j, k] = x_j − x_i
         delta -= np.floor(delta + 0.5)
-        d = np.sqrt((delta ** 2).sum(-1))
+        d = np.sqrt((delta**2).sum(-1))
         inside = (d > e) & (d < r)
         ds = np.where(inside, d, 1.0)
         u = ds * (b - 1) / r

@@ -45,8 +45,7 @@ def load_radial_file(name: str, k: int, m: int) -> np.ndarray:
     raise LossError(f"no radial target file for {name!r}, d={k}, n={m}; have: {avail}")
 
 
-def radial_target(name: str, m: int, k: int = 2, nu_max: float = 4.0,
-                  source: str = "auto") -> torch.Tensor:
+def radial_target(name: str, m: int, k: int = 2, nu_max: float = 4.0, source: str = "auto") -> torch.Tensor:
     """Radial target of length radial_bins(m, k, nu_max), to compare with radspec(X, nu_max).
 
     source: "auto" (analytic profile for `step` and square-m 2-D `jitter`, else the authors'
@@ -64,8 +63,7 @@ def radial_target(name: str, m: int, k: int = 2, nu_max: float = 4.0,
             raise LossError(f"no analytic radial profile for {name!r} (d={k}, n={m})")
     prof = load_radial_file(name, k, m)
     if len(prof) < nb:
-        raise LossError(f"target {name!r} (d={k}, n={m}) has {len(prof)} radii, need {nb} for "
-                        f"nu_max = {nu_max}")
+        raise LossError(f"target {name!r} (d={k}, n={m}) has {len(prof)} radii, need {nb} for nu_max = {nu_max}")
     return torch.from_numpy(prof[:nb].copy())
 
 
@@ -98,7 +96,7 @@ def _crop_centred(a: np.ndarray, K: int, what: str) -> torch.Tensor:
     c0, c1 = a.shape[0] // 2, a.shape[1] // 2
     if K > min(c0, c1) - 1:
         raise LossError(f"{what}: K = {K} exceeds the stored resolution {a.shape}")
-    out = a[c0 - K:c0 + K + 1, c1 - K:c1 + K + 1].copy()
+    out = a[c0 - K : c0 + K + 1, c1 - K : c1 + K + 1].copy()
     out[K, K] = 0.0
     return torch.from_numpy(out)
 
@@ -110,8 +108,9 @@ def integrand_spectrum(name: str, K: int) -> torch.Tensor:
     d = data_dir() / "integrand-spectra"
     files = sorted(d.glob(f"{name}_spectrum_*.npy"))
     if not files:
-        raise LossError(f"no integrand spectrum {name!r}; have "
-                        f"{sorted(p.name.split('_spectrum')[0] for p in d.glob('*.npy'))}")
+        raise LossError(
+            f"no integrand spectrum {name!r}; have {sorted(p.name.split('_spectrum')[0] for p in d.glob('*.npy'))}"
+        )
     F = _crop_centred(np.load(files[0]).astype(np.float64), K, files[0].name)
     return F / F.sum()
 
@@ -122,8 +121,7 @@ def eq5_variance(X: torch.Tensor, F: torch.Tensor) -> torch.Tensor:
     return (spec(X, K=K) * F.to(X)).sum()
 
 
-def step_radial(m: int, k: int = 2, nu_max: float = 4.0, nu0: float = 0.8,
-                height: float = 1.0) -> torch.Tensor:
+def step_radial(m: int, k: int = 2, nu_max: float = 4.0, nu0: float = 0.8, height: float = 1.0) -> torch.Tensor:
     """Analytic step profile (Heck et al. 2013): 0 below ν0, `height` above (DC = 0)."""
     nb = radial_bins(m, k, nu_max)
     nu = torch.arange(nb, dtype=torch.float64) / m ** (1.0 / k)

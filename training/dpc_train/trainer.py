@@ -18,10 +18,10 @@ from pathlib import Path
 
 import torch
 
+from . import losses as L
 from .cascade import Cascade
 from .config import Config, config_from_dict
 from .lossprog import build_loss
-from . import losses as L
 
 CHECKPOINT = "checkpoint.pt"
 
@@ -33,9 +33,9 @@ class TrainingError(RuntimeError):
 class TrainingDivergedError(TrainingError):
     """The run diverged (NaN/inf, an error inside torch, a loss jump, collapsed points)."""
 
+
 # Temporary files of atomic_write_bytes: ".NAME.<random>.tmp" beside NAME.
-_TEMP_PREFIXES = tuple(f".{n}." for n in ("checkpoint.pt", "loss.csv", "loss.png", "config.json",
-                                          "quality.json"))
+_TEMP_PREFIXES = tuple(f".{n}." for n in ("checkpoint.pt", "loss.csv", "loss.png", "config.json", "quality.json"))
 
 
 def remove_stale_temporaries(run_dir: Path) -> list[Path]:
@@ -132,8 +132,14 @@ def measure_quality(model: Cascade, loss_fn, cfg: Config, device="cpu") -> dict:
 class Trainer:
     """One training run in `run_dir` (checkpoint.pt, loss.csv, loss.png, config.json)."""
 
-    def __init__(self, cfg: Config, run_dir: str | Path | None = None, resume: bool = False,
-                 force: bool = False, progress: bool = True):
+    def __init__(
+        self,
+        cfg: Config,
+        run_dir: str | Path | None = None,
+        resume: bool = False,
+        force: bool = False,
+        progress: bool = True,
+    ):
         self.cfg = cfg
         t = cfg.train
         self.run_dir = Path(run_dir) if run_dir else Path(t.run_dir) / cfg.pattern.name
@@ -146,8 +152,7 @@ class Trainer:
         self.device = torch.device(t.device)
         torch.manual_seed(t.seed)
         self.model = Cascade(cfg.cascade_spec()).to(self.device)
-        self.loss_fn, self.loss_source = build_loss(cfg.loss, cfg.pattern.points, cfg.pattern.dims,
-                                                    cfg.base_dir())
+        self.loss_fn, self.loss_source = build_loss(cfg.loss, cfg.pattern.points, cfg.pattern.dims, cfg.base_dir())
         self.opt = torch.optim.Adam(self.model.parameters(), lr=t.lr)
         gamma = (t.lr_final / t.lr) ** (1.0 / t.steps)
         self.sched = torch.optim.lr_scheduler.ExponentialLR(self.opt, gamma=gamma)
@@ -159,25 +164,33 @@ class Trainer:
             if resume:
                 self._restore(load_checkpoint(self.ckpt_path))
             elif not force:
-                raise RunExistsError(f"{self.ckpt_path} exists: pass --resume to continue it or "
-                                     f"--force to start over")
+                raise RunExistsError(f"{self.ckpt_path} exists: pass --resume to continue it or --force to start over")
 
     # -- checkpoints ------------------------------------------------------------------
     def state(self) -> dict:
-        return {"format": "dpc-train-checkpoint-1", "step": self.step, "wall_time": self.wall,
-                "config": self.cfg.to_dict(), "config_path": self.cfg.source_path,
-                "loss_source": self.loss_source, "model": self.model.state_dict(),
-                "tables": self.model.tables().detach().cpu(),
-                "optimizer": self.opt.state_dict(), "scheduler": self.sched.state_dict(),
-                "history": list(self.history), "torch_version": torch.__version__}
+        return {
+            "format": "dpc-train-checkpoint-1",
+            "step": self.step,
+            "wall_time": self.wall,
+            "config": self.cfg.to_dict(),
+            "config_path": self.cfg.source_path,
+            "loss_source": self.loss_source,
+            "model": self.model.state_dict(),
+            "tables": self.model.tables().detach().cpu(),
+            "optimizer": self.opt.state_dict(),
+            "scheduler": self.sched.state_dict(),
+            "history": list(self.history),
+            "torch_version": torch.__version__,
+        }
 
     def _restore(self, st: dict) -> None:
         saved = st["config"]
         now = self.cfg.to_dict()
         for sec in ("pattern", "model", "loss"):
             if saved[sec] != now[sec]:
-                raise TrainingError(f"cannot resume: [{sec}] differs from the checkpoint's "
-                                    f"({saved[sec]} vs {now[sec]})")
+                raise TrainingError(
+                    f"cannot resume: [{sec}] differs from the checkpoint's ({saved[sec]} vs {now[sec]})"
+                )
         self.model.load_state_dict(st["model"])
         self.opt.load_state_dict(st["optimizer"])
         self.sched.load_state_dict(st["scheduler"])
@@ -211,8 +224,7 @@ class Trainer:
             ax.plot(steps, vals, lw=0.6, alpha=0.5, label="loss (one batch)")
             win = max(1, min(25, len(vals) // 5))
             if win > 1:  # batch losses are noisy: show a running mean too
-                run = [sum(vals[max(0, i - win + 1):i + 1]) / (i - max(0, i - win + 1) + 1)
-                       for i in range(len(vals))]
+                run = [sum(vals[max(0, i - win + 1) : i + 1]) / (i - max(0, i - win + 1) + 1) for i in range(len(vals))]
                 ax.plot(steps, run, lw=1.2, label=f"running mean ({win})")
                 ax.legend(fontsize=8)
             ax.set_yscale("log" if min(vals) > 0 else "symlog")  # mask losses go below zero
@@ -238,28 +250,30 @@ class Trainer:
             loss = self.loss_fn(y)
             val = float(loss.detach())
         except RuntimeError as e:  # e.g. an overflow inside torch from kernels blown up by a huge lr
-            raise TrainingDivergedError(f"torch failed at step {self.step} ({e}); stopping. "
-                                        f"{self._last_good()}") from e
+            raise TrainingDivergedError(f"torch failed at step {self.step} ({e}); stopping. {self._last_good()}") from e
         self._last_y = y.detach()
         if not math.isfinite(val):
             raise TrainingDivergedError(
                 f"loss is {val} at step {self.step}; stopping. {self._last_good()} Lower [train] "
-                f"lr, check the loss program, or resume from the checkpoint.")
+                f"lr, check the loss program, or resume from the checkpoint."
+            )
         try:
             loss.backward()
         except RuntimeError as e:
-            raise TrainingDivergedError(f"torch failed in the backward pass at step {self.step} "
-                                        f"({e}); stopping. {self._last_good()}") from e
+            raise TrainingDivergedError(
+                f"torch failed in the backward pass at step {self.step} ({e}); stopping. {self._last_good()}"
+            ) from e
         grad = self.model.theta.grad
         if grad is not None and not torch.isfinite(grad).all():
             raise TrainingDivergedError(
-                f"non-finite kernel gradient at step {self.step} (loss {val}); stopping. "
-                f"{self._last_good()}")
+                f"non-finite kernel gradient at step {self.step} (loss {val}); stopping. {self._last_good()}"
+            )
         try:
             self.opt.step()
         except RuntimeError as e:
-            raise TrainingDivergedError(f"the optimiser failed at step {self.step} ({e}); "
-                                        f"stopping. {self._last_good()}") from e
+            raise TrainingDivergedError(
+                f"the optimiser failed at step {self.step} ({e}); stopping. {self._last_good()}"
+            ) from e
         self.sched.step()
         return val
 
@@ -289,8 +303,10 @@ class Trainer:
             self._suspect = True
             self._above += 1
             if self._above >= t.diverge_patience:
-                return (f"the loss jumped: {val:.4g} at step {self.step}, above {t.diverge_factor:g} x "
-                        f"the best running mean {self._best_mean:.4g} for {self._above} steps")
+                return (
+                    f"the loss jumped: {val:.4g} at step {self.step}, above {t.diverge_factor:g} x "
+                    f"the best running mean {self._best_mean:.4g} for {self._above} steps"
+                )
         else:
             self._above = 0
         return None
@@ -309,8 +325,7 @@ class Trainer:
 
         t = self.cfg.train
         self.run_dir.mkdir(parents=True, exist_ok=True)
-        atomic_write_bytes(self.run_dir / "config.json",
-                           json.dumps(self.cfg.to_dict(), indent=2).encode())
+        atomic_write_bytes(self.run_dir / "config.json", json.dumps(self.cfg.to_dict(), indent=2).encode())
         # the checkpoint on disk (a resumed run's), whose step is the last good one
         self._last_ckpt = self.step if self.ckpt_path.exists() else None
         self._recent: list[float] = [h[1] for h in self.history[-10:]]
@@ -318,8 +333,14 @@ class Trainer:
         self._above = 0
         self._suspect = False
         pending = False  # a checkpoint is due but was held back while the run looked unhealthy
-        bar = tqdm(total=t.steps, initial=self.step, disable=not self.progress, unit="step",
-                   dynamic_ncols=True, desc=self.cfg.pattern.name)
+        bar = tqdm(
+            total=t.steps,
+            initial=self.step,
+            disable=not self.progress,
+            unit="step",
+            dynamic_ncols=True,
+            desc=self.cfg.pattern.name,
+        )
         try:
             while self.step < t.steps:
                 t0 = time.perf_counter()
@@ -342,8 +363,9 @@ class Trainer:
                         raise TrainingDivergedError(
                             f"{hold} at step {self.step} (collapsed: more than 10% of a set's "
                             f"points coincide); stopping. {self._last_good()}"
-                            if hold == "points collapsed" else
-                            f"{hold} at the last step {self.step}; stopping. {self._last_good()}")
+                            if hold == "points collapsed"
+                            else f"{hold} at the last step {self.step}; stopping. {self._last_good()}"
+                        )
                     pending = bool(hold)
                     if not hold:
                         self.checkpoint(final=self.step == t.steps)
@@ -355,8 +377,7 @@ class Trainer:
         st["quality"] = quality
         save_checkpoint(self.ckpt_path, st)
         atomic_write_bytes(self.run_dir / "quality.json", json.dumps(quality, indent=2).encode())
-        return {"run_dir": str(self.run_dir), "steps": self.step, "wall_time": self.wall,
-                "quality": quality}
+        return {"run_dir": str(self.run_dir), "steps": self.step, "wall_time": self.wall, "quality": quality}
 
 
 def cascade_from_checkpoint(st: dict) -> tuple[Cascade, Config]:

@@ -11,25 +11,63 @@ averages over the sets. Pure numpy/scipy: no compiled dpc code is needed.
 """
 
 from ._common import as_sets, max_packing_distance
-from .discrepancy import (METHODS as DISCREPANCY_METHODS, discrepancy, discrepancy_per_set,
-                          generalized_l2, unanchored_l2)
-from .integration import (FAMILIES, IntegrandFamily, IntegrationStudy, estimates, integrands,
-                          integration_study, relative_variance)
+from .discrepancy import METHODS as DISCREPANCY_METHODS
+from .discrepancy import discrepancy, discrepancy_per_set, generalized_l2, unanchored_l2
+from .integration import (
+    FAMILIES,
+    IntegrandFamily,
+    IntegrationStudy,
+    estimates,
+    integrands,
+    integration_study,
+    relative_variance,
+)
 from .pcf import PCF, MinDistance, min_distance, min_distance_ratio, pair_statistics, pcf
-from .report import Analysis, analyze
-from .spectrum import (RadialSpectrum, Spectrum1D, Spectrum2D, power_spectrum_1d,
-                       power_spectrum_2d, power_spectrum_direct, radial_profile,
-                       radial_spectrum, radial_spectrum_mc)
 from .reference import reference_radial_spectrum
+from .report import Analysis, analyze
+from .spectrum import (
+    RadialSpectrum,
+    Spectrum1D,
+    Spectrum2D,
+    power_spectrum_1d,
+    power_spectrum_2d,
+    power_spectrum_direct,
+    radial_profile,
+    radial_spectrum,
+    radial_spectrum_mc,
+)
 
 __all__ = [
-    "as_sets", "max_packing_distance",
-    "power_spectrum_2d", "power_spectrum_1d", "power_spectrum_direct", "radial_profile",
-    "radial_spectrum", "radial_spectrum_mc", "Spectrum2D", "Spectrum1D", "RadialSpectrum",
-    "pcf", "PCF", "pair_statistics", "min_distance", "min_distance_ratio", "MinDistance",
-    "discrepancy", "discrepancy_per_set", "generalized_l2", "unanchored_l2",
+    "as_sets",
+    "max_packing_distance",
+    "power_spectrum_2d",
+    "power_spectrum_1d",
+    "power_spectrum_direct",
+    "radial_profile",
+    "radial_spectrum",
+    "radial_spectrum_mc",
+    "Spectrum2D",
+    "Spectrum1D",
+    "RadialSpectrum",
+    "pcf",
+    "PCF",
+    "pair_statistics",
+    "min_distance",
+    "min_distance_ratio",
+    "MinDistance",
+    "discrepancy",
+    "discrepancy_per_set",
+    "generalized_l2",
+    "unanchored_l2",
     "DISCREPANCY_METHODS",
-    "integrands", "IntegrandFamily", "estimates", "relative_variance", "integration_study",
-    "IntegrationStudy", "FAMILIES",
-    "analyze", "Analysis", "reference_radial_spectrum",
+    "integrands",
+    "IntegrandFamily",
+    "estimates",
+    "relative_variance",
+    "integration_study",
+    "IntegrationStudy",
+    "FAMILIES",
+    "analyze",
+    "Analysis",
+    "reference_radial_spectrum",
 ]

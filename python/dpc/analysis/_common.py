@@ -40,7 +40,8 @@ def max_packing_distance(n_points: int, dims: int) -> float:
         raise InvalidArgumentError(f"n_points must be positive, got {n_points}")
     if n not in _CENTRE_DENSITY:
         raise InvalidArgumentError(
-            f"maximal packing distance is tabulated for 1..{MAX_PACKING_DIMS} dimensions, got {n}")
+            f"maximal packing distance is tabulated for 1..{MAX_PACKING_DIMS} dimensions, got {n}"
+        )
     return 2.0 * (_CENTRE_DENSITY[n] / m) ** (1.0 / n)
 
 
@@ -57,18 +58,17 @@ def as_sets(points, *, min_points: int = 1) -> np.ndarray:
     elif a.ndim == 2:
         a = a[None]
     elif a.ndim != 3:
-        raise InvalidArgumentError(
-            f"points must have shape (m,), (m, n) or (sets, m, n), got {a.shape}")
+        raise InvalidArgumentError(f"points must have shape (m,), (m, n) or (sets, m, n), got {a.shape}")
     if a.shape[0] < 1 or a.shape[1] < min_points or a.shape[2] < 1:
         raise InvalidArgumentError(
-            f"need at least 1 set of {min_points} point(s) with 1 dimension, got shape {a.shape}")
+            f"need at least 1 set of {min_points} point(s) with 1 dimension, got shape {a.shape}"
+        )
     a = np.asarray(a, dtype=np.float64)
     if not np.all(np.isfinite(a)):
         raise InvalidArgumentError("points contain NaN or infinite values")
     lo, hi = float(a.min()), float(a.max())
     if lo < 0.0 or hi > 1.0:
-        raise InvalidArgumentError(
-            f"points must lie in the unit cube [0, 1]; values range over [{lo:g}, {hi:g}]")
+        raise InvalidArgumentError(f"points must lie in the unit cube [0, 1]; values range over [{lo:g}, {hi:g}]")
     if hi == 1.0:  # periodic domain: 1.0 is 0.0 (cKDTree's boxsize also needs [0, 1))
         a = np.where(a == 1.0, 0.0, a)
     return np.ascontiguousarray(a)
@@ -81,15 +81,13 @@ def check_dims(dims, n: int, count: int) -> tuple[int, ...]:
     except (TypeError, ValueError):
         raise InvalidArgumentError(f"dims must be a sequence of integers, got {dims!r}") from None
     if len(d) != count or len(set(d)) != count or any(k < 0 or k >= n for k in d):
-        raise InvalidArgumentError(
-            f"dims must be {count} distinct axes in 0..{n - 1}, got {dims!r}")
+        raise InvalidArgumentError(f"dims must be {count} distinct axes in 0..{n - 1}, got {dims!r}")
     return d
 
 
 def progress(iterable, *, enabled: bool, desc: str, total: int | None = None):
     """A tqdm bar on stderr that only appears when the loop runs longer than a second."""
-    return tqdm(iterable, desc=desc, total=total, disable=not enabled, delay=1.0,
-                leave=False, dynamic_ncols=True)
+    return tqdm(iterable, desc=desc, total=total, disable=not enabled, delay=1.0, leave=False, dynamic_ncols=True)
 
 
 def cpu_count() -> int:
@@ -121,9 +119,7 @@ def map_sets(fn, count: int, *, progress_bar: bool, desc: str):
     with _single_threaded_blas() as limited:
         workers = min(cpu_count(), count) if limited else 1
         if workers <= 1:
-            yield from progress(map(fn, range(count)), enabled=progress_bar, desc=desc,
-                                total=count)
+            yield from progress(map(fn, range(count)), enabled=progress_bar, desc=desc, total=count)
             return
         with ThreadPoolExecutor(max_workers=workers) as pool:
-            yield from progress(pool.map(fn, range(count)), enabled=progress_bar, desc=desc,
-                                total=count)
+            yield from progress(pool.map(fn, range(count)), enabled=progress_bar, desc=desc, total=count)

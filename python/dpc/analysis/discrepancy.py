@@ -38,17 +38,17 @@ def _pair_sum(x: np.ndarray, kind: str) -> float:
     total = 0.0
     prod, hi, tmp = (np.empty(block * m) for _ in range(3))
     for start in range(0, m, block):
-        rows = x[start:start + block]
+        rows = x[start : start + block]
         r, width = rows.shape[0], m - start
-        p = prod[:r * width].reshape(r, width)
-        big = hi[:r * width].reshape(r, width)
-        h = tmp[:r * width].reshape(r, width)
+        p = prod[: r * width].reshape(r, width)
+        big = hi[: r * width].reshape(r, width)
+        h = tmp[: r * width].reshape(r, width)
         for k in range(n):
-            a, b = rows[:, k:k + 1], x[None, start:, k]
+            a, b = rows[:, k : k + 1], x[None, start:, k]
             np.maximum(a, b, out=big)
             if kind == "GL2":
                 np.subtract(2.0, big, out=h)
-            else:                                   # min = a + b - max
+            else:  # min = a + b - max
                 np.add(a, b, out=h)
                 h -= big
                 np.subtract(1.0, big, out=big)
@@ -84,8 +84,7 @@ def unanchored_l2(points: np.ndarray) -> float:
 def discrepancy_per_set(points, method: str = "CD", *, progress_bar: bool = False) -> np.ndarray:
     """Discrepancy ``method`` (one of :data:`METHODS`) of every set: array (sets,)."""
     if method not in METHODS:
-        raise InvalidArgumentError(
-            f"unknown discrepancy {method!r}; choose from {', '.join(METHODS)}")
+        raise InvalidArgumentError(f"unknown discrepancy {method!r}; choose from {', '.join(METHODS)}")
     sets = as_sets(points)
     from scipy.stats import qmc  # here: scipy.stats takes a second to import
 
@@ -98,9 +97,11 @@ def discrepancy_per_set(points, method: str = "CD", *, progress_bar: bool = Fals
         v = float(qmc.discrepancy(x, method=method))
         return float(np.sqrt(max(v, 0.0))) if method in _SQUARED_IN_SCIPY else v
 
-    out = np.fromiter(map_sets(one_set, sets.shape[0], progress_bar=progress_bar,
-                               desc=f"discrepancy {method}"), dtype=np.float64,
-                      count=sets.shape[0])
+    out = np.fromiter(
+        map_sets(one_set, sets.shape[0], progress_bar=progress_bar, desc=f"discrepancy {method}"),
+        dtype=np.float64,
+        count=sets.shape[0],
+    )
     return out
 
 

@@ -94,9 +94,15 @@ def mask_quality(masks, q_max: float = 6.0, levels=LEVELS) -> dict:
         per_level.append(float(p[:, low].mean()))
         p[:, 0, 0] = 0.0
         peaks.append(float(p.max(axis=(1, 2)).mean()))
-    return {"mask_elow": float(p0[:, low].mean()), "levels": list(levels), "levels_elow": per_level,
-            "levels_elow_mean": float(np.mean(per_level)), "levels_elow_max": float(np.max(per_level)),
-            "levels_peak": peaks, "levels_peak_mean": float(np.mean(peaks))}
+    return {
+        "mask_elow": float(p0[:, low].mean()),
+        "levels": list(levels),
+        "levels_elow": per_level,
+        "levels_elow_mean": float(np.mean(per_level)),
+        "levels_elow_max": float(np.max(per_level)),
+        "levels_peak": peaks,
+        "levels_peak_mean": float(np.mean(peaks)),
+    }
 
 
 def luminance(image: np.ndarray) -> np.ndarray:
@@ -124,7 +130,7 @@ def dither(image: np.ndarray, mask: np.ndarray) -> np.ndarray:
     if m.ndim != 2 or min(m.shape) < 1:
         raise InvalidArgumentError(f"mask must be 2-D, got {np.shape(mask)}")
     reps = (-(-g.shape[0] // m.shape[0]), -(-g.shape[1] // m.shape[1]))
-    return g > np.tile(m, reps)[:g.shape[0], :g.shape[1]]
+    return g > np.tile(m, reps)[: g.shape[0], : g.shape[1]]
 
 
 def save_mask_figure(path, mask: np.ndarray, title: str = "") -> Path:

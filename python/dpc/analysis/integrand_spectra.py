@@ -24,8 +24,11 @@ from ..errors import InvalidArgumentError
 from ._common import as_sets
 
 NAMES = ("font", "softshadows", "envmap")
-_FILES = {"font": "font_spectrum_128.npy", "softshadows": "softshadows_spectrum_128.npy",
-          "envmap": "envmap_spectrum_512.npy"}
+_FILES = {
+    "font": "font_spectrum_128.npy",
+    "softshadows": "softshadows_spectrum_128.npy",
+    "envmap": "envmap_spectrum_512.npy",
+}
 
 
 def _path(name: str) -> Path:
@@ -41,7 +44,7 @@ def integrand_spectrum(name: str, K: int = 63) -> np.ndarray:
     if not 1 <= int(K) <= c - 1:
         raise InvalidArgumentError(f"K must be in [1, {c - 1}] for {name!r} ({a.shape}), got {K}")
     K = int(K)
-    F = a[c - K:c + K + 1, c - K:c + K + 1].copy()
+    F = a[c - K : c + K + 1, c - K : c + K + 1].copy()
     F[K, K] = 0.0
     total = F.sum()
     if not total > 0:
@@ -75,8 +78,9 @@ def eq5_variance(points, F: np.ndarray) -> float:
 @dataclass
 class RandomPhaseFamily:
     """Integrands f_j(x) = Re Σ_q A_j(q) e^{2πi q·x}, A_j = √F e^{iφ_j}: E|f̂|² = F, ∫f = 0."""
+
     name: str
-    amplitudes: np.ndarray   # (count, 2K+1, 2K+1) complex
+    amplitudes: np.ndarray  # (count, 2K+1, 2K+1) complex
 
     @property
     def count(self) -> int:

@@ -21,8 +21,9 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Callable, Mapping, Sequence
+from typing import Callable
 
 import numpy as np
 
@@ -37,6 +38,7 @@ erf = np.vectorize(math.erf, otypes=[np.float64])
 @dataclass
 class IntegrandFamily:
     """``count`` integrands of one family in ``dims`` dimensions."""
+
     name: str
     dims: int
     params: dict
@@ -62,13 +64,13 @@ class IntegrandFamily:
         if self.name == "gaussian":
             mu, sig = self.params["mu"], self.params["sigma"][:, None]
             s2 = sig * math.sqrt(2.0)
-            return np.prod(sig * math.sqrt(math.pi / 2.0) * (erf((1 - mu) / s2) + erf(mu / s2)),
-                           axis=1)
+            return np.prod(sig * math.sqrt(math.pi / 2.0) * (erf((1 - mu) / s2) + erf(mu / s2)), axis=1)
         if self.name == "heaviside":
-            return np.array([1.0 - _halfspace_volume(w, float(w @ c))
-                             for w, c in zip(self.params["w"], self.params["c"])])
+            return np.array(
+                [1.0 - _halfspace_volume(w, float(w @ c)) for w, c in zip(self.params["w"], self.params["c"])]
+            )
         r = self.params["r"]
-        return math.pi ** (n / 2.0) / math.gamma(n / 2.0 + 1.0) * r ** n
+        return math.pi ** (n / 2.0) / math.gamma(n / 2.0 + 1.0) * r**n
 
 
 def _halfspace_volume(w: np.ndarray, t: float) -> float:
@@ -84,7 +86,7 @@ def _halfspace_volume(w: np.ndarray, t: float) -> float:
     for v in itertools.product((0, 1), repeat=n):
         r = t - float(np.dot(a, v))
         if r > 0:
-            total += (-1) ** sum(v) * r ** n
+            total += (-1) ** sum(v) * r**n
     return float(min(max(total / (math.factorial(n) * float(np.prod(a))), 0.0), 1.0))
 
 
@@ -111,8 +113,7 @@ def estimates(sets: np.ndarray, family: IntegrandFamily) -> np.ndarray:
     """MC estimates (1/m) sum_k f(x_k): array (integrands, realisations)."""
     x = np.asarray(sets, dtype=np.float64)
     if x.ndim != 3 or x.shape[2] != family.dims:
-        raise InvalidArgumentError(
-            f"sets must have shape (realisations, m, {family.dims}), got {x.shape}")
+        raise InvalidArgumentError(f"sets must have shape (realisations, m, {family.dims}), got {x.shape}")
     return np.stack([family.evaluate(x, i).mean(axis=1) for i in range(family.count)])
 
 
@@ -133,6 +134,7 @@ Sampler = Callable[[int, int, int], np.ndarray]
 class IntegrationStudy:
     """Relative variance per family, sampler and point count (mean over the integrands).
     ``rel_var[family][sampler][i]`` belongs to ``points[sampler][i]`` actual points."""
+
     families: tuple[str, ...]
     point_counts: tuple[int, ...]
     points: dict[str, list[int]] = field(default_factory=dict)
@@ -143,16 +145,29 @@ class IntegrationStudy:
     seed: int = 0
 
     def to_json(self) -> dict:
-        return {"families": list(self.families), "point_counts": list(self.point_counts),
-                "points": self.points, "relative_variance": self.rel_var,
-                "integrands": self.integrands, "realisations": self.realisations,
-                "dims": list(self.dims), "seed": self.seed}
+        return {
+            "families": list(self.families),
+            "point_counts": list(self.point_counts),
+            "points": self.points,
+            "relative_variance": self.rel_var,
+            "integrands": self.integrands,
+            "realisations": self.realisations,
+            "dims": list(self.dims),
+            "seed": self.seed,
+        }
 
 
-def integration_study(samplers: Mapping[str, Sampler], point_counts: Sequence[int], *,
-                      families: Sequence[str] = FAMILIES, integrands_per_family: int = 10,
-                      realisations: int = 64, dims: Sequence[int] = (0, 1), seed: int = 0,
-                      progress_bar: bool = False) -> IntegrationStudy:
+def integration_study(
+    samplers: Mapping[str, Sampler],
+    point_counts: Sequence[int],
+    *,
+    families: Sequence[str] = FAMILIES,
+    integrands_per_family: int = 10,
+    realisations: int = 64,
+    dims: Sequence[int] = (0, 1),
+    seed: int = 0,
+    progress_bar: bool = False,
+) -> IntegrationStudy:
     """Relative variance of every sampler at every point count on every family. Each sampler is
     called once per point count for ``realisations`` sets (seeded with ``seed``); the integrands
     live in the subspace ``dims`` of the samples (default the first two axes)."""
@@ -161,19 +176,24 @@ def integration_study(samplers: Mapping[str, Sampler], point_counts: Sequence[in
         raise InvalidArgumentError(f"point counts must be positive, got {point_counts}")
     if int(realisations) < 2:
         raise InvalidArgumentError("realisations must be >= 2")
-    fams = {f: integrands(f, integrands_per_family, dims=len(tuple(dims)), seed=seed + i)
-            for i, f in enumerate(families)}
-    study = IntegrationStudy(families=tuple(families), point_counts=counts,
-                             integrands=int(integrands_per_family), realisations=int(realisations),
-                             dims=tuple(int(d) for d in dims), seed=int(seed))
+    fams = {
+        f: integrands(f, integrands_per_family, dims=len(tuple(dims)), seed=seed + i) for i, f in enumerate(families)
+    }
+    study = IntegrationStudy(
+        families=tuple(families),
+        point_counts=counts,
+        integrands=int(integrands_per_family),
+        realisations=int(realisations),
+        dims=tuple(int(d) for d in dims),
+        seed=int(seed),
+    )
     for f in families:
         study.rel_var[f] = {name: [] for name in samplers}
     jobs = [(name, c) for name in samplers for c in counts]
     for name, c in progress(jobs, enabled=progress_bar, desc="integration study"):
         sets = np.asarray(samplers[name](int(realisations), c, int(seed)), dtype=np.float64)
         if sets.ndim != 3 or sets.shape[0] != int(realisations):
-            raise InvalidArgumentError(
-                f"sampler {name!r} returned shape {sets.shape}, expected ({realisations}, m, n)")
+            raise InvalidArgumentError(f"sampler {name!r} returned shape {sets.shape}, expected ({realisations}, m, n)")
         d = check_dims(dims, sets.shape[2], len(tuple(dims)))
         sub = sets[:, :, d]
         study.points.setdefault(name, []).append(int(sets.shape[1]))

@@ -65,8 +65,7 @@ def vector_quality(masks, q_max: float = 6.0, box_levels=BOX_LEVELS) -> dict:
     numbers and joint box patterns of channels 0 and 1 (see the module doc)."""
     ms = _as_stack(masks, 3, "vector_quality")
     if ms.shape[1] != ms.shape[2] or ms.shape[1] < 4 or ms.shape[3] < 2:
-        raise InvalidArgumentError(f"vector masks must be (count, N, N, C), N >= 4, C >= 2; "
-                                   f"got {np.shape(masks)}")
+        raise InvalidArgumentError(f"vector masks must be (count, N, N, C), N >= 4, C >= 2; got {np.shape(masks)}")
     n, c = ms.shape[1], ms.shape[3]
     r = np.stack([np.stack([rank_normalise(m[..., k]) for k in range(c)], axis=-1) for m in ms])
     per = [mask_quality(r[..., k], q_max=q_max) for k in range(c)]
@@ -77,12 +76,15 @@ def vector_quality(masks, q_max: float = 6.0, box_levels=BOX_LEVELS) -> dict:
             pat = ((r[..., 0] < a) & (r[..., 1] < b)).astype(np.float64)
             joint[f"{a:g},{b:g}"] = _pattern_elow(pat, low)
     vals = list(joint.values())
-    return {"channels": per,
-            "mask_elow_max": max(p["mask_elow"] for p in per),
-            "levels_elow_mean_max": max(p["levels_elow_mean"] for p in per),
-            "levels_elow_max": max(p["levels_elow_max"] for p in per),
-            "joint_elow": joint, "joint_elow_mean": float(np.mean(vals)),
-            "joint_elow_max": float(np.max(vals))}
+    return {
+        "channels": per,
+        "mask_elow_max": max(p["mask_elow"] for p in per),
+        "levels_elow_mean_max": max(p["levels_elow_mean"] for p in per),
+        "levels_elow_max": max(p["levels_elow_max"] for p in per),
+        "joint_elow": joint,
+        "joint_elow_mean": float(np.mean(vals)),
+        "joint_elow_max": float(np.max(vals)),
+    }
 
 
 def temporal_spectrum(volume) -> np.ndarray:
@@ -106,9 +108,9 @@ def accumulated_error(volume, steps=STEP_LEVELS, q_max: float = 6.0) -> dict:
     for k in range(1, t + 1):
         err2, lows = [], []
         for c in cs:
-            est = (v[:, :k] < c).mean(axis=1)                 # (cnt, N, N)
+            est = (v[:, :k] < c).mean(axis=1)  # (cnt, N, N)
             e = est - c
-            err2.append(float((e ** 2).mean()))
+            err2.append(float((e**2).mean()))
             # white noise: var of the estimate = c(1 − c)/k per pixel, independent pixels
             var_white = c * (1 - c) / k
             pw = np.abs(np.fft.fft2(e - e.mean(axis=(1, 2), keepdims=True))) ** 2 / (n * n * var_white)
@@ -122,22 +124,26 @@ def spatiotemporal_quality(volumes, q_max: float = 6.0) -> dict:
     """Quality of (count, T, N, N) or one (T, N, N) spatiotemporal mask (see the module doc)."""
     vs = _as_stack(volumes, 3, "spatiotemporal_quality")
     if vs.shape[2] != vs.shape[3] or vs.shape[2] < 4 or vs.shape[1] < 2:
-        raise InvalidArgumentError(f"spatiotemporal masks must be (count, T, N, N), T >= 2, "
-                                   f"N >= 4; got {np.shape(volumes)}")
+        raise InvalidArgumentError(
+            f"spatiotemporal masks must be (count, T, N, N), T >= 2, N >= 4; got {np.shape(volumes)}"
+        )
     t = vs.shape[1]
     r = np.stack([np.stack([rank_normalise(f) for f in vol]) for vol in vs])
     frames = [mask_quality(r[:, k], q_max=q_max) for k in range(t)]
     ts = temporal_spectrum(r)
     kmax = max(1, t // 4)
     acc = accumulated_error(r)
-    return {"frames": t,
-            "mask_elow_mean": float(np.mean([f["mask_elow"] for f in frames])),
-            "mask_elow_max": float(np.max([f["mask_elow"] for f in frames])),
-            "levels_elow_mean": float(np.mean([f["levels_elow_mean"] for f in frames])),
-            "levels_elow_max": float(np.max([f["levels_elow_max"] for f in frames])),
-            "temporal_spectrum": [float(x) for x in ts],
-            "temporal_elow": float(ts[1:kmax + 1].mean()),
-            "accumulated_rmse": acc["rmse"], "accumulated_error_elow": acc["error_elow"]}
+    return {
+        "frames": t,
+        "mask_elow_mean": float(np.mean([f["mask_elow"] for f in frames])),
+        "mask_elow_max": float(np.max([f["mask_elow"] for f in frames])),
+        "levels_elow_mean": float(np.mean([f["levels_elow_mean"] for f in frames])),
+        "levels_elow_max": float(np.max([f["levels_elow_max"] for f in frames])),
+        "temporal_spectrum": [float(x) for x in ts],
+        "temporal_elow": float(ts[1 : kmax + 1].mean()),
+        "accumulated_rmse": acc["rmse"],
+        "accumulated_error_elow": acc["error_elow"],
+    }
 
 
 def seam_ratio(masks, q_max: float = 6.0, levels=LEVELS) -> float:
@@ -150,7 +156,7 @@ def seam_ratio(masks, q_max: float = 6.0, levels=LEVELS) -> float:
     w = np.hanning(n + 2)[1:-1]
     win = np.outer(w, w)
     low = _low_band(n, q_max)
-    norm = (win ** 2).sum()
+    norm = (win**2).sum()
 
     def band(m: np.ndarray) -> float:
         out = []

@@ -24,6 +24,7 @@ def _ball_volume(n: int) -> float:
 class PCF:
     """Pair correlation g(r) on bins [edges[i], edges[i+1]); ``r`` are the bin centres,
     ``r_norm`` = r / d_max. g = 1 for white noise."""
+
     r: np.ndarray
     r_norm: np.ndarray
     g: np.ndarray
@@ -40,7 +41,7 @@ def _close_pairs(x: np.ndarray, radius: float) -> np.ndarray:
     tree = cKDTree(x, boxsize=1.0)
     ij = tree.query_pairs(radius, output_type="ndarray")
     d = x[ij[:, 0]] - x[ij[:, 1]]
-    d -= np.rint(d)                                  # minimum image on the unit torus
+    d -= np.rint(d)  # minimum image on the unit torus
     return np.sqrt(np.einsum("ij,ij->i", d, d))
 
 
@@ -53,8 +54,9 @@ def pcf(points, *, r_max: float = 2.5, bins: int = 100, progress_bar: bool = Fal
     return pair_statistics(points, r_max=r_max, bins=bins, progress_bar=progress_bar)[0]
 
 
-def pair_statistics(points, *, r_max: float = 2.5, bins: int = 100,
-                    progress_bar: bool = False) -> tuple[PCF, "MinDistance"]:
+def pair_statistics(
+    points, *, r_max: float = 2.5, bins: int = 100, progress_bar: bool = False
+) -> tuple[PCF, MinDistance]:
     """:func:`pcf` and :func:`min_distance` from one neighbour search per set (the nearest pair
     is almost always closer than r_max d_max; where not, a k-NN query finds it)."""
     sets = as_sets(points, min_points=2)
@@ -64,8 +66,7 @@ def pair_statistics(points, *, r_max: float = 2.5, bins: int = 100,
     d_max = max_packing_distance(m, n)
     top = float(r_max) * d_max
     if not 0.0 < top <= 0.5:
-        raise InvalidArgumentError(
-            f"r_max = {r_max} d_max = {top:.4g} must lie in (0, 0.5] on the unit torus")
+        raise InvalidArgumentError(f"r_max = {r_max} d_max = {top:.4g} must lie in (0, 0.5] on the unit torus")
     edges = np.linspace(0.0, top, int(bins) + 1)
 
     def one_set(s: int):
@@ -75,16 +76,16 @@ def pair_statistics(points, *, r_max: float = 2.5, bins: int = 100,
 
     pairs = np.zeros(int(bins))
     closest = np.empty(s_count)
-    for s, (hist, c) in enumerate(map_sets(one_set, s_count, progress_bar=progress_bar,
-                                           desc="PCF")):
+    for s, (hist, c) in enumerate(map_sets(one_set, s_count, progress_bar=progress_bar, desc="PCF")):
         pairs += 2.0 * hist
         closest[s] = c
     shells = _ball_volume(n) * (edges[1:] ** n - edges[:-1] ** n)
     g = pairs / (s_count * m * (m - 1.0) * shells)
     r = 0.5 * (edges[1:] + edges[:-1])
-    return (PCF(r=r, r_norm=r / d_max, g=g, edges=edges, pairs=pairs, d_max=d_max, n_points=m,
-                n_sets=s_count, dims=n),
-            MinDistance(distances=closest, d_max=d_max))
+    return (
+        PCF(r=r, r_norm=r / d_max, g=g, edges=edges, pairs=pairs, d_max=d_max, n_points=m, n_sets=s_count, dims=n),
+        MinDistance(distances=closest, d_max=d_max),
+    )
 
 
 def _nearest(x: np.ndarray) -> float:
@@ -95,6 +96,7 @@ def _nearest(x: np.ndarray) -> float:
 @dataclass
 class MinDistance:
     """Per-set minimum toroidal distance and its ratio delta_min = min distance / d_max."""
+
     distances: np.ndarray
     d_max: float
 
@@ -116,8 +118,11 @@ def min_distance(points, *, progress_bar: bool = False) -> MinDistance:
     sets = as_sets(points, min_points=2)
     s_count, m, n = sets.shape
     d_max = max_packing_distance(m, n)
-    out = np.fromiter(map_sets(lambda s: _nearest(sets[s]), s_count, progress_bar=progress_bar,
-                               desc="min distance"), dtype=np.float64, count=s_count)
+    out = np.fromiter(
+        map_sets(lambda s: _nearest(sets[s]), s_count, progress_bar=progress_bar, desc="min distance"),
+        dtype=np.float64,
+        count=s_count,
+    )
     return MinDistance(distances=out, d_max=d_max)
 
 

@@ -5,8 +5,8 @@ the user's backend). Every file is written atomically (``dpc._atomic``)."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -35,8 +35,13 @@ def _save(fig: Figure, path, formats: Sequence[str] | None = None) -> Path:
         if fmt not in FORMATS:
             raise InvalidArgumentError(f"plot format {fmt!r}: choose from {', '.join(FORMATS)}")
         # layout="tight" figures: one draw, not two; SVG/PDF keep text as text
-        _atomic.save_figure(fig, p.with_suffix("." + fmt), dpi=_DPI, format=fmt,
-                            metadata={"Creator": "dpc"} if fmt in ("pdf", "svg") else None)
+        _atomic.save_figure(
+            fig,
+            p.with_suffix("." + fmt),
+            dpi=_DPI,
+            format=fmt,
+            metadata={"Creator": "dpc"} if fmt in ("pdf", "svg") else None,
+        )
     return p
 
 
@@ -47,8 +52,9 @@ def written(path, formats: Sequence[str] | None = None) -> list[str]:
     return [p.with_suffix("." + f).name for f in [first] + [f for f in (formats or ()) if f != first]]
 
 
-def save_points(path, points: np.ndarray, *, dims=(0, 1), title: str = "",
-                formats: Sequence[str] | None = None) -> Path:
+def save_points(
+    path, points: np.ndarray, *, dims=(0, 1), title: str = "", formats: Sequence[str] | None = None
+) -> Path:
     """Scatter plot of one set (m, n) in the subspace ``dims`` (a strip plot for 1-D)."""
     pts = np.asarray(points)
     fig = Figure(figsize=(4.4, 4.6) if pts.shape[1] >= 2 else (6.0, 1.6), layout="tight")
@@ -69,16 +75,16 @@ def save_points(path, points: np.ndarray, *, dims=(0, 1), title: str = "",
     return _save(fig, path, formats)
 
 
-def save_spectrum2d(path, spec: Spectrum2D, *, title: str = "",
-                    formats: Sequence[str] | None = None) -> Path:
+def save_spectrum2d(path, spec: Spectrum2D, *, title: str = "", formats: Sequence[str] | None = None) -> Path:
     """Greyscale image of the mean 2-D power spectrum, axes in normalised frequency."""
     fig = Figure(figsize=(4.8, 4.4), layout="tight")
     ax = fig.subplots()
     ext = spec.nu_extent
     p = spec.power
     vmax = float(np.clip(np.percentile(p, 99.5), 2.0, 4.0))
-    im = ax.imshow(p.T, origin="lower", cmap="gray", vmin=0.0, vmax=vmax,
-                   extent=(-ext, ext, -ext, ext), interpolation="nearest")
+    im = ax.imshow(
+        p.T, origin="lower", cmap="gray", vmin=0.0, vmax=vmax, extent=(-ext, ext, -ext, ext), interpolation="nearest"
+    )
     fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04, label="power P (white noise = 1)")
     ax.set_xlabel(rf"$\nu_{{{spec.dims[0]}}}$")
     ax.set_ylabel(rf"$\nu_{{{spec.dims[1]}}}$")
@@ -86,10 +92,16 @@ def save_spectrum2d(path, spec: Spectrum2D, *, title: str = "",
     return _save(fig, path, formats)
 
 
-def save_radial(path, curves: Sequence[tuple[str, RadialSpectrum]], *, title: str = "",
-                anisotropy: bool = True,
-                reference: Reference | Sequence[Reference] | None = None,
-                nu_max: float = 4.0, formats: Sequence[str] | None = None) -> Path:
+def save_radial(
+    path,
+    curves: Sequence[tuple[str, RadialSpectrum]],
+    *,
+    title: str = "",
+    anisotropy: bool = True,
+    reference: Reference | Sequence[Reference] | None = None,
+    nu_max: float = 4.0,
+    formats: Sequence[str] | None = None,
+) -> Path:
     """Radial mean power of each curve, with a legend; ``reference`` (one (label, nu, power)
     or a list of them: e.g. a model's target) is drawn dashed. With ``anisotropy`` the
     anisotropy of the curves (dB) goes in a second panel below, on its own labelled axis."""
@@ -134,8 +146,7 @@ def save_radial(path, curves: Sequence[tuple[str, RadialSpectrum]], *, title: st
     return _save(fig, path, formats)
 
 
-def save_pcf(path, curves: Sequence[tuple[str, PCF]], *, title: str = "",
-             formats: Sequence[str] | None = None) -> Path:
+def save_pcf(path, curves: Sequence[tuple[str, PCF]], *, title: str = "", formats: Sequence[str] | None = None) -> Path:
     """Pair correlation functions against r / d_max."""
     fig = Figure(figsize=(6.4, 3.8), layout="tight")
     ax = fig.subplots()
@@ -153,8 +164,14 @@ def save_pcf(path, curves: Sequence[tuple[str, PCF]], *, title: str = "",
     return _save(fig, path, formats)
 
 
-def save_projections(path, curves: Sequence[tuple[str, Spectrum1D]], *, title: str = "",
-                     nu_max: float = 4.0, formats: Sequence[str] | None = None) -> Path:
+def save_projections(
+    path,
+    curves: Sequence[tuple[str, Spectrum1D]],
+    *,
+    title: str = "",
+    nu_max: float = 4.0,
+    formats: Sequence[str] | None = None,
+) -> Path:
     """1-D power spectra of projections on axes, against nu = q / m."""
     fig = Figure(figsize=(6.4, 3.6), layout="tight")
     ax = fig.subplots()
@@ -177,8 +194,7 @@ def save_projections(path, curves: Sequence[tuple[str, Spectrum1D]], *, title: s
     return _save(fig, path, formats)
 
 
-def save_integration(path, study: IntegrationStudy, *, title: str = "",
-                     formats: Sequence[str] | None = None) -> Path:
+def save_integration(path, study: IntegrationStudy, *, title: str = "", formats: Sequence[str] | None = None) -> Path:
     """Relative variance against point count, log-log, one panel per integrand family."""
     fams = study.families
     fig = Figure(figsize=(4.0 * len(fams), 3.8), layout="tight")
@@ -196,9 +212,17 @@ def save_integration(path, study: IntegrationStudy, *, title: str = "",
     return _save(fig, path, formats)
 
 
-def save_series(path, series: dict[str, tuple[Sequence[float], Sequence[float]]], *,
-                xlabel: str, ylabel: str, title: str = "", logx: bool = False,
-                logy: bool = False, formats: Sequence[str] | None = None) -> Path:
+def save_series(
+    path,
+    series: dict[str, tuple[Sequence[float], Sequence[float]]],
+    *,
+    xlabel: str,
+    ylabel: str,
+    title: str = "",
+    logx: bool = False,
+    logy: bool = False,
+    formats: Sequence[str] | None = None,
+) -> Path:
     """Generic line plot of named (x, y) series."""
     fig = Figure(figsize=(6.0, 3.8), layout="tight")
     ax = fig.subplots()

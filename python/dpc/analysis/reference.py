@@ -18,6 +18,7 @@ _NAME = re.compile(r"^([a-z]+)-powspec-radialmean-d(\d+)-n(\d+)\.txt$")
 class ReferenceRadial:
     """A target radial spectrum: ring b (b <= |q| < b + 1) at ``radius`` = b, nu = b / m^(1/n).
     The DC row of the file (|q| = 0; m in some files, 0 in others) is dropped."""
+
     pattern: str
     n_points: int
     dims: int
@@ -50,5 +51,6 @@ def reference_radial_spectrum(pattern: str, n_points: int, dims: int = 2) -> Ref
     data = np.loadtxt(str(f), ndmin=2)
     data = data[data[:, 0] > 0]
     m, n = int(n_points), int(dims)
-    return ReferenceRadial(pattern=pattern, n_points=m, dims=n, radius=data[:, 0],
-                           nu=data[:, 0] / m ** (1.0 / n), power=data[:, 1])
+    return ReferenceRadial(
+        pattern=pattern, n_points=m, dims=n, radius=data[:, 0], nu=data[:, 0] / m ** (1.0 / n), power=data[:, 1]
+    )

@@ -34,6 +34,7 @@ class Spectrum2D:
     """Mean power spectrum of a 2-D (sub)space on the integer grid.
 
     ``power[i, j]`` is P at q = (freqs[i], freqs[j]); the DC entry (centre) is 0."""
+
     power: np.ndarray
     freqs: np.ndarray
     stride: int
@@ -54,7 +55,7 @@ class Spectrum2D:
             raise InvalidArgumentError(f"no grid frequencies below nu = {nu_max}")
         return float(self.power[sel].mean())
 
-    def radial(self, nu_max: float | None = None) -> "RadialSpectrum":
+    def radial(self, nu_max: float | None = None) -> RadialSpectrum:
         """Radial mean and anisotropy, rings of width ``stride`` (see :func:`radial_profile`)."""
         return radial_profile(self, nu_max=nu_max)
 
@@ -62,6 +63,7 @@ class Spectrum2D:
 @dataclass
 class Spectrum1D:
     """Mean power spectrum of a 1-D projection at the integer frequencies ``freqs`` (> 0)."""
+
     power: np.ndarray
     freqs: np.ndarray
     stride: int
@@ -81,6 +83,7 @@ class RadialSpectrum:
     ``mean``: radial mean of P; ``anisotropy_db``: 10 log10(variance / mean^2) of P over the
     ring, for the realisation-averaged P; ``weights``: how much of frequency space a ring
     stands for (grid: its number of frequencies; Monte Carlo: radius^(n-1))."""
+
     nu: np.ndarray
     radius: np.ndarray
     mean: np.ndarray
@@ -145,7 +148,7 @@ def _dft2_quadrants(xy: np.ndarray, q: np.ndarray, dtype) -> tuple[np.ndarray, n
     acc = np.zeros((2 * k1, 2 * k1), dtype=dtype)
     chunk = max(1, _CHUNK_ELEMS // (2 * k1))
     for start in range(0, xy.shape[0], chunk):
-        part = xy[start:start + chunk]
+        part = xy[start : start + chunk]
         left = np.empty((part.shape[0], 2 * k1), dtype=dtype)
         right = np.empty_like(left)
         _phases(part[:, 0], q, left[:, :k1], left[:, k1:])
@@ -167,9 +170,16 @@ def grid_stride(n_points: int, nu_max: float, max_size: int, dims: int = 2) -> i
     return max(1, math.ceil(reach / half))
 
 
-def power_spectrum_2d(points, *, dims=(0, 1), nu_max: float = 4.0, max_size: int = 513,
-                      stride: int | None = None, dtype=None, progress_bar: bool = False
-                      ) -> Spectrum2D:
+def power_spectrum_2d(
+    points,
+    *,
+    dims=(0, 1),
+    nu_max: float = 4.0,
+    max_size: int = 513,
+    stride: int | None = None,
+    dtype=None,
+    progress_bar: bool = False,
+) -> Spectrum2D:
     """Exact mean power spectrum of the 2-D (sub)space ``dims`` on the integer frequency grid
     |q_x|, |q_y| <= nu_max sqrt(m) (plus one ring), sampled every ``stride`` integers; by
     default the smallest stride keeping the grid within ``max_size`` x ``max_size``."""
@@ -189,8 +199,9 @@ def power_spectrum_2d(points, *, dims=(0, 1), nu_max: float = 4.0, max_size: int
     dt = _auto_dtype(dtype, float(m) * (k + 1) ** 2)
     pp = np.zeros((k + 1, k + 1))
     pm = np.zeros((k + 1, k + 1))
-    for a, b in map_sets(lambda s: _dft2_quadrants(sets[s][:, d], q, dt), s_count,
-                         progress_bar=progress_bar, desc="2-D spectrum"):
+    for a, b in map_sets(
+        lambda s: _dft2_quadrants(sets[s][:, d], q, dt), s_count, progress_bar=progress_bar, desc="2-D spectrum"
+    ):
         pp += a
         pm += b
     pp /= m * s_count
@@ -220,21 +231,29 @@ def radial_profile(spec: Spectrum2D, nu_max: float | None = None) -> RadialSpect
     s1 = np.bincount(ring, weights=p, minlength=k)[1:k]
     s2 = np.bincount(ring, weights=p * p, minlength=k)[1:k]
     mean = s1 / counts
-    var = np.maximum(s2 / counts - mean ** 2, 0.0)
+    var = np.maximum(s2 / counts - mean**2, 0.0)
     with np.errstate(divide="ignore", invalid="ignore"):
-        anis = 10.0 * np.log10(var / mean ** 2)
+        anis = 10.0 * np.log10(var / mean**2)
     radius = spec.stride * np.arange(1, k, dtype=np.float64)
     nu = radius / math.sqrt(spec.n_points)
     if nu_max is not None:
         sel = nu <= nu_max + 1e-12
         nu, radius, mean, anis, counts = nu[sel], radius[sel], mean[sel], anis[sel], counts[sel]
-    return RadialSpectrum(nu=nu, radius=radius, mean=mean, anisotropy_db=anis, samples=counts,
-                          weights=counts.astype(np.float64), n_points=spec.n_points,
-                          n_sets=spec.n_sets, dims=2, method="grid")
+    return RadialSpectrum(
+        nu=nu,
+        radius=radius,
+        mean=mean,
+        anisotropy_db=anis,
+        samples=counts,
+        weights=counts.astype(np.float64),
+        n_points=spec.n_points,
+        n_sets=spec.n_sets,
+        dims=2,
+        method="grid",
+    )
 
 
-def _progression_power(xs: np.ndarray, q0: int, step: int, count: int, dtype,
-                       progress_bar: bool) -> np.ndarray:
+def _progression_power(xs: np.ndarray, q0: int, step: int, count: int, dtype, progress_bar: bool) -> np.ndarray:
     """sum over sets of |sum_k exp(2 pi i q x_k)|^2 at q = q0 + step i, i = 0..count-1.
 
     Separable again: with i = B t + j, z^q = z^(q0 + step B t) z^(step j), so all the sums are
@@ -251,10 +270,10 @@ def _progression_power(xs: np.ndarray, q0: int, step: int, count: int, dtype,
     def one_set(s: int) -> np.ndarray:
         acc = np.zeros((t, b), dtype=cdt)
         for start in range(0, m, chunk):
-            part = xs[s, start:start + chunk]
+            part = xs[s, start : start + chunk]
             u = np.empty((part.size, t), cdt)
             v = np.empty((part.size, b), cdt)
-            _phases(part, q_out, u.real, u.imag)      # exp(2 pi i q x) written in place
+            _phases(part, q_out, u.real, u.imag)  # exp(2 pi i q x) written in place
             _phases(part, q_in, v.real, v.imag)
             acc += u.T @ v
         return np.abs(acc.ravel()[:count]).astype(np.float64) ** 2
@@ -265,9 +284,16 @@ def _progression_power(xs: np.ndarray, q0: int, step: int, count: int, dtype,
     return total
 
 
-def power_spectrum_1d(points, *, dim: int = 0, nu_max: float = 4.0, max_freqs: int = 4096,
-                      stride: int | None = None, dtype=None, progress_bar: bool = False
-                      ) -> Spectrum1D:
+def power_spectrum_1d(
+    points,
+    *,
+    dim: int = 0,
+    nu_max: float = 4.0,
+    max_freqs: int = 4096,
+    stride: int | None = None,
+    dtype=None,
+    progress_bar: bool = False,
+) -> Spectrum1D:
     """Mean power spectrum of the projection of the points on axis ``dim``, at integer q up to
     nu_max m (nu = q / m for a 1-D set of m points).
 
@@ -294,11 +320,9 @@ def power_spectrum_1d(points, *, dim: int = 0, nu_max: float = 4.0, max_freqs: i
         parts = [(1, 1, low), (low + step, step, -(-(reach - low) // step))]
     xs = np.ascontiguousarray(sets[:, :, dim])
     dt = _auto_dtype(dtype, float(m) * sum(c for _, _, c in parts))
-    power = np.concatenate([_progression_power(xs, q0, st, c, dt, progress_bar)
-                            for q0, st, c in parts]) / (m * s_count)
+    power = np.concatenate([_progression_power(xs, q0, st, c, dt, progress_bar) for q0, st, c in parts]) / (m * s_count)
     freqs = np.concatenate([q0 + st * np.arange(c) for q0, st, c in parts])
-    return Spectrum1D(power=power, freqs=freqs, stride=parts[-1][1], n_points=m,
-                      n_sets=s_count, dim=dim)
+    return Spectrum1D(power=power, freqs=freqs, stride=parts[-1][1], n_points=m, n_sets=s_count, dim=dim)
 
 
 def power_spectrum_direct(points, q, *, dtype=np.float64) -> np.ndarray:
@@ -322,18 +346,19 @@ def power_spectrum_direct(points, q, *, dtype=np.float64) -> np.ndarray:
     chunk = max(1, _CHUNK_ELEMS // m)
     for s in range(s_count):
         for start in range(0, qf.shape[0], chunk):
-            ph = sets[s] @ qf[start:start + chunk].T      # (m, chunk) phases in cycles
+            ph = sets[s] @ qf[start : start + chunk].T  # (m, chunk) phases in cycles
             ph -= np.floor(ph)
             ph = ph.astype(dt, copy=False)
             ph *= _TWO_PI
             re = np.cos(ph).sum(axis=0, dtype=np.float64)
             im = np.sin(ph).sum(axis=0, dtype=np.float64)
-            out[start:start + chunk] += re * re + im * im
+            out[start : start + chunk] += re * re + im * im
     return out / (m * s_count)
 
 
-def radial_spectrum_mc(points, *, dims=None, nu_max: float = 4.0, directions: int = 128,
-                       seed: int = 0, progress_bar: bool = False) -> RadialSpectrum:
+def radial_spectrum_mc(
+    points, *, dims=None, nu_max: float = 4.0, directions: int = 128, seed: int = 0, progress_bar: bool = False
+) -> RadialSpectrum:
     """n-D radial mean spectrum by Monte Carlo (paper Sec. 4.5). Ring b (b <= |q| < b + 1, as on
     the grid) gets ``directions`` samples q = round(rho u): u a uniform random unit vector
     (normalised Gaussian), rho uniform in [b, b + 1), snapped to the integer grid, P(q)
@@ -359,38 +384,66 @@ def radial_spectrum_mc(points, *, dims=None, nu_max: float = 4.0, directions: in
     flat = q.reshape(-1, nd)
     p = np.zeros(flat.shape[0])
     # Single precision trigonometry: the estimate is Monte Carlo anyway (see the docstring).
-    for ps in map_sets(lambda s: power_spectrum_direct(sub[s], flat, dtype=np.float32),
-                       s_count, progress_bar=progress_bar, desc="radial spectrum (MC)"):
+    for ps in map_sets(
+        lambda s: power_spectrum_direct(sub[s], flat, dtype=np.float32),
+        s_count,
+        progress_bar=progress_bar,
+        desc="radial spectrum (MC)",
+    ):
         p += ps
     p = (p / s_count).reshape(ring.size, int(directions))
     cnt = nonzero.sum(axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
         mean = np.where(nonzero, p, 0.0).sum(axis=1) / cnt
         var = np.where(nonzero, (p - mean[:, None]) ** 2, 0.0).sum(axis=1) / cnt
-        anis = 10.0 * np.log10(var / mean ** 2)
-    shell = (ring + 1.0) ** nd - ring ** nd          # frequency-space volume of each ring
-    return RadialSpectrum(nu=ring / h, radius=ring, mean=mean, anisotropy_db=anis, samples=cnt,
-                          weights=shell, n_points=m, n_sets=s_count, dims=nd,
-                          method="monte-carlo")
+        anis = 10.0 * np.log10(var / mean**2)
+    shell = (ring + 1.0) ** nd - ring**nd  # frequency-space volume of each ring
+    return RadialSpectrum(
+        nu=ring / h,
+        radius=ring,
+        mean=mean,
+        anisotropy_db=anis,
+        samples=cnt,
+        weights=shell,
+        n_points=m,
+        n_sets=s_count,
+        dims=nd,
+        method="monte-carlo",
+    )
 
 
-def radial_spectrum(points, *, dims=None, nu_max: float = 4.0, max_size: int = 513,
-                    directions: int = 128, seed: int = 0, progress_bar: bool = False
-                    ) -> RadialSpectrum:
+def radial_spectrum(
+    points,
+    *,
+    dims=None,
+    nu_max: float = 4.0,
+    max_size: int = 513,
+    directions: int = 128,
+    seed: int = 0,
+    progress_bar: bool = False,
+) -> RadialSpectrum:
     """Radial mean spectrum of the (sub)space ``dims`` (default: all axes): exact grid for 2-D,
     Monte Carlo (:func:`radial_spectrum_mc`) for 3-D and up, the plain spectrum for 1-D."""
     sets = as_sets(points)
     n = sets.shape[2]
     d = tuple(range(n)) if dims is None else check_dims(dims, n, len(tuple(dims)))
     if len(d) == 2:
-        return power_spectrum_2d(sets, dims=d, nu_max=nu_max, max_size=max_size,
-                                 progress_bar=progress_bar).radial(nu_max)
+        return power_spectrum_2d(sets, dims=d, nu_max=nu_max, max_size=max_size, progress_bar=progress_bar).radial(
+            nu_max
+        )
     if len(d) == 1:
         sp = power_spectrum_1d(sets, dim=d[0], nu_max=nu_max, progress_bar=progress_bar)
         ones = np.ones_like(sp.power)
-        return RadialSpectrum(nu=sp.nu, radius=sp.freqs.astype(np.float64), mean=sp.power,
-                              anisotropy_db=np.full_like(sp.power, np.nan), samples=ones * 2,
-                              weights=ones, n_points=sp.n_points, n_sets=sp.n_sets, dims=1,
-                              method="1-d")
-    return radial_spectrum_mc(sets, dims=d, nu_max=nu_max, directions=directions, seed=seed,
-                              progress_bar=progress_bar)
+        return RadialSpectrum(
+            nu=sp.nu,
+            radius=sp.freqs.astype(np.float64),
+            mean=sp.power,
+            anisotropy_db=np.full_like(sp.power, np.nan),
+            samples=ones * 2,
+            weights=ones,
+            n_points=sp.n_points,
+            n_sets=sp.n_sets,
+            dims=1,
+            method="1-d",
+        )
+    return radial_spectrum_mc(sets, dims=d, nu_max=nu_max, directions=directions, seed=seed, progress_bar=progress_bar)

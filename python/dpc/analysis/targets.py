@@ -33,6 +33,7 @@ _ARG = re.compile(r"""^\s*(?:(\w+)\s*=\s*)?("[^"]*"|'[^']*'|[\w.+-]+)\s*$""")
 class Target:
     """A radial target profile: ``power`` at normalised frequencies ``nu`` (of a ``dims``-D
     spectrum, white noise = 1), for plotting as (label, nu, power)."""
+
     label: str
     dims: int
     nu: np.ndarray
@@ -82,7 +83,7 @@ def _crop(a: np.ndarray, K: int) -> np.ndarray | None:
     c0, c1 = a.shape[0] // 2, a.shape[1] // 2
     if K > min(c0, c1) - 1:
         return None
-    out = a[c0 - K:c0 + K + 1, c1 - K:c1 + K + 1].astype(np.float64)
+    out = a[c0 - K : c0 + K + 1, c1 - K : c1 + K + 1].astype(np.float64)
     out[K, K] = 0.0
     return out
 
@@ -138,9 +139,15 @@ def _from_loss(loss: str, m: int) -> Target | None:
             if func == "radial_target":
                 k = int(pos[2]) if len(pos) > 2 else int(kw.get("k", 2))
                 power = _radial_target(pattern, m, k, nu_max, kw.get("source", "auto"))
-                what = "analytic" if kw.get("source", "auto") != "file" and pattern in ("step", "jitter") \
-                    and power is not None and k == 2 and (pattern == "step" or round(math.sqrt(m)) ** 2 == m) \
+                what = (
+                    "analytic"
+                    if kw.get("source", "auto") != "file"
+                    and pattern in ("step", "jitter")
+                    and power is not None
+                    and k == 2
+                    and (pattern == "step" or round(math.sqrt(m)) ** 2 == m)
                     else "authors' radial mean"
+                )
             else:
                 k = 2
                 power = _spectrum2d_radial(pattern, m, nu_max)
@@ -150,8 +157,7 @@ def _from_loss(loss: str, m: int) -> Target | None:
         if power is None:
             return None
         nu = np.arange(len(power)) / m ** (1.0 / k)
-        return Target(label=f"target: {pattern} ({what}, {k}-D, m={m})", dims=k,
-                      nu=nu[1:], power=power[1:])
+        return Target(label=f"target: {pattern} ({what}, {k}-D, m={m})", dims=k, nu=nu[1:], power=power[1:])
     return None
 
 
@@ -162,8 +168,12 @@ def model_target(model) -> Target | None:
     if raw:
         try:
             d = json.loads(raw)
-            return Target(label=str(d.get("label", "target")), dims=int(d["dims"]),
-                          nu=np.asarray(d["nu"], np.float64), power=np.asarray(d["power"], np.float64))
+            return Target(
+                label=str(d.get("label", "target")),
+                dims=int(d["dims"]),
+                nu=np.asarray(d["nu"], np.float64),
+                power=np.asarray(d["power"], np.float64),
+            )
         except (ValueError, KeyError, TypeError):
             return None
     loss = meta.get("dpc.loss")

@@ -56,8 +56,10 @@ def _mitsuba():
     try:
         import mitsuba  # noqa: PLC0415  (optional dependency)
     except ImportError as e:
-        raise UnsupportedError("dpc.mitsuba needs Mitsuba 3: pip install 'mitsuba>=3.5' nanobind "
-                               "(or pip install .[mitsuba] from the dpc repository)") from e
+        raise UnsupportedError(
+            "dpc.mitsuba needs Mitsuba 3: pip install 'mitsuba>=3.5' nanobind "
+            "(or pip install .[mitsuba] from the dpc repository)"
+        ) from e
     return mitsuba
 
 
@@ -84,18 +86,37 @@ def _compile_command(output: Path) -> list[str]:
         import nanobind  # noqa: PLC0415
     except ImportError as e:
         raise UnsupportedError(
-            "building the dpc Mitsuba plugin needs the nanobind headers: pip install nanobind") from e
+            "building the dpc Mitsuba plugin needs the nanobind headers: pip install nanobind"
+        ) from e
     import drjit  # noqa: PLC0415  (installed with mitsuba)
 
     mi_dir, dr_dir, pkg = Path(mi.__file__).parent, Path(drjit.__file__).parent, _package_dir()
     libdpc = pkg / "lib" / "libdpc.so.0"
     cxx = shlex.split(os.environ.get("CXX", "c++"))
-    return [*cxx, "-std=c++17", "-O2", "-fPIC", "-shared", "-fvisibility=hidden", "-w",
-            f"-I{mi_dir / 'include'}", f"-I{dr_dir / 'include'}", f"-I{nanobind.include_dir()}",
-            f"-I{pkg / 'include'}", f'-DDPC_MODELS_DIR="{pkg / "models"}"',
-            str(_source()), "-o", str(output),
-            f"-L{mi_dir}", "-lmitsuba", f"-L{dr_dir}", "-ldrjit-core", "-ldrjit-extra", str(libdpc),
-            f"-Wl,-rpath,{mi_dir}:{dr_dir}:{libdpc.parent}"]
+    return [
+        *cxx,
+        "-std=c++17",
+        "-O2",
+        "-fPIC",
+        "-shared",
+        "-fvisibility=hidden",
+        "-w",
+        f"-I{mi_dir / 'include'}",
+        f"-I{dr_dir / 'include'}",
+        f"-I{nanobind.include_dir()}",
+        f"-I{pkg / 'include'}",
+        f'-DDPC_MODELS_DIR="{pkg / "models"}"',
+        str(_source()),
+        "-o",
+        str(output),
+        f"-L{mi_dir}",
+        "-lmitsuba",
+        f"-L{dr_dir}",
+        "-ldrjit-core",
+        "-ldrjit-extra",
+        str(libdpc),
+        f"-Wl,-rpath,{mi_dir}:{dr_dir}:{libdpc.parent}",
+    ]
 
 
 def build(force: bool = False) -> Path:
@@ -107,8 +128,9 @@ def build(force: bool = False) -> Path:
     target.parent.mkdir(parents=True, exist_ok=True)
     cmd0 = shlex.split(os.environ.get("CXX", "c++"))[0]
     if not shutil.which(cmd0):
-        raise UnsupportedError(f"building the dpc Mitsuba plugin needs a C++17 compiler; '{cmd0}' is not on PATH "
-                               "(set CXX)")
+        raise UnsupportedError(
+            f"building the dpc Mitsuba plugin needs a C++17 compiler; '{cmd0}' is not on PATH (set CXX)"
+        )
     # Compile next to the target and rename: a concurrent or interrupted build never leaves a
     # half-written plugin where Mitsuba looks.
     fd, tmp = tempfile.mkstemp(prefix=".dpc-", suffix=".so", dir=target.parent)
@@ -117,8 +139,9 @@ def build(force: bool = False) -> Path:
         cmd = _compile_command(Path(tmp))
         r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode != 0:
-            raise UnsupportedError("compiling the dpc Mitsuba plugin failed:\n" + shlex.join(cmd) + "\n"
-                                   + (r.stderr or r.stdout)[-4000:])
+            raise UnsupportedError(
+                "compiling the dpc Mitsuba plugin failed:\n" + shlex.join(cmd) + "\n" + (r.stderr or r.stdout)[-4000:]
+            )
         os.replace(tmp, target)
     finally:
         if os.path.exists(tmp):

@@ -48,22 +48,29 @@ def test_inits():
         d = p[0][None] - p[0][:, None]
         d = d - torch.floor(d + 0.5)
         return (d.norm(dim=-1) + 10 * torch.eye(64)).min()
+
     assert dmin(c(x)) > 2 * dmin(x)
 
 
 def test_cascade_chains_filter_layers_and_grid_inputs():
-    sp = CascadeSpec(dims=3, n_points=12, layers=3, unique_kernels=2, bins=5,
-                     subspaces=["xyz", "z"], radius=[2.0, 3.0], grid_axes=[0, 1],
-                     grid_shape=[4, 3])
+    sp = CascadeSpec(
+        dims=3,
+        n_points=12,
+        layers=3,
+        unique_kernels=2,
+        bins=5,
+        subspaces=["xyz", "z"],
+        radius=[2.0, 3.0],
+        grid_axes=[0, 1],
+        grid_shape=[4, 3],
+    )
     c = Cascade(sp)
     with torch.no_grad():
         c.theta.normal_(0, 0.1, generator=torch.Generator().manual_seed(1))
     x = c.input_points(2, torch.Generator().manual_seed(2), dtype=torch.float64)
     # format §5: first grid axis varies fastest, cell centres
-    assert torch.allclose(x[0, :, 0], torch.tensor([0.125, 0.375, 0.625, 0.875] * 3,
-                                                    dtype=torch.float64))
-    assert torch.allclose(x[0, :, 1], torch.tensor([1 / 6] * 4 + [0.5] * 4 + [5 / 6] * 4,
-                                                    dtype=torch.float64))
+    assert torch.allclose(x[0, :, 0], torch.tensor([0.125, 0.375, 0.625, 0.875] * 3, dtype=torch.float64))
+    assert torch.allclose(x[0, :, 1], torch.tensor([1 / 6] * 4 + [0.5] * 4 + [5 / 6] * 4, dtype=torch.float64))
     y = x
     for t in c.tables().double():
         y = filter_layer(y, t, sp.masks, sp.radius, sp.eps, fixed=0b011)
@@ -73,15 +80,18 @@ def test_cascade_chains_filter_layers_and_grid_inputs():
         c.input_points(1, torch.Generator(), m=20)
 
 
-@pytest.mark.parametrize("kw, msg", [
-    (dict(unique_kernels=5, layers=4), "unique_kernels"),
-    (dict(bins=1), "bins"),
-    (dict(grid_axes=[0], grid_shape=[5]), "n_points"),
-    (dict(init="ones"), "init"),
-    (dict(subspaces=["xy", "yx"], radius=[1.0, 1.0]), "distinct"),
-    (dict(input="sobol"), "input"),
-    (dict(input="stratified", grid_axes=[0], grid_shape=[64]), "grid axes"),
-])
+@pytest.mark.parametrize(
+    "kw, msg",
+    [
+        (dict(unique_kernels=5, layers=4), "unique_kernels"),
+        (dict(bins=1), "bins"),
+        (dict(grid_axes=[0], grid_shape=[5]), "n_points"),
+        (dict(init="ones"), "init"),
+        (dict(subspaces=["xy", "yx"], radius=[1.0, 1.0]), "distinct"),
+        (dict(input="sobol"), "input"),
+        (dict(input="stratified", grid_axes=[0], grid_shape=[64]), "grid axes"),
+    ],
+)
 def test_bad_specs(kw, msg):
     base = dict(dims=2, n_points=64)
     base.update(kw)
@@ -98,8 +108,8 @@ def test_parse_subspace():
 
 def test_loss_file_route(tmp_path):
     (tmp_path / "my_loss.py").write_text(
-        "S = step_radial(M, 2, nu_max=2.0, nu0=0.5)\n"
-        "def loss(X):\n    return l2(radspec(X, nu_max=2.0), S)\n")
+        "S = step_radial(M, 2, nu_max=2.0, nu0=0.5)\ndef loss(X):\n    return l2(radspec(X, nu_max=2.0), S)\n"
+    )
     fn, src = build_loss({"file": "my_loss.py"}, 64, 2, base_dir=tmp_path)
     assert "step_radial" in src
     assert torch.isfinite(fn(torch.rand(2, 64, 2))) and fn(torch.rand(2, 64, 2)) > 0
@@ -108,8 +118,9 @@ def test_loss_file_route(tmp_path):
 def test_neighbour_cache_gives_the_fresh_search_result():
     from dpc_train.filter import NeighbourCache, _restrict, find_pairs
 
-    sp = CascadeSpec(dims=2, n_points=1024, layers=12, unique_kernels=3, bins=16,
-                     radius=[3.0], init="repulsion", init_amplitude=0.2)
+    sp = CascadeSpec(
+        dims=2, n_points=1024, layers=12, unique_kernels=3, bins=16, radius=[3.0], init="repulsion", init_amplitude=0.2
+    )
     c = Cascade(sp).double()
     x = c.input_points(2, torch.Generator().manual_seed(3), dtype=torch.float64)
     outs = {}
@@ -123,7 +134,7 @@ def test_neighbour_cache_gives_the_fresh_search_result():
     assert (outs[None][1] - outs[0.5][1]).abs().max() < 1e-9
     # the cache is reused, and after moves below skin/2 it still holds every pair within r
     cache = NeighbourCache([3], [3.0], skin=1.0)
-    h = 1024 ** -0.5
+    h = 1024**-0.5
     cache.candidates(x)
     g = torch.Generator().manual_seed(4)
     move = torch.randn(x.shape, generator=g, dtype=torch.float64)
@@ -142,6 +153,7 @@ def test_stratified_training_inputs_are_libdpcs():
     """[model] input = "stratified": the batch is dpc.stratified of seeds drawn from the step's
     generator, so training sees exactly what dpc.load(..., input="stratified") will feed."""
     import dpc
+
     sp = CascadeSpec(dims=2, n_points=64, layers=2, unique_kernels=1, bins=4, input="stratified")
     x = Cascade(sp).input_points(3, torch.Generator().manual_seed(5), dtype=torch.float64)
     seeds = torch.randint(0, 1 << 62, (3,), generator=torch.Generator().manual_seed(5)).tolist()

@@ -21,10 +21,15 @@ REPO = Path(__file__).resolve().parents[3]
 TINY = REPO / "training" / "configs" / "tiny-test.toml"
 
 GRIDDED_3D = {
-    "pattern": {"name": "grid3d-test", "dims": 3, "points": 49, "grid_axes": [0, 1],
-                "grid_shape": [7, 7]},
-    "model": {"layers": 3, "unique_kernels": 2, "bins": 6, "subspaces": ["xyz", "z"],
-              "radius": [2.0, 3.0], "init": "zero"},
+    "pattern": {"name": "grid3d-test", "dims": 3, "points": 49, "grid_axes": [0, 1], "grid_shape": [7, 7]},
+    "model": {
+        "layers": 3,
+        "unique_kernels": 2,
+        "bins": 6,
+        "subspaces": ["xyz", "z"],
+        "radius": [2.0, 3.0],
+        "init": "zero",
+    },
     "loss": {"source": "def loss(X):\n    return l1(radspec(z(X), nu_max=2.0))\n"},
     "train": {"steps": 1, "batch": 1},
 }
@@ -49,8 +54,7 @@ def gridded_ckpt(tmp_path_factory):
     d = tmp_path_factory.mktemp("grid")
     tr = TR.Trainer(config_from_dict(GRIDDED_3D), d, progress=False)
     with torch.no_grad():  # non-trivial kernels in both subspaces
-        tr.model.theta.copy_(0.1 * torch.randn(tr.model.theta.shape,
-                                               generator=torch.Generator().manual_seed(0)))
+        tr.model.theta.copy_(0.1 * torch.randn(tr.model.theta.shape, generator=torch.Generator().manual_seed(0)))
     TR.save_checkpoint(d / TR.CHECKPOINT, tr.state())
     return d / TR.CHECKPOINT
 
@@ -68,8 +72,12 @@ def inputs(ckpt, batch, m=None, seed=1):
 
 def test_cli_export_and_metadata(trained_tiny, tmp_path):
     out = tmp_path / "tiny.onnx"
-    res = subprocess.run([sys.executable, str(REPO / "training" / "export.py"), str(trained_tiny),
-                          "-o", str(out)], capture_output=True, text=True, timeout=120)
+    res = subprocess.run(
+        [sys.executable, str(REPO / "training" / "export.py"), str(trained_tiny), "-o", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert res.returncode == 0, res.stderr
     spec = read_model(out)
     assert spec.dims == 2 and spec.n_points == 64 and len(spec.layers) == 4 and spec.name == "tiny-test"
@@ -133,6 +141,7 @@ def test_standard_ops_in_onnxruntime_matches_torch(which, trained_tiny, gridded_
 def test_libdpc_runs_exported_model_like_torch(which, trained_tiny, gridded_ckpt, tmp_path):
     """The exported file, loaded by libdpc (the compiled `dpc` package), filters like torch."""
     import dpc
+
     ckpt = trained_tiny if which == "tiny" else gridded_ckpt
     out = tmp_path / "m.onnx"
     EX.export(ckpt, out)

@@ -122,8 +122,7 @@ def test_analytic_backward_matches_autograd(case, dtype):
     gradient entry (measured 4e-6: in 1-D subspaces d(δ/|δ|)/dδ = 0 is a difference of two
     large terms for close pairs, and float32 rounds the two formulas differently)."""
     x, k, subs, rad, fixed = _inputs(case, dtype=dtype)
-    x = torch.stack([x, torch.rand(x.shape, generator=torch.Generator().manual_seed(5),
-                                   dtype=dtype)])
+    x = torch.stack([x, torch.rand(x.shape, generator=torch.Generator().manual_seed(5), dtype=dtype)])
     if fixed:
         x[1][:, :2] = x[0][:, :2]
     w = torch.randn(x.shape, generator=torch.Generator().manual_seed(7), dtype=dtype)
@@ -172,12 +171,15 @@ def test_unknown_impl_is_a_config_error():
         filter_layer(x, torch.zeros(1, 4, dtype=torch.float64), [3], [2.0], impl="cuda-magic")
 
 
-@pytest.mark.parametrize("bad", [
-    dict(subspaces=[4], radius=[2.0]),          # dim 2 in a 2-D set
-    dict(subspaces=[3, 3], radius=[2.0, 2.0]),  # duplicate
-    dict(subspaces=[3], radius=[-1.0]),
-    dict(subspaces=[3], radius=[2.0, 1.0]),
-])
+@pytest.mark.parametrize(
+    "bad",
+    [
+        dict(subspaces=[4], radius=[2.0]),  # dim 2 in a 2-D set
+        dict(subspaces=[3, 3], radius=[2.0, 2.0]),  # duplicate
+        dict(subspaces=[3], radius=[-1.0]),
+        dict(subspaces=[3], radius=[2.0, 1.0]),
+    ],
+)
 def test_bad_layers_rejected(bad):
     with pytest.raises(FilterConfigError):
         filter_layer(torch.rand(10, 2), torch.zeros(len(bad["subspaces"]), 4), **bad)

@@ -20,7 +20,7 @@ def make(case, m=96, seed=0, dtype=torch.float64):
     g = torch.Generator().manual_seed(seed)
     x = torch.rand(2, m, n, generator=g, dtype=dtype)
     x[0, :3] = torch.tensor([1e-7, 1 - 1e-7, 0.5], dtype=dtype)[:, None].expand(3, n)  # torus seam
-    k = (torch.randn(len(subspaces), bins, generator=g, dtype=dtype) * 0.2)
+    k = torch.randn(len(subspaces), bins, generator=g, dtype=dtype) * 0.2
     return x, k, subspaces, radius, fixed
 
 

@@ -91,12 +91,12 @@ def test_bnot_point_sets_reproduce_bnot_radial_target():
     rs = L.radspec(X, nu_max=4.0)
     tgt = T.radial_target("bnot", 1024, 2, nu_max=4.0)
     d = (rs - tgt)[1:].abs()
-    assert d.mean() < 0.02                 # measured: 0.014
+    assert d.mean() < 0.02  # measured: 0.014
     rel = d / tgt[1:]
-    assert rel.median() < 0.03             # measured: 0.019
-    assert abs(int(rs.argmax()) - int(tgt.argmax())) <= 1          # peak at ν ≈ 1.03-1.06
-    assert (rs.max() / tgt.max() - 1).abs() < 0.01                 # measured: 0.007
-    assert ((rs / tgt - 1)[28:40]).abs().max() < 0.06              # measured: 0.055
+    assert rel.median() < 0.03  # measured: 0.019
+    assert abs(int(rs.argmax()) - int(tgt.argmax())) <= 1  # peak at ν ≈ 1.03-1.06
+    assert (rs.max() / tgt.max() - 1).abs() < 0.01  # measured: 0.007
+    assert ((rs / tgt - 1)[28:40]).abs().max() < 0.06  # measured: 0.055
     # the low band agrees in absolute terms (both ≈ 0)
     assert d[: int(0.5 * 32)].max() < 0.01
 
@@ -124,7 +124,7 @@ def test_jitter_analytic_spectrum():
     # and the authors' jitter radial file is the same analytic profile
     f = T.load_radial_file("jitter", 2, 1024)
     ours = T.jitter_radial(1024, nu_max=4.0)
-    assert np.abs(f[1:len(ours)] - ours[1:].numpy()).mean() < 0.02
+    assert np.abs(f[1 : len(ours)] - ours[1:].numpy()).mean() < 0.02
 
 
 def test_ddom_matches_direct_sum():
@@ -163,10 +163,10 @@ def test_raddom_is_one_for_uniform_and_matches_histogram():
     assert gb[r < 0.5].max() < 0.05 and gb.max() > 1.2
     # independent numpy evaluation on one small set
     s = X[0, :100].numpy()
-    h = 100 ** -0.5
+    h = 100**-0.5
     d = s[None] - s[:, None]
     d = d - np.floor(d + 0.5)
-    dist = np.sqrt((d ** 2).sum(-1))[~np.eye(100, dtype=bool)] / h
+    dist = np.sqrt((d**2).sum(-1))[~np.eye(100, dtype=bool)] / h
     rr = np.arange(1, 11) * 0.25
     ref = np.exp(-0.5 * ((rr[None] - dist[:, None]) / 0.05) ** 2).sum(0) / (np.sqrt(2 * np.pi) * 0.05)
     ref /= 100 * 99 * 2 * np.pi * rr * h * h
@@ -207,8 +207,7 @@ def test_targets_and_metrics():
 
 
 def test_loss_programs():
-    src = ("T0 = radial_target('bnot', M, 2, nu_max=2)\n"
-           "def loss(X):\n    return l1(radspec(xy(X), nu_max=2) - T0)\n")
+    src = "T0 = radial_target('bnot', M, 2, nu_max=2)\ndef loss(X):\n    return l1(radspec(xy(X), nu_max=2) - T0)\n"
     fn, text = build_loss({"source": src}, 256, 2)
     X = T.load_point_sets("pcf-bnot-d2-n256")
     assert text == src and fn(X).item() < 0.1 < fn(torch.rand(4, 256, 2)).item()
@@ -255,11 +254,12 @@ def test_2d_spectrum_files_radially_average_to_the_radial_files(name):
 
 def test_radial_target_sources_and_2d_spectrum_radials():
     import numpy as np
+
     from dpc_train import targets as T
 
     step_file = T.radial_target("step", 1024, 2, nu_max=4.0, source="file")
     raw = T.load_radial_file("step", 2, 1024)
-    assert torch.equal(step_file, torch.from_numpy(raw[:len(step_file)]))
+    assert torch.equal(step_file, torch.from_numpy(raw[: len(step_file)]))
     assert not torch.equal(step_file, T.radial_target("step", 1024, 2, nu_max=4.0))  # analytic ν0 = 0.8
     with pytest.raises(T.LossError):
         T.radial_target("bnot", 1024, 2, source="analytic")
@@ -270,8 +270,9 @@ def test_radial_target_sources_and_2d_spectrum_radials():
     a = np.load(T.data_dir() / "spectra" / "pink-powspec-d2-n1024.npy").astype(np.float64)
     c = a.shape[0] // 2
     for b in (1, 7, 20, len(g) - 1):
-        vals = [a[c + i, c + j] for i in range(-b - 1, b + 2) for j in range(-b - 1, b + 2)
-                if b <= np.hypot(i, j) < b + 1]
+        vals = [
+            a[c + i, c + j] for i in range(-b - 1, b + 2) for j in range(-b - 1, b + 2) if b <= np.hypot(i, j) < b + 1
+        ]
         assert abs(float(g[b]) - np.mean(vals)) < 1e-9
     assert g[0] == 0
     with pytest.raises(T.LossError):

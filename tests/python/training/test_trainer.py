@@ -28,8 +28,7 @@ def tiny(**train):
 def test_deterministic_per_seed(tmp_path):
     thetas = []
     for i, seed in enumerate((0, 0, 1)):
-        tr = TR.Trainer(tiny(steps=6, seed=seed, checkpoint_every=3), tmp_path / f"r{i}",
-                        progress=False)
+        tr = TR.Trainer(tiny(steps=6, seed=seed, checkpoint_every=3), tmp_path / f"r{i}", progress=False)
         tr.run()
         thetas.append(tr.model.theta.detach().clone())
     assert torch.equal(thetas[0], thetas[1])
@@ -68,8 +67,15 @@ def test_kill_and_resume_matches_uninterrupted(tmp_path):
     cfg_path = tmp_path / "tiny.toml"
     cfg_path.write_text(TINY.read_text().replace("steps = 20", f"steps = {steps}"))
     run = tmp_path / "killed"
-    cmd = [sys.executable, str(REPO / "training" / "train.py"), "--config", str(cfg_path),
-           "--run-dir", str(run), "--no-progress"]
+    cmd = [
+        sys.executable,
+        str(REPO / "training" / "train.py"),
+        "--config",
+        str(cfg_path),
+        "--run-dir",
+        str(run),
+        "--no-progress",
+    ]
     csv = run / "loss.csv"
     with subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL) as proc:
         deadline = time.time() + 60
@@ -109,8 +115,7 @@ def test_crash_during_checkpoint_keeps_previous(tmp_path, monkeypatch):
         write = exploding_write
 
     real_fdopen = os.fdopen
-    monkeypatch.setattr(TR.os, "fdopen", lambda fd, mode: Boom(fd, "wb") if "b" in mode
-                        else real_fdopen(fd, mode))
+    monkeypatch.setattr(TR.os, "fdopen", lambda fd, mode: Boom(fd, "wb") if "b" in mode else real_fdopen(fd, mode))
     with pytest.raises(KeyboardInterrupt):
         TR.save_checkpoint(tmp_path / "r" / TR.CHECKPOINT, {"junk": torch.zeros(1000)})
     monkeypatch.undo()
@@ -134,16 +139,19 @@ def test_existing_run_needs_resume_or_force(tmp_path):
     TR.Trainer(tiny(steps=2), tmp_path / "r", force=True, progress=False)
 
 
-@pytest.mark.parametrize("mutate, msg", [
-    (lambda d: d["model"].update(layers=0), "layers"),
-    (lambda d: d["model"].update(subspaces=["x!"]), "axis"),
-    (lambda d: d["model"].update(radius=[1.0, 2.0]), "radius"),
-    (lambda d: d["model"].update(bogus=1), "unknown keys"),
-    (lambda d: d["train"].update(lr="fast"), "expected float"),
-    (lambda d: d["train"].update(impl="cuda"), "impl"),
-    (lambda d: d.pop("loss"), r"missing section \[loss\]"),
-    (lambda d: d["pattern"].update(grid_axes=[0], grid_shape=[10]), "n_points"),
-])
+@pytest.mark.parametrize(
+    "mutate, msg",
+    [
+        (lambda d: d["model"].update(layers=0), "layers"),
+        (lambda d: d["model"].update(subspaces=["x!"]), "axis"),
+        (lambda d: d["model"].update(radius=[1.0, 2.0]), "radius"),
+        (lambda d: d["model"].update(bogus=1), "unknown keys"),
+        (lambda d: d["train"].update(lr="fast"), "expected float"),
+        (lambda d: d["train"].update(impl="cuda"), "impl"),
+        (lambda d: d.pop("loss"), r"missing section \[loss\]"),
+        (lambda d: d["pattern"].update(grid_axes=[0], grid_shape=[10]), "n_points"),
+    ],
+)
 def test_bad_configs(mutate, msg):
     import tomllib
 

@@ -10,7 +10,6 @@ import torch
 
 from dpc_train import trainer as TR
 from dpc_train.config import ConfigError, config_from_dict, load_config
-
 from test_trainer import TINY
 
 
@@ -21,14 +20,28 @@ def cfg_with(train=None, model=None):
     return config_from_dict(d, str(TINY))
 
 
-@pytest.mark.parametrize("section, key, value", [
-    ("train", "lr", math.inf), ("train", "lr", math.nan), ("train", "lr", 0.0), ("train", "lr", -1e-3),
-    ("train", "lr_final", math.inf), ("train", "lr_final", 0.0),
-    ("train", "diverge_factor", math.nan), ("train", "diverge_factor", 0.5),
-    ("train", "diverge_patience", 0), ("train", "eval_sets", 0), ("train", "seed", -1),
-    ("model", "eps", math.nan), ("model", "eps", -1.0), ("model", "init_sigma", 0.0),
-    ("model", "init_amplitude", math.inf), ("model", "radius", [math.inf]), ("model", "radius", [0.0]),
-])
+@pytest.mark.parametrize(
+    "section, key, value",
+    [
+        ("train", "lr", math.inf),
+        ("train", "lr", math.nan),
+        ("train", "lr", 0.0),
+        ("train", "lr", -1e-3),
+        ("train", "lr_final", math.inf),
+        ("train", "lr_final", 0.0),
+        ("train", "diverge_factor", math.nan),
+        ("train", "diverge_factor", 0.5),
+        ("train", "diverge_patience", 0),
+        ("train", "eval_sets", 0),
+        ("train", "seed", -1),
+        ("model", "eps", math.nan),
+        ("model", "eps", -1.0),
+        ("model", "init_sigma", 0.0),
+        ("model", "init_amplitude", math.inf),
+        ("model", "radius", [math.inf]),
+        ("model", "radius", [0.0]),
+    ],
+)
 def test_hyper_parameters_must_be_finite_and_positive(section, key, value):
     with pytest.raises(ConfigError, match=key):
         cfg_with(**{section: {key: value}})
@@ -46,8 +59,7 @@ def _good_run(tmp_path, steps=10):
 def test_divergence_stops_with_the_last_good_checkpoint_intact(tmp_path, lr):
     step, theta, raw = _good_run(tmp_path)
     assert step == 10
-    tr = TR.Trainer(cfg_with({"steps": 40, "checkpoint_every": 5}), tmp_path, resume=True,
-                    progress=False)
+    tr = TR.Trainer(cfg_with({"steps": 40, "checkpoint_every": 5}), tmp_path, resume=True, progress=False)
     for g in tr.opt.param_groups:  # the run blows up after its good checkpoint
         g["lr"] = lr
     with pytest.raises(TR.TrainingDivergedError) as e:
@@ -58,13 +70,15 @@ def test_divergence_stops_with_the_last_good_checkpoint_intact(tmp_path, lr):
     assert not [f for f in os.listdir(tmp_path) if f.endswith(".tmp")]
 
 
-@pytest.mark.parametrize("lr, expect", [
-    (1e30, "points collapsed"),    # loss 0.39 -> 63.5 and stays, all points coincide, no NaN
-    (1e38, "optimiser failed"),    # an overflow inside torch (RuntimeError)
-])
+@pytest.mark.parametrize(
+    "lr, expect",
+    [
+        (1e30, "points collapsed"),  # loss 0.39 -> 63.5 and stays, all points coincide, no NaN
+        (1e38, "optimiser failed"),  # an overflow inside torch (RuntimeError)
+    ],
+)
 def test_divergence_before_any_checkpoint_says_there_is_none(tmp_path, lr, expect):
-    tr = TR.Trainer(cfg_with({"steps": 40, "checkpoint_every": 5, "lr": lr}), tmp_path,
-                    progress=False)
+    tr = TR.Trainer(cfg_with({"steps": 40, "checkpoint_every": 5, "lr": lr}), tmp_path, progress=False)
     with pytest.raises(TR.TrainingDivergedError) as e:
         tr.run()
     assert expect in str(e.value) and "No checkpoint was written" in str(e.value), str(e.value)
@@ -121,8 +135,7 @@ def test_resume_removes_stale_temporaries_and_keeps_other_files(tmp_path):
         f.write_bytes(b"half a checkpoint")
     mine = tmp_path / "notes.tmp"
     mine.write_text("not the trainer's")
-    tr = TR.Trainer(cfg_with({"steps": 12, "checkpoint_every": 5}), tmp_path, resume=True,
-                    progress=False)
+    tr = TR.Trainer(cfg_with({"steps": 12, "checkpoint_every": 5}), tmp_path, resume=True, progress=False)
     assert sorted(tr.removed_temporaries) == sorted(stale)
     assert not any(f.exists() for f in stale)
     assert mine.exists()
@@ -138,8 +151,9 @@ def test_negative_losses_do_not_look_like_a_jump(tmp_path):
     tr.loss_fn = lambda y: base_loss(y) - 5.0  # same gradients, loss around -4.6
     tr.run()
     assert TR.load_checkpoint(tmp_path / TR.CHECKPOINT)["step"] == 40
-    tr2 = TR.Trainer(cfg_with({"steps": 60, "checkpoint_every": 5, "diverge_patience": 3}), tmp_path,
-                     resume=True, progress=False)
+    tr2 = TR.Trainer(
+        cfg_with({"steps": 60, "checkpoint_every": 5, "diverge_patience": 3}), tmp_path, resume=True, progress=False
+    )
     tr2.loss_fn = lambda y: base_loss(y) - 5.0 + (100.0 if tr2.step >= 45 else 0.0)
     with pytest.raises(TR.TrainingDivergedError, match="the loss jumped"):
         tr2.run()

@@ -60,21 +60,33 @@ def test_package_data_through_importlib_resources():
 
 def test_console_scripts_train_and_export(tmp_path):
     run = tmp_path / "run"
-    r = subprocess.run([_script("dpc-train"), "--config", str(TINY), "--run-dir", str(run), "--steps", "2",
-                        "--no-progress"], capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    r = subprocess.run(
+        [_script("dpc-train"), "--config", str(TINY), "--run-dir", str(run), "--steps", "2", "--no-progress"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=tmp_path,
+    )
     assert r.returncode == 0, r.stderr
     out = tmp_path / "tiny.onnx"
-    r = subprocess.run([_script("dpc-export"), str(run / "checkpoint.pt"), "-o", str(out)], capture_output=True,
-                       text=True, timeout=300, cwd=tmp_path)
+    r = subprocess.run(
+        [_script("dpc-export"), str(run / "checkpoint.pt"), "-o", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=tmp_path,
+    )
     assert r.returncode == 0, r.stderr
     assert read_model(out).name == "tiny-test" and dpc.load(out).layers == 4
-    r = subprocess.run([_script("dpc-train"), "--config", str(tmp_path / "missing.toml")], capture_output=True,
-                       text=True, cwd=tmp_path)
+    r = subprocess.run(
+        [_script("dpc-train"), "--config", str(tmp_path / "missing.toml")], capture_output=True, text=True, cwd=tmp_path
+    )
     assert r.returncode == 2 and r.stderr.startswith("dpc-train: error: ConfigError"), r.stderr
 
 
 def test_checkout_scripts_run_the_same_commands(tmp_path):
     for script, prog in (("train.py", "dpc-train"), ("export.py", "dpc-export")):
-        r = subprocess.run([sys.executable, str(REPO / "training" / script), "--help"], capture_output=True,
-                           text=True, cwd=tmp_path)
+        r = subprocess.run(
+            [sys.executable, str(REPO / "training" / script), "--help"], capture_output=True, text=True, cwd=tmp_path
+        )
         assert r.returncode == 0 and r.stdout.startswith(f"usage: {prog}"), r.stdout + r.stderr
