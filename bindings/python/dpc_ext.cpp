@@ -29,8 +29,7 @@ namespace {
 }
 
 // Call f with the GIL released; raise on failure (the message is read on the same thread).
-template <class F>
-void call(F &&f) {
+template <class F> void call(F &&f) {
     dpc_status status;
     std::string message;
     {
@@ -51,7 +50,7 @@ struct Job {
     std::shared_ptr<dpc_model> model;
     uint64_t seed = 0;
     size_t count = 0, n_points = 0;
-    float *buf = nullptr;  // malloc'd; handed to numpy on success
+    float *buf = nullptr; // malloc'd; handed to numpy on success
     std::atomic<bool> cancel{false};
     std::atomic<uint64_t> done{0}, total{0};
     std::mutex mu;
@@ -191,7 +190,7 @@ class Model {
             std::thread t(job_run, job);
             uint64_t shown = UINT64_MAX;
             while (!job_wait(*job, 50)) {
-                if (PyErr_CheckSignals() != 0) {  // Ctrl-C (KeyboardInterrupt) or another signal's exception
+                if (PyErr_CheckSignals() != 0) { // Ctrl-C (KeyboardInterrupt) or another signal's exception
                     job_abandon(job, t);
                     throw py::error_already_set();
                 }
@@ -249,7 +248,8 @@ class Model {
 py::array_t<float> input_points(uint64_t seed, size_t m, size_t n, double max_bytes, bool stratified) {
     if (m == 0 || n == 0) raise_status(DPC_ERROR_INVALID_ARGUMENT, "m and n must be positive");
     if (stratified && m > DPC_MAX_POINTS)
-        raise_status(DPC_ERROR_LIMIT, std::to_string(m) + " points requested, at most " + std::to_string(DPC_MAX_POINTS));
+        raise_status(DPC_ERROR_LIMIT,
+                     std::to_string(m) + " points requested, at most " + std::to_string(DPC_MAX_POINTS));
     if (m > SIZE_MAX / n / sizeof(float)) raise_status(DPC_ERROR_LIMIT, "m * n overflows");
     if (static_cast<double>(m) * n * sizeof(float) > max_bytes)
         raise_status(DPC_ERROR_LIMIT, "the output would take " + std::to_string(m * n) +
@@ -360,10 +360,9 @@ LayerCall layer_call(const Array64 &x, const Array64 &kernels, const py::sequenc
     const size_t s = static_cast<size_t>(kernels.shape(0)), b = static_cast<size_t>(kernels.shape(1));
     const size_t n = static_cast<size_t>(x.shape(x.ndim() - 1));
     if (static_cast<size_t>(py::len(subspaces)) != s || radius.size() != s)
-        raise_status(DPC_ERROR_INVALID_ARGUMENT,
-                     "kernels has " + std::to_string(s) + " rows but subspaces has " +
-                         std::to_string(py::len(subspaces)) + " and radius " + std::to_string(radius.size()) +
-                         " entries: all three must agree");
+        raise_status(DPC_ERROR_INVALID_ARGUMENT, "kernels has " + std::to_string(s) + " rows but subspaces has " +
+                                                     std::to_string(py::len(subspaces)) + " and radius " +
+                                                     std::to_string(radius.size()) + " entries: all three must agree");
     // Larger values would wrap in the uint32 fields; the C checks give the precise ranges.
     if (n > DPC_MAX_DIMS || s > 0xFFFFFFFFu || b > 0xFFFFFFFFu)
         raise_status(DPC_ERROR_INVALID_ARGUMENT, "x has " + std::to_string(n) + " dims (at most " +
@@ -418,8 +417,8 @@ py::tuple layer_backward(const Array64 &x, const Array64 &kernels, const py::seq
 }
 
 void register_layer_training(py::module_ &mod) {
-    mod.def("layer_forward", &layer_forward, py::arg("x"), py::arg("kernels"), py::arg("subspaces"),
-            py::arg("radius"), py::arg("eps"), py::arg("fixed"), py::arg("threads"), py::arg("isa") = DPC_ISA_AUTO,
+    mod.def("layer_forward", &layer_forward, py::arg("x"), py::arg("kernels"), py::arg("subspaces"), py::arg("radius"),
+            py::arg("eps"), py::arg("fixed"), py::arg("threads"), py::arg("isa") = DPC_ISA_AUTO,
             "One PointFilter layer in float64: x (m, n) or (batch, m, n) -> y of the same shape.");
     mod.def("layer_backward", &layer_backward, py::arg("x"), py::arg("kernels"), py::arg("subspaces"),
             py::arg("radius"), py::arg("eps"), py::arg("fixed"), py::arg("grad_y"), py::arg("threads"),
@@ -461,7 +460,7 @@ py::dict load_defaults() {
     return d;
 }
 
-}  // namespace
+} // namespace
 
 PYBIND11_MODULE(_core, mod) {
     mod.doc() = "libdpc bindings (use the dpc package, not this module)";
@@ -472,8 +471,7 @@ PYBIND11_MODULE(_core, mod) {
     mod.def("load_defaults", &load_defaults);
     py::class_<Model>(mod, "Model")
         .def(py::init<const std::string &, dpc_isa, unsigned, dpc_backend, dpc_input, double>(), py::arg("path"),
-             py::arg("isa"),
-             py::arg("threads"), py::arg("backend"), py::arg("input"),
+             py::arg("isa"), py::arg("threads"), py::arg("backend"), py::arg("input"),
              py::arg("max_neighbours") = DPC_DEFAULT_MAX_NEIGHBOURS)
         .def("info", &Model::info)
         .def("metadata", &Model::metadata)
@@ -493,12 +491,15 @@ PYBIND11_MODULE(_core, mod) {
         .def("get", &Sampler::get, py::arg("x"), py::arg("y"), py::arg("index"), py::arg("dim"), py::arg("width"))
         .def("table", &Sampler::table, py::arg("t"));
     mod.def("sampler_mask", &sampler_mask);
-    mod.def("isa_supported", [](dpc_isa isa) { return dpc_isa_supported(isa) != 0; }, py::arg("isa"));
-    mod.def("uniform", [](uint64_t seed, size_t m, size_t n, double max_bytes) {
-        return input_points(seed, m, n, max_bytes, false);
-    }, py::arg("seed"), py::arg("m"), py::arg("n"), py::arg("max_bytes"));
-    mod.def("stratified", [](uint64_t seed, size_t m, size_t n, double max_bytes) {
-        return input_points(seed, m, n, max_bytes, true);
-    }, py::arg("seed"), py::arg("m"), py::arg("n"), py::arg("max_bytes"));
+    mod.def(
+        "isa_supported", [](dpc_isa isa) { return dpc_isa_supported(isa) != 0; }, py::arg("isa"));
+    mod.def(
+        "uniform",
+        [](uint64_t seed, size_t m, size_t n, double max_bytes) { return input_points(seed, m, n, max_bytes, false); },
+        py::arg("seed"), py::arg("m"), py::arg("n"), py::arg("max_bytes"));
+    mod.def(
+        "stratified",
+        [](uint64_t seed, size_t m, size_t n, double max_bytes) { return input_points(seed, m, n, max_bytes, true); },
+        py::arg("seed"), py::arg("m"), py::arg("n"), py::arg("max_bytes"));
     register_layer_training(mod);
 }

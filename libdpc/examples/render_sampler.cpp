@@ -40,7 +40,9 @@ class DpcSampler {
 
 class RandomSampler { // the baseline: independent uniform numbers
   public:
-    void StartPixelSample(int x, int y, int index) { rng_.seed((uint64_t)y << 40 ^ (uint64_t)x << 20 ^ (uint64_t)index); }
+    void StartPixelSample(int x, int y, int index) {
+        rng_.seed((uint64_t)y << 40 ^ (uint64_t)x << 20 ^ (uint64_t)index);
+    }
     float Get1D() { return u_(rng_); }
     void Get2D(float out[2]) { out[0] = u_(rng_), out[1] = u_(rng_); }
     void GetPixel2D(float out[2]) { Get2D(out); }
@@ -61,8 +63,7 @@ float shade(float px, float py, const float light[2]) {
     return dx * dx + dy * dy < 0.18f * 0.18f ? 0.0f : 1.0f;
 }
 
-template <class Sampler>
-void render(std::vector<float> &image, int spp, Sampler make(), int threads) {
+template <class Sampler> void render(std::vector<float> &image, int spp, Sampler make(), int threads) {
     std::vector<std::thread> pool;
     for (int t = 0; t < threads; t++)
         pool.emplace_back([&, t] {

@@ -20,7 +20,7 @@ void expect_message() {
     EXPECT_GT(std::strlen(msg), 0u) << "dpc_last_error() is empty after a failure";
 }
 
-}  // namespace
+} // namespace
 
 TEST(Version, RuntimeMatchesHeader) {
     EXPECT_EQ(dpc_version_number(), (unsigned)DPC_VERSION_NUMBER);
@@ -33,9 +33,7 @@ TEST(Version, RuntimeMatchesHeader) {
 
 // CMake's project version is read from dpc.h (CMakeLists.txt): the build that made this library
 // must agree with the library (tests/python/test_version.py checks pyproject and Python).
-TEST(Version, MatchesTheCMakeProject) {
-    EXPECT_STREQ(DPC_TEST_PROJECT_VERSION, dpc_version_string());
-}
+TEST(Version, MatchesTheCMakeProject) { EXPECT_STREQ(DPC_TEST_PROJECT_VERSION, dpc_version_string()); }
 
 TEST(Status, PinnedValuesAndNames) {
     // The numeric values are part of the ABI (dpc.h: "Values are pinned").
@@ -111,7 +109,7 @@ TEST(Lifecycle, BadOptionsAreRejected) {
     EXPECT_EQ(m, nullptr);
     expect_message();
     dpc_load_options_init(&o);
-    o.struct_size = 0;  // not initialised with dpc_load_options_init
+    o.struct_size = 0; // not initialised with dpc_load_options_init
     EXPECT_NE(dpc_model_load_file(path.c_str(), &o, &m), DPC_OK);
     EXPECT_EQ(m, nullptr);
     expect_message();
@@ -123,7 +121,7 @@ TEST(Lifecycle, LoadFileAndMemoryAgree) {
     dpc_model *mm = nullptr;
     ASSERT_EQ(dpc_model_load_memory(bytes.data(), bytes.size(), nullptr, &mm), DPC_OK) << dpc_last_error();
     ModelPtr from_mem(mm);
-    std::fill(bytes.begin(), bytes.end(), 0);  // "not retained after the call returns"
+    std::fill(bytes.begin(), bytes.end(), 0); // "not retained after the call returns"
     ModelPtr from_file = load(model_path("model_3d_mixed"));
     ASSERT_TRUE(from_file);
     EXPECT_EQ(generate(from_mem.get(), 5), generate(from_file.get(), 5));
@@ -390,9 +388,9 @@ TEST(Uniform, HandComputedValues) {
         uint64_t seed, index;
         uint32_t top24;
     };
-    for (Known k : {Known{1, 0, 12578688}, Known{1, 1, 6247724}, Known{1, 7, 3119647},
-                    Known{0xDEADBEEF, 0, 2595342}, Known{0xDEADBEEF, 1, 15670181}, Known{0xDEADBEEF, 7, 8394523},
-                    Known{~0ull, 0, 10844024}, Known{~0ull, 1, 11830564}, Known{~0ull, 7, 12987990}}) {
+    for (Known k : {Known{1, 0, 12578688}, Known{1, 1, 6247724}, Known{1, 7, 3119647}, Known{0xDEADBEEF, 0, 2595342},
+                    Known{0xDEADBEEF, 1, 15670181}, Known{0xDEADBEEF, 7, 8394523}, Known{~0ull, 0, 10844024},
+                    Known{~0ull, 1, 11830564}, Known{~0ull, 7, 12987990}}) {
         EXPECT_EQ(stream_value(k.seed, k.index) >> 40, k.top24);
         float out[8];
         ASSERT_EQ(dpc_uniform(k.seed, 8, 1, out), DPC_OK);

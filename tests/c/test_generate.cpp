@@ -75,7 +75,7 @@ class PerModel : public ::testing::TestWithParam<std::string> {
 
 std::string param_name(const ::testing::TestParamInfo<std::string> &p) { return p.param; }
 
-}  // namespace
+} // namespace
 
 TEST_P(PerModel, SameSeedSameBits) {
     ModelPtr a = load(path()), b = load(path());
@@ -147,7 +147,7 @@ TEST_P(PerModel, EightThreadsSharingOneModelGiveTheSerialResults) {
         for (int t = 0; t < T; t++)
             pool.emplace_back([&, t] {
                 for (int r = 0; r < per_thread; r++) {
-                    int s = t + T * r;  // interleave seeds between threads
+                    int s = t + T * r; // interleave seeds between threads
                     std::vector<float> out((size_t)info.n_points * info.dims);
                     if (dpc_generate(m.get(), 1000 + s, out.data()) != DPC_OK) failures[t]++;
                     parallel[s] = std::move(out);
@@ -168,13 +168,13 @@ TEST_P(PerModel, BatchEqualsPerSeedGenerate) {
     if (other_count(info)) counts.push_back(600);
     for (size_t n : counts) {
         size_t m_pts = n ? n : info.n_points;
-        for (uint64_t seed : {10ull, ~0ull - 1}) {  // the second wraps: seeds 2^64-2, 2^64-1, 0, 1
+        for (uint64_t seed : {10ull, ~0ull - 1}) { // the second wraps: seeds 2^64-2, 2^64-1, 0, 1
             const size_t count = 4;
             ASSERT_EQ(dpc_output_size(m.get(), count, m_pts), count * m_pts * info.dims);
             std::vector<float> batch(count * m_pts * info.dims, -1.0f);
             ASSERT_EQ(dpc_generate_batch(m.get(), seed, count, n, batch.data()), DPC_OK) << dpc_last_error();
             for (size_t c = 0; c < count; c++) {
-                std::vector<float> one = generate(m.get(), seed + c, n);  // uint64 wraps
+                std::vector<float> one = generate(m.get(), seed + c, n); // uint64 wraps
                 std::vector<float> part(batch.begin() + c * one.size(), batch.begin() + (c + 1) * one.size());
                 EXPECT_EQ(part, one) << "set " << c << " of the batch from seed " << seed << ", n " << n;
             }
@@ -189,7 +189,7 @@ TEST_P(PerModel, OtherPointCounts) {
     EXPECT_EQ(generate(m.get(), 4, 0), generate(m.get(), 4, info.n_points)) << "0 means the trained count";
     if (info.grid_dims) GTEST_SKIP() << "gridded models generate only their grid's count (tested in test_api)";
     for (size_t n : {777u, 1500u, 3000u}) {
-        if (info.dims >= 8 && n > 1000) continue;  // O(m^2) full-space subspace: keep it fast
+        if (info.dims >= 8 && n > 1000) continue; // O(m^2) full-space subspace: keep it fast
         std::vector<float> y = generate(m.get(), 4, n);
         ASSERT_EQ(y.size(), n * info.dims);
         expect_unit_cube(y);
@@ -281,7 +281,7 @@ TEST(Grid, FilterLeavesGivenGriddedValuesAlone) {
     ModelPtr m = load(model_path("model_grid_3to1"));
     ASSERT_TRUE(m);
     std::vector<float> x(1024 * 3);
-    ASSERT_EQ(dpc_uniform(5, 1024, 3, x.data()), DPC_OK);  // gridded dims NOT on cell centres
+    ASSERT_EQ(dpc_uniform(5, 1024, 3, x.data()), DPC_OK); // gridded dims NOT on cell centres
     std::vector<float> y = x;
     ASSERT_EQ(dpc_filter(m.get(), 1024, y.data()), DPC_OK) << dpc_last_error();
     size_t moved = 0;
@@ -341,7 +341,7 @@ TEST(Golden, EveryIsaMatchesTheFloat64Reference) {
         size_t n = std::stoull(fname.substr(b + 3));
         std::vector<uint8_t> raw = read_file(entry.path().string());
         std::vector<float> expect(raw.size() / 4);
-        std::memcpy(expect.data(), raw.data(), expect.size() * 4);  // little-endian hosts
+        std::memcpy(expect.data(), raw.data(), expect.size() * 4); // little-endian hosts
         for (dpc_isa isa : isas) {
             ModelPtr m = load(model_path(model), isa);
             ASSERT_TRUE(m);

@@ -75,10 +75,10 @@ struct Shape {
 };
 // Powers of g (one point per cell), leftover cells (1000 = 31^2 + 39, 3000 = 14^3 + 256), several
 // points per cell (8192 in 10-D: 2^10 cells of 8), 1-D, one point, and no grid at all (g = 1).
-const Shape kShapes[] = {{1024, 2}, {1000, 2}, {3000, 3}, {4096, 3}, {8192, 10}, {1024, 10},
-                         {7, 1}, {1, 2}, {5, 64}, {65536, 2}, {777, 4}};
+const Shape kShapes[] = {{1024, 2}, {1000, 2}, {3000, 3}, {4096, 3},  {8192, 10}, {1024, 10},
+                         {7, 1},    {1, 2},    {5, 64},   {65536, 2}, {777, 4}};
 
-}  // namespace
+} // namespace
 
 TEST(Stratified, MatchesTheDocumentedGenerator) {
     for (const Shape &s : kShapes)
@@ -108,7 +108,7 @@ TEST(Stratified, EveryCellGetsItsShareAndTheOrderIsRandom) {
         const size_t base = s.m / cells;
         for (size_t c = 0; c < cells; c++)
             ASSERT_TRUE(count[c] == base || count[c] == base + 1) << s.m << " x " << s.n << ", cell " << c;
-        if (g > 1 && s.m >= 64) {  // the first quarter of the points is spread over the domain, not a corner
+        if (g > 1 && s.m >= 64) { // the first quarter of the points is spread over the domain, not a corner
             double mean = 0;
             for (size_t i = 0; i < s.m / 4; i++) mean += x[i * s.n + s.n - 1];
             mean /= (double)(s.m / 4);
@@ -144,8 +144,8 @@ TEST(StratifiedInput, GenerateFiltersTheStratifiedPoints) {
     std::vector<float> batch(3 * 1024 * 2);
     ASSERT_EQ(dpc_generate_batch(m.get(), 7, 3, 0, batch.data()), DPC_OK) << dpc_last_error();
     for (size_t c = 0; c < 3; c++)
-        EXPECT_TRUE(std::equal(batch.begin() + c * 2048, batch.begin() + (c + 1) * 2048,
-                               generate(m.get(), 7 + c).begin()))
+        EXPECT_TRUE(
+            std::equal(batch.begin() + c * 2048, batch.begin() + (c + 1) * 2048, generate(m.get(), 7 + c).begin()))
             << "set " << c;
     ModelPtr uni = load_input(model_path("model_2d"), DPC_INPUT_UNIFORM);
     EXPECT_NE(generate(uni.get(), 42), generate(m.get(), 42)) << "the option changes the input";

@@ -139,7 +139,8 @@ TEST(Kernels, EveryArrangementGivesTheScalarBits) {
                     for (auto &p : paths) {
                         const std::vector<float> got = run(p.second, j);
                         ASSERT_EQ(std::memcmp(got.data(), want.data(), want.size() * sizeof(float)), 0)
-                            << p.first << ": k " << k << ", bins " << bins << ", ranges " << n_ranges << ", count " << count;
+                            << p.first << ": k " << k << ", bins " << bins << ", ranges " << n_ranges << ", count "
+                            << count;
                     }
                     cases++;
                 }

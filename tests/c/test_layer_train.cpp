@@ -61,7 +61,7 @@ void expect_failure(dpc_status got, dpc_status want, const char *needle) {
     EXPECT_NE(std::strstr(dpc_last_error(), needle), nullptr) << "message: " << dpc_last_error();
 }
 
-}  // namespace
+} // namespace
 
 TEST(LayerTrain, RejectsBadArguments) {
     Layer L(2, {3}, {3.0}, 8);
@@ -76,7 +76,8 @@ TEST(LayerTrain, RejectsBadArguments) {
     expect_failure(fwd(nullptr, 1, 10), DPC_ERROR_INVALID_ARGUMENT, "layer is NULL");
     expect_failure(dpc_layer_forward(&good, nullptr, 1, 10, x.data(), y.data(), 1), DPC_ERROR_INVALID_ARGUMENT, "NULL");
     expect_failure(dpc_layer_forward(&good, w.data(), 1, 10, nullptr, y.data(), 1), DPC_ERROR_INVALID_ARGUMENT, "NULL");
-    expect_failure(dpc_layer_forward(&good, w.data(), 1, 10, x.data(), nullptr, 1), DPC_ERROR_INVALID_ARGUMENT, "y is NULL");
+    expect_failure(dpc_layer_forward(&good, w.data(), 1, 10, x.data(), nullptr, 1), DPC_ERROR_INVALID_ARGUMENT,
+                   "y is NULL");
     expect_failure(dpc_layer_backward(&good, w.data(), 1, 10, x.data(), nullptr, gx.data(), gk.data(), 1),
                    DPC_ERROR_INVALID_ARGUMENT, "NULL");
     expect_failure(dpc_layer_backward(&good, w.data(), 1, 10, x.data(), g.data(), nullptr, gk.data(), 1),
@@ -160,10 +161,10 @@ TEST(LayerTrain, TwoPointsByHand) {
     struct Case {
         double x0, x1, y0, y1, dir;
     };
-    for (const Case &c : {Case{0.1, 0.35, 0.1375, 0.3125, 1.0},    // x1 to the right
-                          Case{0.35, 0.1, 0.3125, 0.1375, -1.0},   // to the left
-                          Case{0.95, 0.2, 0.9875, 0.1625, 1.0},    // to the right across the seam
-                          Case{0.2, 0.95, 0.1625, 0.9875, -1.0},   // to the left across the seam
+    for (const Case &c : {Case{0.1, 0.35, 0.1375, 0.3125, 1.0},     // x1 to the right
+                          Case{0.35, 0.1, 0.3125, 0.1375, -1.0},    // to the left
+                          Case{0.95, 0.2, 0.9875, 0.1625, 1.0},     // to the right across the seam
+                          Case{0.2, 0.95, 0.1625, 0.9875, -1.0},    // to the left across the seam
                           Case{0.98, 0.23, 0.0175, 0.1925, 1.0}}) { // and y0 wraps past 1
         const double x[2] = {c.x0, c.x1}, G[2] = {1.0, 0.0};
         double y[2], gx[2], gk[3];
@@ -214,39 +215,39 @@ TEST(LayerTrain, ThreadCountDoesNotChangeBits) {
     std::vector<double> many_r;
     for (uint64_t mask = 1; mask <= 64; mask++) many.push_back(mask), many_r.push_back(1.0 + 0.03 * (double)mask);
     std::vector<Case> cases = {
-        {Layer(2, {3}, {3.0}, 32), 1, 12000},                  // one big set: chunks over threads
+        {Layer(2, {3}, {3.0}, 32), 1, 12000},                        // one big set: chunks over threads
         {Layer(3, {3, 5, 6, 4}, {2.0, 2.0, 2.0, 4.0}, 32), 2, 9000}, // fewer sets than threads
-        {Layer(3, {7, 4}, {2.0, 3.0}, 16, 1e-4, 1), 4, 700},   // sets over threads, a fixed dim
-        {Layer(5, {31, 1}, {1.5, 3.0}, 8), 3, 400},             // 5-D: all pairs, generic K
-        {Layer(7, many, many_r, 4), 2, 300},                    // 64 subspaces
-        {Layer(4, {15}, {2.0}, 32), 1, 9000, true},             // 4-D all pairs, chunks over threads
-        {Layer(10, {1023}, {1.0}, 32), 3, 1001},                // 10-D all pairs, m not a multiple of 8
+        {Layer(3, {7, 4}, {2.0, 3.0}, 16, 1e-4, 1), 4, 700},         // sets over threads, a fixed dim
+        {Layer(5, {31, 1}, {1.5, 3.0}, 8), 3, 400},                  // 5-D: all pairs, generic K
+        {Layer(7, many, many_r, 4), 2, 300},                         // 64 subspaces
+        {Layer(4, {15}, {2.0}, 32), 1, 9000, true},                  // 4-D all pairs, chunks over threads
+        {Layer(10, {1023}, {1.0}, 32), 3, 1001},                     // 10-D all pairs, m not a multiple of 8
     };
     for (dpc_isa isa : all_isas())
-    for (const Case &c : cases) {
-        if (c.vector_only && isa == DPC_ISA_SCALAR) continue;
-        SCOPED_TRACE(dpct::isa_name(isa));
-        const IsaScope scope(isa);
-        const dpc_layer_desc d = c.layer.desc();
-        const size_t n = d.dims, total = c.count * c.m * n, sb = (size_t)d.n_subspaces * d.bins;
-        std::vector<double> w = uniform(sb, 7, -0.05, 0.05), x = uniform(total, 8), g = uniform(total, 9, -1, 1);
-        std::vector<double> y1(total), gx1(total), gk1(sb);
-        ASSERT_EQ(dpc_layer_forward(&d, w.data(), c.count, c.m, x.data(), y1.data(), 1), DPC_OK);
-        ASSERT_EQ(dpc_layer_backward(&d, w.data(), c.count, c.m, x.data(), g.data(), gx1.data(),
-                                     gk1.data(), 1),
-                  DPC_OK);
-        EXPECT_NE(0, std::memcmp(x.data(), y1.data(), total * sizeof(double))) << "the layer moved nothing";
-        for (uint32_t threads : {3u, 0u}) {
-            std::vector<double> y(total), gx(total), gk(sb);
-            ASSERT_EQ(dpc_layer_forward(&d, w.data(), c.count, c.m, x.data(), y.data(), threads), DPC_OK);
-            ASSERT_EQ(dpc_layer_backward(&d, w.data(), c.count, c.m, x.data(), g.data(), gx.data(),
-                                         gk.data(), threads),
+        for (const Case &c : cases) {
+            if (c.vector_only && isa == DPC_ISA_SCALAR) continue;
+            SCOPED_TRACE(dpct::isa_name(isa));
+            const IsaScope scope(isa);
+            const dpc_layer_desc d = c.layer.desc();
+            const size_t n = d.dims, total = c.count * c.m * n, sb = (size_t)d.n_subspaces * d.bins;
+            std::vector<double> w = uniform(sb, 7, -0.05, 0.05), x = uniform(total, 8), g = uniform(total, 9, -1, 1);
+            std::vector<double> y1(total), gx1(total), gk1(sb);
+            ASSERT_EQ(dpc_layer_forward(&d, w.data(), c.count, c.m, x.data(), y1.data(), 1), DPC_OK);
+            ASSERT_EQ(dpc_layer_backward(&d, w.data(), c.count, c.m, x.data(), g.data(), gx1.data(), gk1.data(), 1),
                       DPC_OK);
-            EXPECT_EQ(0, std::memcmp(y.data(), y1.data(), total * sizeof(double))) << "dims " << n << " threads " << threads;
-            EXPECT_EQ(0, std::memcmp(gx.data(), gx1.data(), total * sizeof(double))) << "dims " << n;
-            EXPECT_EQ(0, std::memcmp(gk.data(), gk1.data(), sb * sizeof(double))) << "dims " << n;
+            EXPECT_NE(0, std::memcmp(x.data(), y1.data(), total * sizeof(double))) << "the layer moved nothing";
+            for (uint32_t threads : {3u, 0u}) {
+                std::vector<double> y(total), gx(total), gk(sb);
+                ASSERT_EQ(dpc_layer_forward(&d, w.data(), c.count, c.m, x.data(), y.data(), threads), DPC_OK);
+                ASSERT_EQ(
+                    dpc_layer_backward(&d, w.data(), c.count, c.m, x.data(), g.data(), gx.data(), gk.data(), threads),
+                    DPC_OK);
+                EXPECT_EQ(0, std::memcmp(y.data(), y1.data(), total * sizeof(double)))
+                    << "dims " << n << " threads " << threads;
+                EXPECT_EQ(0, std::memcmp(gx.data(), gx1.data(), total * sizeof(double))) << "dims " << n;
+                EXPECT_EQ(0, std::memcmp(gk.data(), gk1.data(), sb * sizeof(double))) << "dims " << n;
+            }
         }
-    }
 }
 
 namespace {
@@ -265,7 +266,7 @@ double rel_err(const std::vector<double> &a, const std::vector<double> &b, const
     return scale > 0.0 ? err / scale : err;
 }
 
-}  // namespace
+} // namespace
 
 // Each vector path against the scalar path: forward displacements, grad_x pair terms and the
 // kernel gradient to 1e-12 relative, on grid and all-pairs layers of 1 .. 10 dimensions, several
@@ -297,14 +298,15 @@ TEST(LayerTrain, VectorPathsMatchScalar) {
         const dpc_layer_desc d = c.layer.desc();
         const size_t n = d.dims, total = c.count * c.m * n, sb = (size_t)d.n_subspaces * d.bins;
         std::vector<double> w = uniform(sb, 17, -0.05, 0.05), x = uniform(total, 18), g = uniform(total, 19, -1, 1);
-        for (size_t i = 0; i < 6 && i < c.m; i++)  // the seam: near 0 and near 1 in every dimension
+        for (size_t i = 0; i < 6 && i < c.m; i++) // the seam: near 0 and near 1 in every dimension
             for (size_t k = 0; k < n; k++) x[i * n + k] = i % 2 ? 1.0 - 1e-9 * (double)(i + 1) : 1e-9 * (double)i;
-        for (size_t i = c.m / 2; i < c.m / 2 + 3; i++)  // duplicates: d = 0 is never a pair
+        for (size_t i = c.m / 2; i < c.m / 2 + 3; i++) // duplicates: d = 0 is never a pair
             for (size_t k = 0; k < n; k++) x[i * n + k] = x[(c.m / 3) * n + k];
         std::vector<double> y0(total), gx0(total), gk0(sb);
         {
             const IsaScope scope(DPC_ISA_SCALAR);
-            ASSERT_EQ(dpc_layer_forward(&d, w.data(), c.count, c.m, x.data(), y0.data(), 1), DPC_OK) << dpc_last_error();
+            ASSERT_EQ(dpc_layer_forward(&d, w.data(), c.count, c.m, x.data(), y0.data(), 1), DPC_OK)
+                << dpc_last_error();
             ASSERT_EQ(dpc_layer_backward(&d, w.data(), c.count, c.m, x.data(), g.data(), gx0.data(), gk0.data(), 1),
                       DPC_OK);
         }
@@ -332,7 +334,7 @@ TEST(LayerTrain, VectorPathsMatchScalar) {
             EXPECT_LE(err, 1e-12 * scale) << "forward";
             EXPECT_LE(rel_err(gx, gx0, g, false), 1e-12) << "grad_x";
             EXPECT_LE(rel_err(gk, gk0, zero, false), 1e-12) << "grad_kernels";
-            for (size_t i = 0; i < total; i++) {  // fixed dimensions never move, on any path
+            for (size_t i = 0; i < total; i++) { // fixed dimensions never move, on any path
                 if (d.fixed >> (i % n) & 1) {
                     ASSERT_EQ(y[i], x[i]);
                 }
@@ -354,7 +356,8 @@ TEST(LayerTrain, VectorFilterKeepsEdgePairs) {
         const dpc_layer_desc d = L.desc();
         const size_t m = 256, total = m * k;
         const double r = std::min(rho * std::pow((double)m, -1.0 / k), 0.5);
-        std::vector<double> w = uniform(16, 31, 0.5, 1.0), x = uniform(total, 32, 0.0, 1.0), g = uniform(total, 33, -1, 1);
+        std::vector<double> w = uniform(16, 31, 0.5, 1.0), x = uniform(total, 32, 0.0, 1.0),
+                            g = uniform(total, 33, -1, 1);
         std::mt19937_64 gen(34);
         std::normal_distribution<double> normal;
         // Pairs (2i, 2i+1) for i < 20: partner at r (1 - 1e-12), at 1e-9, or across the seam.
@@ -364,7 +367,7 @@ TEST(LayerTrain, VectorFilterKeepsEdgePairs) {
             double norm = 0.0;
             for (double &v : dir) v = normal(gen), norm += v * v;
             const double len = i % 3 == 1 ? 1e-9 : r * (1.0 - 1e-12);
-            if (i % 3 == 2) a[0] = 1.0 - 1e-9;  // rounds to 1.0f
+            if (i % 3 == 2) a[0] = 1.0 - 1e-9; // rounds to 1.0f
             for (size_t q = 0; q < k; q++) {
                 double v = a[q] + dir[q] / std::sqrt(norm) * len;
                 b[q] = v - std::floor(v);

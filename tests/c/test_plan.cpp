@@ -103,7 +103,7 @@ std::vector<size_t> point_counts() {
     return ms;
 }
 
-}  // namespace
+} // namespace
 
 TEST(Plan, ReproducesTheCopiesItReplaced) {
     const float rhos[] = {0.25f, 0.5f, 1.0f, 1.5f, 2.0f, 2.5f, 3.0f, 4.0f, 6.0f, 8.0f, 20.0f, 1e6f};

@@ -69,14 +69,14 @@ void exercise(dpc_model *m) {
         ASSERT_TRUE(k && v);
     }
     size_t n = info.grid_dims ? info.n_points : std::min<size_t>(info.n_points, 256);
-    if (n > 4096) return;  // a mutated grid could be large; keep the test fast
+    if (n > 4096) return; // a mutated grid could be large; keep the test fast
     std::vector<float> out(n * info.dims);
     if (dpc_generate_n(m, 9, info.grid_dims ? 0 : n, out.data()) == DPC_OK) {
         for (float v : out) ASSERT_TRUE(v >= 0.0f && v < 1.0f);
     }
 }
 
-}  // namespace
+} // namespace
 
 // ---- truncations -----------------------------------------------------------------------------
 
@@ -138,8 +138,8 @@ TEST(Malformed, EveryFileGivesItsStatus) {
         dpc_status st = dpc_model_load_file(path.c_str(), nullptr, &m);
         std::string msg = dpc_last_error();
         if (st == DPC_OK) dpc_model_free(m);
-        EXPECT_TRUE(c.expected.count(st)) << "got " << dpc_status_string(st) << " (" << msg << "), expected "
-                                          << names(c.expected);
+        EXPECT_TRUE(c.expected.count(st))
+            << "got " << dpc_status_string(st) << " (" << msg << "), expected " << names(c.expected);
         if (st != DPC_OK) {
             EXPECT_EQ(m, nullptr);
             EXPECT_FALSE(msg.empty());
@@ -168,12 +168,12 @@ TEST(Mutation, RandomBitFlipsNeverCrash) {
         for (int iter = 0; iter < 250; iter++) {
             std::vector<uint8_t> b = good;
             int kind = (int)(rng() % 4);
-            if (kind <= 1) {  // flip 1..4 bits
+            if (kind <= 1) { // flip 1..4 bits
                 int flips = 1 + (int)(rng() % 4);
                 for (int k = 0; k < flips; k++) b[rng() % b.size()] ^= (uint8_t)(1u << (rng() % 8));
-            } else if (kind == 2) {  // overwrite a byte (lengths, tags, digits become anything)
+            } else if (kind == 2) { // overwrite a byte (lengths, tags, digits become anything)
                 b[rng() % b.size()] = (uint8_t)rng();
-            } else {  // delete or duplicate a short run of bytes
+            } else { // delete or duplicate a short run of bytes
                 size_t at = rng() % b.size(), len = 1 + rng() % 8;
                 len = std::min(len, b.size() - at);
                 if (rng() % 2) b.erase(b.begin() + at, b.begin() + at + len);

@@ -53,7 +53,7 @@ dpc_status load_within(const std::string &path, double seconds, std::string *mes
     return st;
 }
 
-}  // namespace
+} // namespace
 
 TEST(OnlyRegularFiles, FifoDirectoryAndDeviceGiveAStatusAtOnce) {
     const std::string dir = temp_dir();
@@ -177,7 +177,7 @@ TEST(GenerateSize, ChecksLikeGenerateBatch) {
 namespace {
 struct Calls {
     std::vector<std::pair<uint64_t, uint64_t>> seen;
-    uint64_t stop_after = UINT64_MAX;  // cancel once done >= this
+    uint64_t stop_after = UINT64_MAX; // cancel once done >= this
     std::atomic<int> inside{0};
     bool overlapped = false;
 };
@@ -190,7 +190,7 @@ int record(void *user, uint64_t done, uint64_t total) {
     c->inside.fetch_sub(1);
     return done >= c->stop_after ? 1 : 0;
 }
-}  // namespace
+} // namespace
 
 TEST(GenerateEx, SameBitsAsBatchAndProgressReachesTotal) {
     for (uint32_t threads : {1u, 3u}) {
@@ -213,11 +213,11 @@ TEST(GenerateEx, SameBitsAsBatchAndProgressReachesTotal) {
         for (size_t i = 0; i < calls.seen.size(); i++) {
             EXPECT_EQ(calls.seen[i].second, total);
             if (i) {
-                EXPECT_GE(calls.seen[i].first, calls.seen[i - 1].first);  // polls repeat `done`
+                EXPECT_GE(calls.seen[i].first, calls.seen[i - 1].first); // polls repeat `done`
             }
         }
         EXPECT_EQ(calls.seen.back().first, total);
-        EXPECT_EQ(calls.seen.front().first, 0u);  // called before the first set
+        EXPECT_EQ(calls.seen.front().first, 0u); // called before the first set
         // NULL options and no callback: plain dpc_generate_batch
         ASSERT_EQ(dpc_generate_ex(m.get(), 77, count, n, nullptr, b.data()), DPC_OK);
         EXPECT_EQ(a, b);
@@ -230,7 +230,7 @@ TEST(GenerateEx, CancelStopsWithCancelled) {
         const size_t count = 40, n = 200;
         std::vector<float> out(count * n * 2);
         Calls calls;
-        calls.stop_after = 1;  // the first report of finished work asks to stop
+        calls.stop_after = 1; // the first report of finished work asks to stop
         dpc_generate_options o;
         dpc_generate_options_init(&o);
         o.progress = record;

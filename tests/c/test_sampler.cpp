@@ -77,16 +77,19 @@ TEST(SamplerOptions, BadOptionsAreStatusesWithAMessage) {
         {"null list", [](dpc_sampler_options &x) { x.models = nullptr; }, DPC_ERROR_INVALID_ARGUMENT, "models"},
         {"null model", [&](dpc_sampler_options &x) { x.models = none; }, DPC_ERROR_INVALID_ARGUMENT, "NULL"},
         {"gridded", [&](dpc_sampler_options &x) { x.models = gridded; }, DPC_ERROR_INVALID_ARGUMENT, "gridded"},
-        {"spp 0", [](dpc_sampler_options &x) { x.samples_per_pixel = 0; }, DPC_ERROR_INVALID_ARGUMENT, "samples_per_pixel"},
+        {"spp 0", [](dpc_sampler_options &x) { x.samples_per_pixel = 0; }, DPC_ERROR_INVALID_ARGUMENT,
+         "samples_per_pixel"},
         {"spp big", [](dpc_sampler_options &x) { x.samples_per_pixel = DPC_SAMPLER_MAX_SPP + 1; },
          DPC_ERROR_INVALID_ARGUMENT, "samples_per_pixel"},
         {"dims 0", [](dpc_sampler_options &x) { x.dimensions = 0; }, DPC_ERROR_INVALID_ARGUMENT, "dimensions"},
         {"dims big", [](dpc_sampler_options &x) { x.dimensions = DPC_SAMPLER_MAX_DIMENSIONS + 1; },
          DPC_ERROR_INVALID_ARGUMENT, "dimensions"},
-        {"tables too big", [](dpc_sampler_options &x) {
+        {"tables too big",
+         [](dpc_sampler_options &x) {
              x.samples_per_pixel = DPC_SAMPLER_MAX_SPP;
              x.dimensions = 1024;
-         }, DPC_ERROR_LIMIT, "2^24"},
+         },
+         DPC_ERROR_LIMIT, "2^24"},
     };
     for (const Case &c : cases) {
         dpc_sampler_options x = o;
@@ -137,7 +140,8 @@ TEST(SamplerLookup, ValuesLieInTheUnitIntervalAnywhere) {
 TEST(SamplerDeterminism, SameOptionsSameBitsWhateverTheModelsIsaOrThreads) {
     ModelPtr scalar = load(model_path("model_2d"), DPC_ISA_SCALAR, 1);
     ModelPtr best = load(model_path("model_2d"), DPC_ISA_AUTO, 4);
-    SamplerPtr a = make({scalar.get()}, 16, 4, 9), b = make({best.get()}, 16, 4, 9), c = make({scalar.get()}, 16, 4, 10);
+    SamplerPtr a = make({scalar.get()}, 16, 4, 9), b = make({best.get()}, 16, 4, 9),
+               c = make({scalar.get()}, 16, 4, 10);
     bool differs = false;
     for (uint32_t t = 0; t < 4; t++) {
         EXPECT_EQ(table_of(a.get(), t, 16), table_of(b.get(), t, 16)) << "table " << t;
@@ -234,7 +238,8 @@ TEST(SamplerThreads, ConcurrentLookupsMatchSerialOnes) {
     std::vector<float> serial(W * W * 32 * 2);
     for (uint32_t y = 0; y < W; y++)
         for (uint32_t x = 0; x < W; x++)
-            for (uint32_t i = 0; i < 32; i++) dpc_sampler_get_2d(s.get(), x, y, i, (x + i) % 8, &serial[((y * W + x) * 32 + i) * 2]);
+            for (uint32_t i = 0; i < 32; i++)
+                dpc_sampler_get_2d(s.get(), x, y, i, (x + i) % 8, &serial[((y * W + x) * 32 + i) * 2]);
     std::vector<std::vector<float>> got(8, std::vector<float>(serial.size()));
     std::vector<std::thread> threads;
     for (int t = 0; t < 8; t++)

@@ -25,8 +25,8 @@ namespace dpct {
 
 // The five committed test models (tests/data/make_models.py).
 inline const std::vector<std::string> &model_names() {
-    static const std::vector<std::string> names = {"model_2d", "model_3d_proj", "model_3d_mixed",
-                                                   "model_grid_3to1", "model_10d"};
+    static const std::vector<std::string> names = {"model_2d", "model_3d_proj", "model_3d_mixed", "model_grid_3to1",
+                                                   "model_10d"};
     return names;
 }
 
@@ -83,9 +83,7 @@ inline uint64_t mix64(uint64_t z) {
     z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
     return z ^ (z >> 31);
 }
-inline uint64_t stream_value(uint64_t seed, uint64_t c) {
-    return mix64(mix64(seed) + (c + 1) * 0x9E3779B97F4A7C15ull);
-}
+inline uint64_t stream_value(uint64_t seed, uint64_t c) { return mix64(mix64(seed) + (c + 1) * 0x9E3779B97F4A7C15ull); }
 inline float uniform_value(uint64_t seed, uint64_t c) {
     return (float)(stream_value(seed, c) >> 40) * (1.0f / 16777216.0f);
 }
@@ -99,7 +97,7 @@ inline double max_torus_diff(const std::vector<float> &a, const std::vector<floa
     double worst = a.size() == b.size() ? 0.0 : INFINITY;
     for (size_t i = 0; i < a.size() && i < b.size(); i++) {
         double d = torus_diff(a[i], b[i]);
-        if (!(d <= worst)) worst = d;  // NaN propagates as "worse"
+        if (!(d <= worst)) worst = d; // NaN propagates as "worse"
     }
     return worst;
 }
@@ -152,6 +150,6 @@ inline bool status_from_name(const std::string &name, dpc_status *out) {
     return false;
 }
 
-}  // namespace dpct
+} // namespace dpct
 
 #endif

@@ -23,7 +23,7 @@ using namespace dpct;
 
 namespace {
 
-constexpr double kParityTol = 1e-4;  // issue 6: Vulkan vs CPU, float32 on both sides
+constexpr double kParityTol = 1e-4; // issue 6: Vulkan vs CPU, float32 on both sides
 
 dpc_status load_with(const std::string &path, dpc_backend backend, dpc_model **out,
                      dpc_input input = DPC_INPUT_UNIFORM) {
@@ -67,12 +67,12 @@ ModelPtr load_vulkan(const std::string &path, std::string *skip) {
     return ModelPtr(m);
 }
 
-#define LOAD_VULKAN_OR_SKIP(var, path)                 \
-    std::string skip_##var;                            \
-    ModelPtr var = load_vulkan(path, &skip_##var);     \
-    if (!var && !skip_##var.empty()) {                 \
-        GTEST_SKIP() << skip_##var;                    \
-    }                                                  \
+#define LOAD_VULKAN_OR_SKIP(var, path)             \
+    std::string skip_##var;                        \
+    ModelPtr var = load_vulkan(path, &skip_##var); \
+    if (!var && !skip_##var.empty()) {             \
+        GTEST_SKIP() << skip_##var;                \
+    }                                              \
     ASSERT_TRUE(var)
 
 ModelPtr load_cpu(const std::string &path) {
@@ -131,7 +131,7 @@ class ScopedEnv {
     bool had_ = false;
 };
 
-}  // namespace
+} // namespace
 
 // ---- the backend choice (every build) --------------------------------------------------------
 
@@ -469,7 +469,7 @@ TEST(Vulkan, ModelsOnDifferentBackendsLiveSideBySide) {
     t3.join();
     EXPECT_EQ(x.size(), 1024u * 10u);
     EXPECT_LE(max_torus_diff(y, z), kParityTol);
-    b.reset();  // freeing one model leaves the others working
+    b.reset(); // freeing one model leaves the others working
     EXPECT_EQ(generate(a.get(), 1), x);
 }
 
@@ -480,8 +480,7 @@ TEST(Vulkan, StratifiedInputIsTheCpuBackendsToo) {
     ASSERT_EQ(load_with(model_path("model_2d"), DPC_BACKEND_VULKAN, &v, DPC_INPUT_STRATIFIED), DPC_OK)
         << dpc_last_error();
     ModelPtr vk(v);
-    ASSERT_EQ(load_with(model_path("model_2d"), DPC_BACKEND_CPU, &c, DPC_INPUT_STRATIFIED), DPC_OK)
-        << dpc_last_error();
+    ASSERT_EQ(load_with(model_path("model_2d"), DPC_BACKEND_CPU, &c, DPC_INPUT_STRATIFIED), DPC_OK) << dpc_last_error();
     ModelPtr cpu(c);
     for (size_t n : {1024u, 1500u}) {
         std::vector<float> x(n * 2);

@@ -25,16 +25,16 @@ int main(int argc, char **argv) {
     }
     double sum = 0.0;
     for (size_t i = 0; i < (size_t)info.n_points * info.dims; i++) sum += points[i];
-    printf("downstream: libdpc %s, %s: %u points in %u-D, mean coordinate %.3f, models in %s\n",
-           dpc_version_string(), dpc_model_name(model), info.n_points, info.dims,
-           sum / ((double)info.n_points * info.dims), dpc_model_dir());
+    printf("downstream: libdpc %s, %s: %u points in %u-D, mean coordinate %.3f, models in %s\n", dpc_version_string(),
+           dpc_model_name(model), info.n_points, info.dims, sum / ((double)info.n_points * info.dims), dpc_model_dir());
 #ifdef DPC_EXPECTED_MODEL_DIR
     /* the folder the CMake package says (DPC_MODEL_DIR) is the one libdpc searches */
     char *expected = realpath(DPC_EXPECTED_MODEL_DIR, NULL);
     const int same = expected && strcmp(expected, dpc_model_dir()) == 0;
     free(expected);
     if (!same) {
-        fprintf(stderr, "downstream: DPC_MODEL_DIR is %s, dpc_model_dir() %s\n", DPC_EXPECTED_MODEL_DIR, dpc_model_dir());
+        fprintf(stderr, "downstream: DPC_MODEL_DIR is %s, dpc_model_dir() %s\n", DPC_EXPECTED_MODEL_DIR,
+                dpc_model_dir());
         return 1;
     }
 #endif

@@ -12,9 +12,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define CHECK(cond)                                                                                \
-    do {                                                                                           \
-        if (!(cond)) __builtin_trap();                                                             \
+#define CHECK(cond)                    \
+    do {                               \
+        if (!(cond)) __builtin_trap(); \
     } while (0)
 
 /* Work bound for the generate step: points^2 * layers (keeps each input well under a second). */

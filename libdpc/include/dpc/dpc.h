@@ -120,11 +120,7 @@ DPC_API int dpc_isa_supported(dpc_isa isa);
  * concurrently. Vulkan failures are statuses with the VkResult named in dpc_last_error().
  * dpc_model_info's isa and threads describe the CPU backend, which a Vulkan-backed model does not
  * use for filtering. */
-typedef enum dpc_backend {
-    DPC_BACKEND_AUTO = 0,
-    DPC_BACKEND_CPU = 1,
-    DPC_BACKEND_VULKAN = 2
-} dpc_backend;
+typedef enum dpc_backend { DPC_BACKEND_AUTO = 0, DPC_BACKEND_CPU = 1, DPC_BACKEND_VULKAN = 2 } dpc_backend;
 
 /* The input points a model filters (docs/model-format.md §5).
  * - AUTO (default): the kind the model was trained on, from its metadata "dpc.input" ("uniform"
@@ -138,11 +134,7 @@ typedef enum dpc_backend {
  *   at the lowest frequencies grows with the point count (bnot-2d, 65,536 points: 1.36, white
  *   noise 1.0); from stratified input it stays near 0. Meant for blue-noise models; patterns
  *   that want low-frequency power (pink, green) lose it. Not for gridded models. */
-typedef enum dpc_input {
-    DPC_INPUT_AUTO = 0,
-    DPC_INPUT_UNIFORM = 1,
-    DPC_INPUT_STRATIFIED = 2
-} dpc_input;
+typedef enum dpc_input { DPC_INPUT_AUTO = 0, DPC_INPUT_UNIFORM = 1, DPC_INPUT_STRATIFIED = 2 } dpc_input;
 
 /* Options fixed at load time. Initialise with dpc_load_options_init(). */
 typedef struct dpc_load_options {
@@ -179,11 +171,10 @@ DPC_API void dpc_load_options_init(dpc_load_options *options);
 
 /* Load a model file. options may be NULL (defaults). On success *out_model is a new handle; on
  * failure it is set to NULL. */
-DPC_API dpc_status dpc_model_load_file(const char *path, const dpc_load_options *options,
-                                       dpc_model **out_model);
+DPC_API dpc_status dpc_model_load_file(const char *path, const dpc_load_options *options, dpc_model **out_model);
 /* Load a model from memory. The bytes are parsed and not retained after the call returns. */
-DPC_API dpc_status dpc_model_load_memory(const void *data, size_t size,
-                                         const dpc_load_options *options, dpc_model **out_model);
+DPC_API dpc_status dpc_model_load_memory(const void *data, size_t size, const dpc_load_options *options,
+                                         dpc_model **out_model);
 /* Release a model. NULL is a no-op. No call may use the model during or after this one. */
 DPC_API void dpc_model_free(dpc_model *model);
 
@@ -191,8 +182,7 @@ DPC_API void dpc_model_free(dpc_model *model);
  * environment variable DPC_MODEL_PATH (separated by ':'), then in dpc_model_dir(). A name is
  * 1 .. 255 characters of [A-Za-z0-9._-], not starting with '.' (so it never names a path).
  * DPC_ERROR_IO with the folders searched when no file is found. */
-DPC_API dpc_status dpc_model_load_named(const char *name, const dpc_load_options *options,
-                                        dpc_model **out_model);
+DPC_API dpc_status dpc_model_load_named(const char *name, const dpc_load_options *options, dpc_model **out_model);
 /* The folder `cmake --install` put the bundled models in: <prefix>/share/dpc/models found
  * beside the shared library (so a prefix given at install time, or a moved install, still
  * works), else the folder configured at build time (CMAKE_INSTALL_PREFIX: all a static libdpc
@@ -207,16 +197,16 @@ DPC_API const char *dpc_model_dir(void);
 #define DPC_MAX_DIMS 64
 
 typedef struct dpc_model_info {
-    uint32_t dims;         /* n: dimensions of each point */
-    uint32_t n_points;     /* m the model was trained for (dpc_generate's count) */
-    uint32_t layers;       /* filter layers in the cascade */
-    uint32_t grid_dims;    /* number of gridded (fixed) dimensions, 0 if none */
+    uint32_t dims;      /* n: dimensions of each point */
+    uint32_t n_points;  /* m the model was trained for (dpc_generate's count) */
+    uint32_t layers;    /* filter layers in the cascade */
+    uint32_t grid_dims; /* number of gridded (fixed) dimensions, 0 if none */
     /* For each gridded dimension g < grid_dims: its index and cell count. A gridded model always
      * generates exactly the product of grid_shape points. */
     uint32_t grid_axis[DPC_MAX_DIMS];
     uint32_t grid_shape[DPC_MAX_DIMS];
-    dpc_isa isa;           /* the ISA path this handle runs (never DPC_ISA_AUTO) */
-    uint32_t threads;      /* worker threads this handle uses (0 resolved to the CPU count) */
+    dpc_isa isa;      /* the ISA path this handle runs (never DPC_ISA_AUTO) */
+    uint32_t threads; /* worker threads this handle uses (0 resolved to the CPU count) */
 } dpc_model_info;
 
 DPC_API dpc_status dpc_model_get_info(const dpc_model *model, dpc_model_info *out_info);
@@ -264,16 +254,14 @@ DPC_API dpc_status dpc_generate_n(const dpc_model *model, uint64_t seed, size_t 
 
 /* Generate count independent sets into out (count * n_points * dims floats): set c is exactly
  * dpc_generate_n(model, seed + c, n_points, ...) (seed arithmetic wraps modulo 2^64). */
-DPC_API dpc_status dpc_generate_batch(const dpc_model *model, uint64_t seed, size_t count,
-                                      size_t n_points, float *out);
+DPC_API dpc_status dpc_generate_batch(const dpc_model *model, uint64_t seed, size_t count, size_t n_points, float *out);
 
 /* Check a request as dpc_generate_batch(model, seed, count, n_points, out) would, without doing
  * it: the same status and message for a bad count (DPC_ERROR_LIMIT beyond DPC_MAX_POINTS, 2^28
  * floats per set, the model's max_neighbours or size_t; DPC_ERROR_INVALID_ARGUMENT for a
  * gridded model's wrong count or count = 0), and on success the floats out needs,
  * count * n_points * dims. For hosts that allocate out themselves (the Python binding). */
-DPC_API dpc_status dpc_generate_size(const dpc_model *model, size_t count, size_t n_points,
-                                     size_t *out_floats);
+DPC_API dpc_status dpc_generate_size(const dpc_model *model, size_t count, size_t n_points, size_t *out_floats);
 
 /* Progress and cancellation of a long call. libdpc calls progress(user, done, total) as work
  * goes on: total = count * layers units, one per layer of each set. It is called before and
@@ -443,22 +431,21 @@ DPC_API void dpc_layer_options_init(dpc_layer_options *options);
  * values, row t = subspace t (in units of h_t). y may be x (in place); otherwise the buffers must
  * not overlap. options may be NULL (defaults). */
 DPC_API dpc_status dpc_layer_forward_ex(const dpc_layer_desc *layer, const double *kernels, size_t count,
-                                        size_t n_points, const double *x, double *y,
-                                        const dpc_layer_options *options);
+                                        size_t n_points, const double *x, double *y, const dpc_layer_options *options);
 
 /* Gradients of a scalar loss L given grad_y = dL/dy (same shape as x, finite): grad_x = dL/dx
  * (same shape; may be grad_y) and grad_kernels = dL/dkernels (s * b, overwritten, summed over the
  * count sets in set order). Other outputs must not overlap the inputs. options may be NULL. */
 DPC_API dpc_status dpc_layer_backward_ex(const dpc_layer_desc *layer, const double *kernels, size_t count,
-                                         size_t n_points, const double *x, const double *grad_y,
-                                         double *grad_x, double *grad_kernels, const dpc_layer_options *options);
+                                         size_t n_points, const double *x, const double *grad_y, double *grad_x,
+                                         double *grad_kernels, const dpc_layer_options *options);
 
 /* dpc_layer_forward_ex / _backward_ex with options {threads, DPC_ISA_AUTO}. */
-DPC_API dpc_status dpc_layer_forward(const dpc_layer_desc *layer, const double *kernels, size_t count,
-                                     size_t n_points, const double *x, double *y, uint32_t threads);
-DPC_API dpc_status dpc_layer_backward(const dpc_layer_desc *layer, const double *kernels, size_t count,
-                                      size_t n_points, const double *x, const double *grad_y,
-                                      double *grad_x, double *grad_kernels, uint32_t threads);
+DPC_API dpc_status dpc_layer_forward(const dpc_layer_desc *layer, const double *kernels, size_t count, size_t n_points,
+                                     const double *x, double *y, uint32_t threads);
+DPC_API dpc_status dpc_layer_backward(const dpc_layer_desc *layer, const double *kernels, size_t count, size_t n_points,
+                                      const double *x, const double *grad_y, double *grad_x, double *grad_kernels,
+                                      uint32_t threads);
 
 #ifdef __cplusplus
 }

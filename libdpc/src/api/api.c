@@ -78,8 +78,7 @@ static dpc_status choose_input(dpc_model *model, dpc_input requested) {
         const char *v = dpc_cascade_meta(c, "dpc.input");
         if (!v || strcmp(v, "uniform") == 0) input = DPC_INPUT_UNIFORM;
         else if (strcmp(v, "stratified") == 0) input = DPC_INPUT_STRATIFIED;
-        else
-            return dpc_fail(DPC_ERROR_FORMAT, "metadata dpc.input is \"%.64s\": \"uniform\" or \"stratified\"", v);
+        else return dpc_fail(DPC_ERROR_FORMAT, "metadata dpc.input is \"%.64s\": \"uniform\" or \"stratified\"", v);
     }
     if (input == DPC_INPUT_STRATIFIED && c->grid_dims) /* the file's fault, or the caller's */
         return requested == DPC_INPUT_AUTO
@@ -255,7 +254,8 @@ static void find_model_dir(void) {
             if (n < 0 || (size_t)n >= sizeof buf || !is_dir(buf)) buf[0] = '\0';
         }
     }
-    if (!buf[0] && DPC_MODEL_DIR[0] && strlen(DPC_MODEL_DIR) < sizeof buf) snprintf(buf, sizeof buf, "%s", DPC_MODEL_DIR);
+    if (!buf[0] && DPC_MODEL_DIR[0] && strlen(DPC_MODEL_DIR) < sizeof buf)
+        snprintf(buf, sizeof buf, "%s", DPC_MODEL_DIR);
     char *real = buf[0] ? realpath(buf, NULL) : NULL;
     snprintf(model_dir, sizeof model_dir, "%s", real && strlen(real) < sizeof model_dir ? real : buf);
     free(real);
@@ -282,8 +282,8 @@ dpc_status dpc_model_load_named(const char *name, const dpc_load_options *option
     if (!name) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "name is NULL");
     const size_t len = strlen(name);
     if (len == 0 || len > 255 || name[0] == '.')
-        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "model name '%.300s' must be 1 .. 255 characters, not starting with '.'",
-                        name);
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
+                        "model name '%.300s' must be 1 .. 255 characters, not starting with '.'", name);
     for (size_t i = 0; i < len; i++) {
         const char ch = name[i];
         if (!((ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') || (ch >= '0' && ch <= '9') || ch == '-' ||
@@ -306,8 +306,8 @@ dpc_status dpc_model_load_named(const char *name, const dpc_load_options *option
     }
     const char *dir = dpc_model_dir();
     if (named_file(dir, strlen(dir), name, path, sizeof path)) return dpc_model_load_file(path, options, out_model);
-    return dpc_fail(DPC_ERROR_IO, "no model named '%s': no file %s.onnx in DPC_MODEL_PATH (%.1000s) or in %s", name, name,
-                    env ? env : "unset", dir[0] ? dir : "(this build installs no models)");
+    return dpc_fail(DPC_ERROR_IO, "no model named '%s': no file %s.onnx in DPC_MODEL_PATH (%.1000s) or in %s", name,
+                    name, env ? env : "unset", dir[0] ? dir : "(this build installs no models)");
 }
 
 void dpc_model_free(dpc_model *model) {
@@ -381,8 +381,7 @@ const char *dpc_model_metadata(const dpc_model *model, const char *key) {
 
 size_t dpc_model_metadata_count(const dpc_model *model) { return model ? model->cascade.n_meta : 0; }
 
-dpc_status dpc_model_metadata_at(const dpc_model *model, size_t index, const char **out_key,
-                                 const char **out_value) {
+dpc_status dpc_model_metadata_at(const dpc_model *model, size_t index, const char **out_key, const char **out_value) {
     dpc_clear_error();
     if (!model || !out_key || !out_value) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "NULL argument");
     if (index >= model->cascade.n_meta)
@@ -432,7 +431,8 @@ static double model_max_radius(const dpc_cascade *c) {
 static dpc_status check_count(const dpc_model *model, size_t *n_points) {
     const dpc_cascade *c = &model->cascade;
     size_t m = *n_points ? *n_points : c->n_points;
-    if (m > DPC_MAX_POINTS) return dpc_fail(DPC_ERROR_LIMIT, "%zu points requested, at most %u per set", m, DPC_MAX_POINTS);
+    if (m > DPC_MAX_POINTS)
+        return dpc_fail(DPC_ERROR_LIMIT, "%zu points requested, at most %u per set", m, DPC_MAX_POINTS);
     if ((unsigned long long)m * c->dims > MAX_FLOATS_PER_SET)
         return dpc_fail(DPC_ERROR_LIMIT, "%zu points x %u dims exceeds 2^28 floats per set", m, c->dims);
     if (c->grid_dims && m != c->n_points)
@@ -476,9 +476,7 @@ static dpc_status progress_add(progress *p, uint64_t units) {
 /* The CPU engine's hook (cpu_cascade.h): before each set and between chunks of points inside a
  * long layer (a poll, so that a cancel is seen within a layer), and after each layer (one unit
  * of progress). */
-static dpc_status engine_hook(void *ctx, int layer_done) {
-    return progress_add((progress *)ctx, layer_done ? 1u : 0u);
-}
+static dpc_status engine_hook(void *ctx, int layer_done) { return progress_add((progress *)ctx, layer_done ? 1u : 0u); }
 
 dpc_status dpc_model_generate_cpu(const dpc_model *model, uint64_t seed, size_t m, float *out) {
     dpc_cpu_engine one;
@@ -629,8 +627,8 @@ dpc_status dpc_filter(const dpc_model *model, size_t n_points, float *points) {
 /* ---- training support: one filter layer in float64 ----------------------------------------- */
 
 /* Every check of the layer description and the shared inputs; fills *out for the kernels. */
-static dpc_status check_layer_call(const dpc_layer_desc *layer, const double *kernels, size_t count,
-                                   size_t n_points, const double *x, dpc_train_layer *out) {
+static dpc_status check_layer_call(const dpc_layer_desc *layer, const double *kernels, size_t count, size_t n_points,
+                                   const double *x, dpc_train_layer *out) {
     if (!layer) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "layer is NULL");
     if (!kernels || !x) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "kernels or x is NULL");
     const uint32_t n = layer->dims, s = layer->n_subspaces, b = layer->bins;
@@ -662,8 +660,7 @@ static dpc_status check_layer_call(const dpc_layer_desc *layer, const double *ke
     if (layer->fixed & ~all)
         return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "fixed mask 0x%llx uses dimensions >= %u",
                         (unsigned long long)layer->fixed, n);
-    if (count == 0 || n_points == 0)
-        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "count and n_points must be positive");
+    if (count == 0 || n_points == 0) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "count and n_points must be positive");
     if (n_points > DPC_MAX_POINTS)
         return dpc_fail(DPC_ERROR_LIMIT, "%zu points per set, at most %u", n_points, DPC_MAX_POINTS);
     if ((unsigned long long)n_points * n > MAX_FLOATS_PER_SET)

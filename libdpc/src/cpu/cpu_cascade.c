@@ -42,10 +42,10 @@ typedef struct workspace {
      * the caller's index of working point i; x_tmp / order_tmp are the reorder targets. */
     float *x, *x_tmp;
     uint32_t *order, *order_tmp, *cell_tmp;
-    float *gather; /* per worker: 4 columns of DPC_GATHER_STRIDE floats (kernel scratch) */
+    float *gather;     /* per worker: 4 columns of DPC_GATHER_STRIDE floats (kernel scratch) */
     dpc_cpu_hook hook; /* NULL: never stopped */
     void *hook_ctx;
-    _Atomic int stop;  /* the status a hook returned (DPC_OK: go on); read by every worker */
+    _Atomic int stop; /* the status a hook returned (DPC_OK: go on); read by every worker */
 } workspace;
 
 /* Ask the hook (inside a layer: layer_done = 0); whether to stop. */
@@ -92,8 +92,8 @@ static dpc_status workspace_init(workspace *w, size_t m, size_t n, unsigned thre
     w->order_tmp = (uint32_t *)malloc(m * sizeof(uint32_t));
     w->cell_tmp = (uint32_t *)malloc(m * sizeof(uint32_t));
     w->gather = (float *)malloc((size_t)threads * 4 * DPC_GATHER_STRIDE * sizeof(float));
-    if (!w->gather || !w->cell_tmp || !w->delta || !w->soa || !w->perm || !w->cell_of || !w->cell_start || !w->x || !w->x_tmp ||
-        !w->order || !w->order_tmp) {
+    if (!w->gather || !w->cell_tmp || !w->delta || !w->soa || !w->perm || !w->cell_of || !w->cell_start || !w->x ||
+        !w->x_tmp || !w->order || !w->order_tmp) {
         workspace_free(w);
         return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory for a %zu x %zu point set", m, n);
     }
@@ -281,8 +281,8 @@ dpc_status dpc_cpu_filter(const dpc_cascade *c, const dpc_cpu_engine *e, size_t 
     return dpc_cpu_filter_hooked(c, e, m, x, NULL, NULL);
 }
 
-dpc_status dpc_cpu_filter_hooked(const dpc_cascade *c, const dpc_cpu_engine *e, size_t m, float *x,
-                                 dpc_cpu_hook hook, void *ctx) {
+dpc_status dpc_cpu_filter_hooked(const dpc_cascade *c, const dpc_cpu_engine *e, size_t m, float *x, dpc_cpu_hook hook,
+                                 void *ctx) {
     workspace ws;
     dpc_status st = workspace_init(&ws, m, c->dims, e->threads);
     if (st != DPC_OK) return st;
@@ -307,8 +307,8 @@ dpc_status dpc_cpu_filter_hooked(const dpc_cascade *c, const dpc_cpu_engine *e, 
 
 /* ---- whole sets: input points, then the cascade; batches fanned out over threads ------------ */
 
-static dpc_status generate_one(const dpc_cascade *c, dpc_input input, const dpc_cpu_engine *e, uint64_t seed,
-                               size_t m, float *out, dpc_cpu_hook hook, void *ctx) {
+static dpc_status generate_one(const dpc_cascade *c, dpc_input input, const dpc_cpu_engine *e, uint64_t seed, size_t m,
+                               float *out, dpc_cpu_hook hook, void *ctx) {
     if (hook && hook(ctx, 0) != DPC_OK) return DPC_ERROR_CANCELLED;
     dpc_input_fill(c, input, seed, m, out);
     return dpc_cpu_filter_hooked(c, e, m, out, hook, ctx);
@@ -337,8 +337,8 @@ static void batch_worker(void *arg, unsigned slot) {
     j->status[slot] = st;
 }
 
-dpc_status dpc_cpu_generate(const dpc_cascade *c, dpc_input input, const dpc_cpu_engine *e, uint64_t seed,
-                            size_t count, size_t m, float *out, dpc_cpu_hook hook, void *ctx) {
+dpc_status dpc_cpu_generate(const dpc_cascade *c, dpc_input input, const dpc_cpu_engine *e, uint64_t seed, size_t count,
+                            size_t m, float *out, dpc_cpu_hook hook, void *ctx) {
     const size_t stride = m * c->dims;
     unsigned threads = e->threads;
     if (threads > count) threads = (unsigned)count;
@@ -356,7 +356,8 @@ dpc_status dpc_cpu_generate(const dpc_cascade *c, dpc_input input, const dpc_cpu
     j.engine.threads = 1;
     dpc_run_workers(threads, batch_worker, &j);
     for (unsigned t = 0; t < threads; t++)
-        if (j.status[t] == DPC_ERROR_CANCELLED) return dpc_fail(DPC_ERROR_CANCELLED, "cancelled by the progress callback");
+        if (j.status[t] == DPC_ERROR_CANCELLED)
+            return dpc_fail(DPC_ERROR_CANCELLED, "cancelled by the progress callback");
     for (unsigned t = 0; t < threads; t++)
         if (j.status[t] != DPC_OK)
             return dpc_fail(j.status[t], "generating a set of the batch failed (%s)", dpc_status_string(j.status[t]));

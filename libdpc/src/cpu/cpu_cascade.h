@@ -33,8 +33,8 @@ dpc_status dpc_cpu_filter(const dpc_cascade *c, const dpc_cpu_engine *e, size_t 
  * dpc_cpu_filter. */
 typedef dpc_status (*dpc_cpu_hook)(void *ctx, int layer_done);
 #define DPC_CPU_POLL_POINTS 16384u
-dpc_status dpc_cpu_filter_hooked(const dpc_cascade *c, const dpc_cpu_engine *e, size_t m, float *x,
-                                 dpc_cpu_hook hook, void *ctx);
+dpc_status dpc_cpu_filter_hooked(const dpc_cascade *c, const dpc_cpu_engine *e, size_t m, float *x, dpc_cpu_hook hook,
+                                 void *ctx);
 
 /* count sets of m points (m already checked): set s is the input points of seed + s (kind
  * `input`, model/input.h) filtered through the cascade, at out + s * m * dims. With several
@@ -42,7 +42,7 @@ dpc_status dpc_cpu_filter_hooked(const dpc_cascade *c, const dpc_cpu_engine *e, 
  * each); otherwise sets run in order, each using the engine's threads. The bits are the same
  * either way. hook (or NULL) is also called (layer_done = 0) before each set; when it stops the
  * run the result is DPC_ERROR_CANCELLED with a message. */
-dpc_status dpc_cpu_generate(const dpc_cascade *c, dpc_input input, const dpc_cpu_engine *e, uint64_t seed,
-                            size_t count, size_t m, float *out, dpc_cpu_hook hook, void *ctx);
+dpc_status dpc_cpu_generate(const dpc_cascade *c, dpc_input input, const dpc_cpu_engine *e, uint64_t seed, size_t count,
+                            size_t m, float *out, dpc_cpu_hook hook, void *ctx);
 
 #endif

@@ -52,8 +52,9 @@ dpc_status dpc_cpu_resolve_isa(dpc_isa isa, dpc_isa *out) {
             if (strcmp(env, "scalar") == 0) isa = DPC_ISA_SCALAR;
             else if (strcmp(env, "avx2") == 0) isa = DPC_ISA_AVX2;
             else if (strcmp(env, "avx512") == 0) isa = DPC_ISA_AVX512;
-            else return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
-                                 "environment variable DPC_ISA='%.32s': use auto, scalar, avx2 or avx512", env);
+            else
+                return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
+                                "environment variable DPC_ISA='%.32s': use auto, scalar, avx2 or avx512", env);
         } else {
             isa = cpu_has_avx512() ? DPC_ISA_AVX512 : cpu_has_avx2_fma() ? DPC_ISA_AVX2 : DPC_ISA_SCALAR;
         }
@@ -62,22 +63,19 @@ dpc_status dpc_cpu_resolve_isa(dpc_isa isa, dpc_isa *out) {
     case DPC_ISA_SCALAR: break;
     case DPC_ISA_AVX2:
 #if defined(DPC_HAVE_AVX2)
-        if (!cpu_has_avx2_fma())
-            return dpc_fail(DPC_ERROR_UNSUPPORTED, "the AVX2 path needs a CPU with AVX2 and FMA");
+        if (!cpu_has_avx2_fma()) return dpc_fail(DPC_ERROR_UNSUPPORTED, "the AVX2 path needs a CPU with AVX2 and FMA");
         break;
 #else
         return dpc_fail(DPC_ERROR_UNSUPPORTED, "this libdpc was built without the AVX2 path");
 #endif
     case DPC_ISA_AVX512:
 #if defined(DPC_HAVE_AVX2)
-        if (!cpu_has_avx512())
-            return dpc_fail(DPC_ERROR_UNSUPPORTED, "the AVX-512 path needs a CPU with AVX-512F");
+        if (!cpu_has_avx512()) return dpc_fail(DPC_ERROR_UNSUPPORTED, "the AVX-512 path needs a CPU with AVX-512F");
         break;
 #else
         return dpc_fail(DPC_ERROR_UNSUPPORTED, "this libdpc was built without the AVX-512 path");
 #endif
-    default:
-        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "unknown ISA %d", (int)isa);
+    default: return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "unknown ISA %d", (int)isa);
     }
     *out = isa;
     return DPC_OK;

@@ -11,8 +11,7 @@
 /* Stable counting sort of m points by their cell ids cell_of[i] < cells: perm[s] is the point at
  * sorted position s, start[c] the first sorted position of cell c (start has cells + 1 entries,
  * start[cells] = m). Points keep their index order within a cell, so the result is fixed. */
-static inline void dpc_grid_sort(const uint32_t *cell_of, size_t m, size_t cells, uint32_t *start,
-                                 uint32_t *perm) {
+static inline void dpc_grid_sort(const uint32_t *cell_of, size_t m, size_t cells, uint32_t *start, uint32_t *perm) {
     memset(start, 0, (cells + 1) * sizeof(uint32_t));
     for (size_t i = 0; i < m; i++) start[cell_of[i] + 1]++;
     for (size_t c = 0; c < cells; c++) start[c + 1] += start[c];
@@ -26,8 +25,8 @@ static inline void dpc_grid_sort(const uint32_t *cell_of, size_t m, size_t cells
  * (2R+1)^(k-1) rows of 2R+1 cells around it, in a fixed order. start[c] is the first sorted
  * index of cell c. Needs 2R+1 <= G (each row wraps at most once) and k <= 8; ranges has room
  * for 2 (2R+1)^(k-1) pairs. Returns the number of non-empty ranges written. */
-static inline unsigned dpc_grid_ranges(unsigned k, uint32_t G_, uint32_t R_, const uint32_t *start,
-                                       uint32_t id, uint32_t *ranges) {
+static inline unsigned dpc_grid_ranges(unsigned k, uint32_t G_, uint32_t R_, const uint32_t *start, uint32_t id,
+                                       uint32_t *ranges) {
     const int32_t G = (int32_t)G_, R = (int32_t)R_;
     int32_t c[8], off[8];
     for (unsigned q = 0; q < k; q++) {

@@ -35,8 +35,10 @@ static inline vf lookup8(const table_regs *T, vi bv) {
     if (!T->small) return (vf)_mm256_i32gather_ps(T->w, b, 4);
     const __m256 bit3 = _mm256_castsi256_ps(_mm256_slli_epi32(b, 28));
     const __m256 bit4 = _mm256_castsi256_ps(_mm256_slli_epi32(b, 27));
-    const __m256 lo = _mm256_blendv_ps(_mm256_permutevar8x32_ps(T->t[0], b), _mm256_permutevar8x32_ps(T->t[1], b), bit3);
-    const __m256 hi = _mm256_blendv_ps(_mm256_permutevar8x32_ps(T->t[2], b), _mm256_permutevar8x32_ps(T->t[3], b), bit3);
+    const __m256 lo =
+        _mm256_blendv_ps(_mm256_permutevar8x32_ps(T->t[0], b), _mm256_permutevar8x32_ps(T->t[1], b), bit3);
+    const __m256 hi =
+        _mm256_blendv_ps(_mm256_permutevar8x32_ps(T->t[2], b), _mm256_permutevar8x32_ps(T->t[3], b), bit3);
     return (vf)_mm256_blendv_ps(lo, hi, bit4);
 }
 

@@ -152,30 +152,30 @@ static inline uint32_t next_chunk(run *rn, const dpc_sub_job *job, unsigned k, f
     return got;
 }
 
-#define SETUP                                                                                          \
-    const vf cut2 = vsplat(job->cutoff * job->cutoff), rad2 = vsplat(job->radius * job->radius);      \
-    const vf scale = vsplat(job->scale), umax = vsplat(job->umax);                                     \
-    const vi qmax = visplat(job->qmax);                                                                \
-    table_regs w_t, dw_t;                                                                              \
-    LOAD_TABLE(&w_t, job->w, job->qmax + 2);                                                           \
+#define SETUP                                                                                    \
+    const vf cut2 = vsplat(job->cutoff * job->cutoff), rad2 = vsplat(job->radius * job->radius); \
+    const vf scale = vsplat(job->scale), umax = vsplat(job->umax);                               \
+    const vi qmax = visplat(job->qmax);                                                          \
+    table_regs w_t, dw_t;                                                                        \
+    LOAD_TABLE(&w_t, job->w, job->qmax + 2);                                                     \
     LOAD_TABLE(&dw_t, job->dw, job->qmax + 2);
 
 /* The terms of one vector of candidates for the query lanes of suffix S, from d2 = |delta|^2:
  * the window eps < d < r tested on squares (cut2 < d2 < rad2, both squared in float), then
  * coef = g(d) / d and a += coef * delta for every dimension (ACC). A vector with no lane in the
  * window is skipped: it would add +0 to every sum, which leaves the sums' bits as they are. */
-#define TERM_ACC(S, ACC)                                                                               \
-    {                                                                                                  \
-        const vi in##S = load & (d2##S > cut2) & (d2##S < rad2);                                       \
-        if (VANY(in##S)) {                                                                             \
-            const vf y##S = vrsqrt(d2##S);                                                             \
-            const vf u##S = VMIN(vsqrt(d2##S, y##S) * scale, umax);                                    \
-            const vi b##S = VIMIN(__builtin_convertvector(u##S, vi), qmax);                            \
-            const vf f##S = u##S - __builtin_convertvector(b##S, vf);                                  \
-            const vf g##S = FMA(f##S, LOOKUP(&dw_t, b##S), LOOKUP(&w_t, b##S));                        \
-            const vf coef##S = vselect(in##S, g##S * y##S, vsplat(0.0f));                              \
-            ACC                                                                                        \
-        }                                                                                              \
+#define TERM_ACC(S, ACC)                                                        \
+    {                                                                           \
+        const vi in##S = load & (d2##S > cut2) & (d2##S < rad2);                \
+        if (VANY(in##S)) {                                                      \
+            const vf y##S = vrsqrt(d2##S);                                      \
+            const vf u##S = VMIN(vsqrt(d2##S, y##S) * scale, umax);             \
+            const vi b##S = VIMIN(__builtin_convertvector(u##S, vi), qmax);     \
+            const vf f##S = u##S - __builtin_convertvector(b##S, vf);           \
+            const vf g##S = FMA(f##S, LOOKUP(&dw_t, b##S), LOOKUP(&w_t, b##S)); \
+            const vf coef##S = vselect(in##S, g##S * y##S, vsplat(0.0f));       \
+            ACC                                                                 \
+        }                                                                       \
     }
 
 /* Small subspaces (K <= 4): every per-dimension value its own variable. Each vector of lanes
@@ -186,68 +186,70 @@ static inline uint32_t next_chunk(run *rn, const dpc_sub_job *job, unsigned k, f
 #define DIMS_3(X) X(0) X(1) X(2)
 #define DIMS_4(X) X(0) X(1) X(2) X(3)
 #define LOADC(q) const vf c##q = vload8(cols[q] + j);
-#define DIFF(S, q)                                                                                     \
-    const vf t##S##q = vwrap(c##q - x##S##q);                                                          \
+#define DIFF(S, q)                            \
+    const vf t##S##q = vwrap(c##q - x##S##q); \
     d2##S = FMA(t##S##q, t##S##q, d2##S);
 #define ACC(S, q) a##S##q = FMA(coef##S, t##S##q, a##S##q);
 #define DIFF_A(q) DIFF(A, q)
 #define DIFF_B(q) DIFF(B, q)
 #define ACC_A(q) ACC(A, q)
 #define ACC_B(q) ACC(B, q)
-#define STEP(S, DIMS)                                                                                  \
-    {                                                                                                  \
-        vf d2##S = vsplat(0.0f);                                                                       \
-        DIMS(DIFF_##S)                                                                                 \
-        TERM_ACC(S, DIMS(ACC_##S))                                                                     \
+#define STEP(S, DIMS)              \
+    {                              \
+        vf d2##S = vsplat(0.0f);   \
+        DIMS(DIFF_##S)             \
+        TERM_ACC(S, DIMS(ACC_##S)) \
     }
-#define LOOP(DIMS, STEPS)                                                                              \
-    {                                                                                                  \
-        run rn = {ranges, n_ranges, 0, 0};                                                             \
-        const float *cols[4];                                                                          \
-        uint32_t first, len;                                                                           \
-        while ((len = next_chunk(&rn, job, kdim, scratch, cols, &first)) != 0) {                       \
-            for (uint32_t o = 0; o < len; o += CANON) {                                                \
-                const uint32_t j = first + o;                                                          \
-                const vi load = vlanes_below(len - o);                                                 \
-                DIMS(LOADC)                                                                            \
-                STEPS                                                                                  \
-            }                                                                                          \
-        }                                                                                              \
+#define LOOP(DIMS, STEPS)                                                        \
+    {                                                                            \
+        run rn = {ranges, n_ranges, 0, 0};                                       \
+        const float *cols[4];                                                    \
+        uint32_t first, len;                                                     \
+        while ((len = next_chunk(&rn, job, kdim, scratch, cols, &first)) != 0) { \
+            for (uint32_t o = 0; o < len; o += CANON) {                          \
+                const uint32_t j = first + o;                                    \
+                const vi load = vlanes_below(len - o);                           \
+                DIMS(LOADC)                                                      \
+                STEPS                                                            \
+            }                                                                    \
+        }                                                                        \
     }
 #define QPV (VW / CANON) /* query points per vector */
-#ifndef PAIRS /* run two vectors of query points side by side (more work in flight, more registers) */
+#ifndef PAIRS            /* run two vectors of query points side by side (more work in flight, more registers) */
 #define PAIRS 1
 #endif
-#define DECL(S, q, P) const vf x##S##q = vpair(xs[(P) * kdim + q], xs[((P) + QPV - 1) * kdim + q]); vf a##S##q = vsplat(0.0f);
+#define DECL(S, q, P)                                                           \
+    const vf x##S##q = vpair(xs[(P)*kdim + q], xs[((P) + QPV - 1) * kdim + q]); \
+    vf a##S##q = vsplat(0.0f);
 #define DECL_A2(q) DECL(A, q, p)
 #define DECL_B2(q) DECL(B, q, p + QPV)
 #define DECL_A1(q) DECL(A, q, p)
-#define FIN(S, q, P, HALVES) for (int h = 0; h < (HALVES); h++) accs[((P) + h) * kdim + q] = vreduce(a##S##q, h);
+#define FIN(S, q, P, HALVES) \
+    for (int h = 0; h < (HALVES); h++) accs[((P) + h) * kdim + q] = vreduce(a##S##q, h);
 #define FIN_A2(q) FIN(A, q, p, QPV)
 #define FIN_B2(q) FIN(B, q, p + QPV, QPV)
 
-#define SMALL_KERNEL(NAME, K, DIMS)                                                                    \
-    static void NAME(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,  \
-                     unsigned n_ranges, float *accs, float *scratch) {                                 \
-        SETUP                                                                                          \
-        const unsigned kdim = K;                                                                       \
-        unsigned p = 0;                                                                                \
-        for (; PAIRS && p + 2 * QPV <= count; p += 2 * QPV) { /* two vectors side by side */           \
-            DIMS(DECL_A2) DIMS(DECL_B2)                                                                \
-            LOOP(DIMS, STEP(A, DIMS) STEP(B, DIMS))                                                    \
-            DIMS(FIN_A2) DIMS(FIN_B2)                                                                  \
-        }                                                                                              \
-        for (; p < count; p += QPV) { /* the rest, one vector at a time */                             \
-            const unsigned here = count - p < QPV ? count - p : QPV;                                   \
-            DIMS(DECL_LAST)                                                                            \
-            LOOP(DIMS, STEP(A, DIMS))                                                                  \
-            DIMS(FIN_LAST)                                                                             \
-        }                                                                                              \
+#define SMALL_KERNEL(NAME, K, DIMS)                                                                       \
+    static void NAME(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,     \
+                     unsigned n_ranges, float *accs, float *scratch) {                                    \
+        SETUP                                                                                             \
+        const unsigned kdim = K;                                                                          \
+        unsigned p = 0;                                                                                   \
+        for (; PAIRS && p + 2 * QPV <= count; p += 2 * QPV) { /* two vectors side by side */              \
+            DIMS(DECL_A2) DIMS(DECL_B2) LOOP(DIMS, STEP(A, DIMS) STEP(B, DIMS)) DIMS(FIN_A2) DIMS(FIN_B2) \
+        }                                                                                                 \
+        for (; p < count; p += QPV) { /* the rest, one vector at a time */                                \
+            const unsigned here = count - p < QPV ? count - p : QPV;                                      \
+            DIMS(DECL_LAST)                                                                               \
+            LOOP(DIMS, STEP(A, DIMS))                                                                     \
+            DIMS(FIN_LAST)                                                                                \
+        }                                                                                                 \
     }
-#define DECL_LAST(q)                                                                                   \
-    const vf xA##q = vpair(xs[p * kdim + q], xs[(p + here - 1) * kdim + q]);                           \
+#define DECL_LAST(q)                                                         \
+    const vf xA##q = vpair(xs[p * kdim + q], xs[(p + here - 1) * kdim + q]); \
     vf aA##q = vsplat(0.0f);
-#define FIN_LAST(q) for (unsigned h = 0; h < here; h++) accs[(p + h) * kdim + q] = vreduce(aA##q, (int)h);
+#define FIN_LAST(q) \
+    for (unsigned h = 0; h < here; h++) accs[(p + h) * kdim + q] = vreduce(aA##q, (int)h);
 
 SMALL_KERNEL(kernel_1, 1, DIMS_1)
 SMALL_KERNEL(kernel_2, 2, DIMS_2)
@@ -256,8 +258,8 @@ SMALL_KERNEL(kernel_4, 4, DIMS_4)
 
 /* Any subspace size: per-dimension values in arrays. Large subspaces run all pairs (one range,
  * read in place), so there is nothing to concatenate. */
-static void kernel_n(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
-                     unsigned n_ranges, float *accs, float *scratch) {
+static void kernel_n(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges, unsigned n_ranges,
+                     float *accs, float *scratch) {
     SETUP
     const unsigned k = job->k;
     vf x[DPC_MAX_DIMS], a[DPC_MAX_DIMS], t[DPC_MAX_DIMS];

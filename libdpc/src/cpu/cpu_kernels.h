@@ -12,17 +12,17 @@
 #include "dpc/dpc.h"
 
 typedef struct dpc_sub_job {
-    unsigned k;                        /* dimensions in the subspace */
+    unsigned k; /* dimensions in the subspace */
     /* coord[q][j]: dimension q of candidate j. Each column is readable (and finite) for 16 floats
      * past any range end, so SIMD kernels load whole vectors and mask the extra lanes. */
     const float *coord[DPC_MAX_DIMS];
-    float radius;                      /* r_t (absolute) */
-    float cutoff;                      /* e_t (absolute) */
-    float scale;                       /* (b - 1) / r_t */
-    float umax;                        /* b - 1 */
-    int32_t qmax;                      /* b - 2 */
-    const float *w;                    /* kernel table, b values */
-    const float *dw;                   /* w[q+1] - w[q] */
+    float radius;    /* r_t (absolute) */
+    float cutoff;    /* e_t (absolute) */
+    float scale;     /* (b - 1) / r_t */
+    float umax;      /* b - 1 */
+    int32_t qmax;    /* b - 2 */
+    const float *w;  /* kernel table, b values */
+    const float *dw; /* w[q+1] - w[q] */
 } dpc_sub_job;
 
 /* Sums for `count` query points that share the candidate ranges (the points of one cell, or a
@@ -34,8 +34,8 @@ typedef struct dpc_sub_job {
 #define DPC_BLOCK_MAX 64u
 #define DPC_GATHER_CAP 4096u
 #define DPC_GATHER_STRIDE (DPC_GATHER_CAP + 32u)
-typedef void (*dpc_block_fn)(const dpc_sub_job *job, const float *xs, unsigned count,
-                             const uint32_t *ranges, unsigned n_ranges, float *acc, float *scratch);
+typedef void (*dpc_block_fn)(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
+                             unsigned n_ranges, float *acc, float *scratch);
 
 void dpc_block_scalar(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
                       unsigned n_ranges, float *acc, float *scratch);
@@ -45,8 +45,8 @@ void dpc_block_packed16(const dpc_sub_job *job, const float *xs, unsigned count,
 #if defined(DPC_HAVE_AVX2)
 void dpc_block_scalar_fma(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
                           unsigned n_ranges, float *acc, float *scratch);
-void dpc_block_avx2(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
-                    unsigned n_ranges, float *acc, float *scratch);
+void dpc_block_avx2(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges, unsigned n_ranges,
+                    float *acc, float *scratch);
 void dpc_block_avx512(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
                       unsigned n_ranges, float *acc, float *scratch);
 #endif

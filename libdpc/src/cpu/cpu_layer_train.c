@@ -221,7 +221,6 @@ static void prepare_pass(const pass *ps, const double *x) {
     }
 }
 
-
 /* Chunk j of the current pass; part (b doubles, backward only) receives its kernel gradient. */
 static void run_chunk(const pass *ps, size_t j, double *part) {
     const size_t lo = j * ps->p->chunk;
@@ -237,15 +236,14 @@ typedef struct job {
     const double *x, *gy;
     double *y, *gx;
     size_t count;
-    unsigned T;    /* workers */
-    wspace *ws;    /* one per worker (set mode) or one (chunk mode) */
-    size_t first;  /* set mode: first set of the current wave */
+    unsigned T;     /* workers */
+    wspace *ws;     /* one per worker (set mode) or one (chunk mode) */
+    size_t first;   /* set mode: first set of the current wave */
     const pass *ps; /* chunk mode: the current pass */
 } job;
 
 /* Per-point results of one set, from the sums in ws->acc. */
-static void finish_set(const plan *p, const wspace *ws, const double *x, const double *gy, double *y,
-                       double *gx) {
+static void finish_set(const plan *p, const wspace *ws, const double *x, const double *gy, double *y, double *gx) {
     const size_t m = p->m, n = p->n;
     if (gy) {
         for (size_t i = 0; i < m * n; i++) gx[i] = gy[i] + ws->acc[i]; /* the residual path */
@@ -307,8 +305,8 @@ static void chunk_worker(void *ctx, unsigned slot) {
         run_chunk(ps, j, ps->gy ? ps->ws->part + j * jb->p->b : NULL);
 }
 
-static dpc_status run(const dpc_train_layer *L, size_t count, size_t m, const double *x, const double *gy,
-                      double *y, double *gx, double *gw, unsigned threads, dpc_isa isa) {
+static dpc_status run(const dpc_train_layer *L, size_t count, size_t m, const double *x, const double *gy, double *y,
+                      double *gx, double *gw, unsigned threads, dpc_isa isa) {
     plan p;
     dpc_status st = plan_init(&p, L, m, isa);
     if (st != DPC_OK) return st;
@@ -375,7 +373,7 @@ dpc_status dpc_train_forward(const dpc_train_layer *L, size_t count, size_t m, c
     return run(L, count, m, x, NULL, y, NULL, NULL, threads, isa);
 }
 
-dpc_status dpc_train_backward(const dpc_train_layer *L, size_t count, size_t m, const double *x,
-                              const double *gy, double *grad_x, double *grad_w, unsigned threads, dpc_isa isa) {
+dpc_status dpc_train_backward(const dpc_train_layer *L, size_t count, size_t m, const double *x, const double *gy,
+                              double *grad_x, double *grad_w, unsigned threads, dpc_isa isa) {
     return run(L, count, m, x, gy, NULL, grad_x, grad_w, threads, isa);
 }

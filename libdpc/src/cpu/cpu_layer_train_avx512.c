@@ -61,11 +61,11 @@ static inline double hsum(vd v) {
 #define V_HSUM hsum
 
 /* A[q st + idx] -= v[q] in the lanes of m, q < K (distinct indices: no conflicts). */
-#define SCATTER_SUB(A, st, idx, m, bits, v, K)                                                    \
-    for (unsigned q_ = 0; q_ < (K); q_++) {                                                        \
-        double *col_ = (A) + q_ * (st);                                                            \
-        const __m512d old_ = _mm512_mask_i32gather_pd(_mm512_setzero_pd(), m, idx, col_, 8);     \
-        _mm512_mask_i32scatter_pd(col_, m, idx, _mm512_sub_pd(old_, (v)[q_]), 8);                 \
+#define SCATTER_SUB(A, st, idx, m, bits, v, K)                                               \
+    for (unsigned q_ = 0; q_ < (K); q_++) {                                                  \
+        double *col_ = (A) + q_ * (st);                                                      \
+        const __m512d old_ = _mm512_mask_i32gather_pd(_mm512_setzero_pd(), m, idx, col_, 8); \
+        _mm512_mask_i32scatter_pd(col_, m, idx, _mm512_sub_pd(old_, (v)[q_]), 8);            \
     }
 
 #define TRAIN_CHUNK_FN dpc_train_chunk_avx512

@@ -11,7 +11,7 @@
 #include "model/plan.h"
 
 #define DPC_TRAIN_MAX_RANGES DPC_PLAN_MAX_RANGES /* candidate index ranges per cell (2 per row of cells) */
-#define DPC_TRAIN_PAD 16u         /* entries readable past the m-th of each packed column */
+#define DPC_TRAIN_PAD 16u                        /* entries readable past the m-th of each packed column */
 
 /* One subspace: the plan's values (model/plan.h, float64) and what the pair loops derive. */
 typedef struct dpc_train_sub {
@@ -45,8 +45,8 @@ typedef struct dpc_train_plan {
     double count[DPC_MAX_DIMS]; /* c_k, 0 where dimension k does not move */
     size_t chunk, n_chunks;     /* kernel-gradient chunks over sorted positions */
     size_t max_cells;
-    unsigned kmax;              /* largest k of a moving subspace */
-    size_t stride;              /* entries per packed column: m + DPC_TRAIN_PAD, rounded up to 16 */
+    unsigned kmax;               /* largest k of a moving subspace */
+    size_t stride;               /* entries per packed column: m + DPC_TRAIN_PAD, rounded up to 16 */
     dpc_train_chunk_fn chunk_fn; /* the ISA's pair loop */
     dpc_train_set_fn set_fn;     /* the ISA's unordered-pair pass; NULL: chunks only */
 } dpc_train_plan;

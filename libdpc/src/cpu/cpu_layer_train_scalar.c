@@ -127,13 +127,13 @@ ALWAYS_INLINE void chunk_body(const dpc_train_pass *ps, size_t lo, size_t hi, do
 void dpc_train_chunk_scalar(const dpc_train_pass *ps, size_t lo, size_t hi, double *part) {
     const unsigned k = ps->sp->k;
     /* Constant K: the per-pair loops unroll and stay in registers. */
-#define DPC_BODY(B)                                          \
-    switch (k) {                                             \
-    case 1: chunk_body(ps, lo, hi, part, 1, B); break;       \
-    case 2: chunk_body(ps, lo, hi, part, 2, B); break;       \
-    case 3: chunk_body(ps, lo, hi, part, 3, B); break;       \
-    case 4: chunk_body(ps, lo, hi, part, 4, B); break;       \
-    default: chunk_body(ps, lo, hi, part, k, B); break;      \
+#define DPC_BODY(B)                                     \
+    switch (k) {                                        \
+    case 1: chunk_body(ps, lo, hi, part, 1, B); break;  \
+    case 2: chunk_body(ps, lo, hi, part, 2, B); break;  \
+    case 3: chunk_body(ps, lo, hi, part, 3, B); break;  \
+    case 4: chunk_body(ps, lo, hi, part, 4, B); break;  \
+    default: chunk_body(ps, lo, hi, part, k, B); break; \
     }
     if (part) {
         DPC_BODY(1)

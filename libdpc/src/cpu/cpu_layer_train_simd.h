@@ -20,7 +20,7 @@
 
 #define ALWAYS_INLINE static inline __attribute__((always_inline))
 
-#define LIST_CAP 256u                    /* survivors per flush */
+#define LIST_CAP 256u                      /* survivors per flush */
 #define LIST_SIZE (LIST_CAP + 2u * WF + W) /* room for full-vector compress stores and the padding */
 
 /* Toroidal difference, t − rint(t) for t = x_j − x_i ∈ (−1, 1). */
@@ -56,8 +56,8 @@ ALWAYS_INLINE uint32_t filter_range(const dpc_train_pass *ps, size_t s, uint32_t
 }
 
 /* Pair math for list[0, len) of point s (see the file comment); acc[q] are the lane sums. */
-ALWAYS_INLINE void pair_sums(const dpc_train_pass *ps, size_t s, uint32_t *list, unsigned len, vd *acc,
-                             double *part, const unsigned K, const int BACKWARD) {
+ALWAYS_INLINE void pair_sums(const dpc_train_pass *ps, size_t s, uint32_t *list, unsigned len, vd *acc, double *part,
+                             const unsigned K, const int BACKWARD) {
     const dpc_train_sub *sp = ps->sp;
     const size_t st = ps->p->stride;
     const double *P = ps->ws->P, *V = ps->ws->V, *w = sp->w;
@@ -170,8 +170,8 @@ ALWAYS_INLINE void chunk_body(const dpc_train_pass *ps, size_t lo, size_t hi, do
  * in ascending s). A point's sum is its terms from partners below it, in ascending order, plus
  * the lane sums of those above: a fixed order, but one that needs the whole set on one worker. */
 
-ALWAYS_INLINE void sym_pairs(const dpc_train_pass *ps, size_t s, uint32_t *list, unsigned len, vd *acc,
-                             double *part, const unsigned K, const int BACKWARD) {
+ALWAYS_INLINE void sym_pairs(const dpc_train_pass *ps, size_t s, uint32_t *list, unsigned len, vd *acc, double *part,
+                             const unsigned K, const int BACKWARD) {
     const dpc_train_sub *sp = ps->sp;
     const size_t st = ps->p->stride;
     const double *P = ps->ws->P, *V = ps->ws->V, *w = sp->w;
@@ -283,16 +283,16 @@ ALWAYS_INLINE void set_body(const dpc_train_pass *ps, double *part, const unsign
 
 void TRAIN_SET_FN(const dpc_train_pass *ps, double *part) {
     const unsigned k = ps->sp->k;
-#define DPC_BODY(B)                                    \
-    switch (k) {                                       \
-    case 1: set_body(ps, part, 1, B); break;           \
-    case 2: set_body(ps, part, 2, B); break;           \
-    case 3: set_body(ps, part, 3, B); break;           \
-    case 4: set_body(ps, part, 4, B); break;           \
-    case 5: set_body(ps, part, 5, B); break;           \
-    case 6: set_body(ps, part, 6, B); break;           \
-    case 10: set_body(ps, part, 10, B); break;         \
-    default: set_body(ps, part, k, B); break;          \
+#define DPC_BODY(B)                            \
+    switch (k) {                               \
+    case 1: set_body(ps, part, 1, B); break;   \
+    case 2: set_body(ps, part, 2, B); break;   \
+    case 3: set_body(ps, part, 3, B); break;   \
+    case 4: set_body(ps, part, 4, B); break;   \
+    case 5: set_body(ps, part, 5, B); break;   \
+    case 6: set_body(ps, part, 6, B); break;   \
+    case 10: set_body(ps, part, 10, B); break; \
+    default: set_body(ps, part, k, B); break;  \
     }
     if (part) {
         DPC_BODY(1)
@@ -305,16 +305,16 @@ void TRAIN_SET_FN(const dpc_train_pass *ps, double *part) {
 void TRAIN_CHUNK_FN(const dpc_train_pass *ps, size_t lo, size_t hi, double *part) {
     const unsigned k = ps->sp->k;
     /* Constant K for the common subspace sizes: per-dimension vectors stay in registers. */
-#define DPC_BODY(B)                                          \
-    switch (k) {                                             \
-    case 1: chunk_body(ps, lo, hi, part, 1, B); break;       \
-    case 2: chunk_body(ps, lo, hi, part, 2, B); break;       \
-    case 3: chunk_body(ps, lo, hi, part, 3, B); break;       \
-    case 4: chunk_body(ps, lo, hi, part, 4, B); break;       \
-    case 5: chunk_body(ps, lo, hi, part, 5, B); break;       \
-    case 6: chunk_body(ps, lo, hi, part, 6, B); break;       \
-    case 10: chunk_body(ps, lo, hi, part, 10, B); break;     \
-    default: chunk_body(ps, lo, hi, part, k, B); break;      \
+#define DPC_BODY(B)                                      \
+    switch (k) {                                         \
+    case 1: chunk_body(ps, lo, hi, part, 1, B); break;   \
+    case 2: chunk_body(ps, lo, hi, part, 2, B); break;   \
+    case 3: chunk_body(ps, lo, hi, part, 3, B); break;   \
+    case 4: chunk_body(ps, lo, hi, part, 4, B); break;   \
+    case 5: chunk_body(ps, lo, hi, part, 5, B); break;   \
+    case 6: chunk_body(ps, lo, hi, part, 6, B); break;   \
+    case 10: chunk_body(ps, lo, hi, part, 10, B); break; \
+    default: chunk_body(ps, lo, hi, part, k, B); break;  \
     }
     if (part) {
         DPC_BODY(1)

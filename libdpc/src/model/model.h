@@ -18,14 +18,14 @@
 #define DPC_MAX_FILE_BYTES (1ull << 30)
 
 typedef struct dpc_layer {
-    uint32_t n_sub;         /* subspaces s */
-    uint32_t bins;          /* b */
-    float eps;              /* cutoff in units of mean spacing */
-    uint64_t fixed;         /* dimensions this layer never moves */
+    uint32_t n_sub; /* subspaces s */
+    uint32_t bins;  /* b */
+    float eps;      /* cutoff in units of mean spacing */
+    uint64_t fixed; /* dimensions this layer never moves */
     uint64_t masks[DPC_MAX_SUBSPACES];
     float radius[DPC_MAX_SUBSPACES]; /* rho_t, in units of mean spacing */
-    float *kernels;         /* [n_sub * bins], row t = subspace t */
-    float *slopes;          /* [n_sub * bins], kernels[q+1] - kernels[q] (last entry 0) */
+    float *kernels;                  /* [n_sub * bins], row t = subspace t */
+    float *slopes;                   /* [n_sub * bins], kernels[q+1] - kernels[q] (last entry 0) */
 } dpc_layer;
 
 typedef struct dpc_cascade {

@@ -21,8 +21,16 @@ enum { GRAPH_NODE = 1, GRAPH_INIT = 5, GRAPH_INPUT = 11, GRAPH_OUTPUT = 12 };
 enum { NODE_INPUT = 1, NODE_OUTPUT = 2, NODE_NAME = 3, NODE_OP = 4, NODE_ATTR = 5, NODE_DOMAIN = 7 };
 enum { ATTR_NAME = 1, ATTR_F = 2, ATTR_I = 3, ATTR_FLOATS = 7, ATTR_INTS = 8, ATTR_TYPE = 20 };
 enum { ATYPE_FLOAT = 1, ATYPE_INT = 2, ATYPE_FLOATS = 6, ATYPE_INTS = 7 };
-enum { TENSOR_DIMS = 1, TENSOR_TYPE = 2, TENSOR_SEGMENT = 3, TENSOR_FLOAT_DATA = 4, TENSOR_NAME = 8,
-       TENSOR_RAW = 9, TENSOR_EXTERNAL = 13, TENSOR_LOCATION = 14 };
+enum {
+    TENSOR_DIMS = 1,
+    TENSOR_TYPE = 2,
+    TENSOR_SEGMENT = 3,
+    TENSOR_FLOAT_DATA = 4,
+    TENSOR_NAME = 8,
+    TENSOR_RAW = 9,
+    TENSOR_EXTERNAL = 13,
+    TENSOR_LOCATION = 14
+};
 enum { ONNX_FLOAT = 1 };
 
 #define FAIL(...) dpc_fail(DPC_ERROR_FORMAT, __VA_ARGS__)
@@ -36,7 +44,7 @@ enum { ONNX_FLOAT = 1 };
 typedef struct attr_values {
     int present;
     int64_t type;
-    unsigned n;          /* values collected (INTS / FLOATS) */
+    unsigned n; /* values collected (INTS / FLOATS) */
     int64_t ints[DPC_MAX_SUBSPACES];
     float floats[DPC_MAX_SUBSPACES];
     int has_i, has_f;
@@ -80,8 +88,8 @@ static dpc_status collect_floats(const pb_field *f, attr_values *a, const char *
     for (size_t k = 0; k < f->bytes.n; k += 4) {
         if (a->n >= DPC_MAX_SUBSPACES) return FAIL("%s has more than %u values", what, DPC_MAX_SUBSPACES);
         const uint8_t *p = f->bytes.p + k;
-        a->floats[a->n++] = pb_float_from_bits((uint32_t)p[0] | (uint32_t)p[1] << 8 |
-                                               (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24);
+        a->floats[a->n++] =
+            pb_float_from_bits((uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24);
     }
     return DPC_OK;
 }
@@ -112,11 +120,28 @@ static dpc_status parse_attribute(pb_span s, node_view *nv) {
     while ((r = pb_next(&s, &f)) == PB_OK) {
         dpc_status st = DPC_OK;
         switch (f.number) {
-        case ATTR_TYPE: CHECK_WIRE(f, 0, "attribute type"); tmp.type = (int64_t)f.value; break;
-        case ATTR_I: CHECK_WIRE(f, 0, what); tmp.has_i = 1; tmp.i = (int64_t)f.value; break;
-        case ATTR_F: CHECK_WIRE(f, 5, what); tmp.has_f = 1; tmp.f = pb_float_from_bits((uint32_t)f.value); break;
-        case ATTR_INTS: tmp.type = tmp.type ? tmp.type : ATYPE_INTS; st = collect_ints(&f, &tmp, what); break;
-        case ATTR_FLOATS: tmp.type = tmp.type ? tmp.type : ATYPE_FLOATS; st = collect_floats(&f, &tmp, what); break;
+        case ATTR_TYPE:
+            CHECK_WIRE(f, 0, "attribute type");
+            tmp.type = (int64_t)f.value;
+            break;
+        case ATTR_I:
+            CHECK_WIRE(f, 0, what);
+            tmp.has_i = 1;
+            tmp.i = (int64_t)f.value;
+            break;
+        case ATTR_F:
+            CHECK_WIRE(f, 5, what);
+            tmp.has_f = 1;
+            tmp.f = pb_float_from_bits((uint32_t)f.value);
+            break;
+        case ATTR_INTS:
+            tmp.type = tmp.type ? tmp.type : ATYPE_INTS;
+            st = collect_ints(&f, &tmp, what);
+            break;
+        case ATTR_FLOATS:
+            tmp.type = tmp.type ? tmp.type : ATYPE_FLOATS;
+            st = collect_floats(&f, &tmp, what);
+            break;
         default: break;
         }
         if (st != DPC_OK) return st;
@@ -144,10 +169,22 @@ static dpc_status parse_node(pb_span s, node_view *nv) {
             nv->out = f.bytes;
             nv->n_out++;
             break;
-        case NODE_NAME: CHECK_WIRE(f, 2, "node name"); nv->name = f.bytes; break;
-        case NODE_OP: CHECK_WIRE(f, 2, "node op_type"); nv->op = f.bytes; break;
-        case NODE_DOMAIN: CHECK_WIRE(f, 2, "node domain"); nv->domain = f.bytes; break;
-        case NODE_ATTR: CHECK_WIRE(f, 2, "node attribute"); st = parse_attribute(f.bytes, nv); break;
+        case NODE_NAME:
+            CHECK_WIRE(f, 2, "node name");
+            nv->name = f.bytes;
+            break;
+        case NODE_OP:
+            CHECK_WIRE(f, 2, "node op_type");
+            nv->op = f.bytes;
+            break;
+        case NODE_DOMAIN:
+            CHECK_WIRE(f, 2, "node domain");
+            nv->domain = f.bytes;
+            break;
+        case NODE_ATTR:
+            CHECK_WIRE(f, 2, "node attribute");
+            st = parse_attribute(f.bytes, nv);
+            break;
         default: break;
         }
         if (st != DPC_OK) return st;
@@ -188,13 +225,24 @@ static dpc_status parse_tensor_header(pb_span s, tensor_view *t) {
                 return FAIL("tensor dims have wire type %u", f.wire);
             }
             break;
-        case TENSOR_TYPE: CHECK_WIRE(f, 0, "tensor data_type"); t->type = (int64_t)f.value; break;
-        case TENSOR_NAME: CHECK_WIRE(f, 2, "tensor name"); t->name = f.bytes; break;
-        case TENSOR_RAW: CHECK_WIRE(f, 2, "tensor raw_data"); t->raw = f.bytes; break;
+        case TENSOR_TYPE:
+            CHECK_WIRE(f, 0, "tensor data_type");
+            t->type = (int64_t)f.value;
+            break;
+        case TENSOR_NAME:
+            CHECK_WIRE(f, 2, "tensor name");
+            t->name = f.bytes;
+            break;
+        case TENSOR_RAW:
+            CHECK_WIRE(f, 2, "tensor raw_data");
+            t->raw = f.bytes;
+            break;
         case TENSOR_FLOAT_DATA: t->n_float_fields++; break;
         case TENSOR_SEGMENT: return FAIL("segmented tensors are not supported");
         case TENSOR_EXTERNAL: t->external = 1; break;
-        case TENSOR_LOCATION: if (f.value != 0) t->external = 1; break;
+        case TENSOR_LOCATION:
+            if (f.value != 0) t->external = 1;
+            break;
         default: break;
         }
     }
@@ -214,8 +262,8 @@ static dpc_status read_tensor_floats(pb_span s, const tensor_view *t, float *dst
         if (t->raw.n != n * 4) return FAIL("tensor raw_data has %zu bytes, expected %zu", t->raw.n, n * 4);
         for (size_t i = 0; i < n; i++) {
             const uint8_t *p = t->raw.p + 4 * i;
-            dst[i] = pb_float_from_bits((uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 |
-                                        (uint32_t)p[3] << 24);
+            dst[i] =
+                pb_float_from_bits((uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24);
         }
         return DPC_OK;
     }
@@ -228,12 +276,11 @@ static dpc_status read_tensor_floats(pb_span s, const tensor_view *t, float *dst
             if (got >= n) return FAIL("tensor has more float_data values than its dims allow");
             dst[got++] = pb_float_from_bits((uint32_t)f.value);
         } else if (f.wire == 2) {
-            if (f.bytes.n % 4 || f.bytes.n / 4 > n - got)
-                return FAIL("tensor float_data does not match its dims");
+            if (f.bytes.n % 4 || f.bytes.n / 4 > n - got) return FAIL("tensor float_data does not match its dims");
             for (size_t k = 0; k < f.bytes.n; k += 4) {
                 const uint8_t *p = f.bytes.p + k;
-                dst[got++] = pb_float_from_bits((uint32_t)p[0] | (uint32_t)p[1] << 8 |
-                                                (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24);
+                dst[got++] = pb_float_from_bits((uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 |
+                                                (uint32_t)p[3] << 24);
             }
         } else {
             return FAIL("tensor float_data has wire type %u", f.wire);
@@ -254,8 +301,14 @@ static dpc_status check_value_info(pb_span s, const char *what, uint32_t dims, p
     name->p = NULL;
     name->n = 0;
     while ((r = pb_next(&s, &f)) == PB_OK) {
-        if (f.number == 1) { CHECK_WIRE(f, 2, "value name"); *name = f.bytes; }
-        if (f.number == 2) { CHECK_WIRE(f, 2, "value type"); type = f.bytes; }
+        if (f.number == 1) {
+            CHECK_WIRE(f, 2, "value name");
+            *name = f.bytes;
+        }
+        if (f.number == 2) {
+            CHECK_WIRE(f, 2, "value type");
+            type = f.bytes;
+        }
     }
     if (r == PB_BAD) return FAIL("malformed graph %s", what);
     pb_span tensor = {NULL, 0};
@@ -266,8 +319,15 @@ static dpc_status check_value_info(pb_span s, const char *what, uint32_t dims, p
     pb_span shape = {NULL, 0};
     int has_shape = 0;
     while ((r = pb_next(&tensor, &f)) == PB_OK) {
-        if (f.number == 1) { CHECK_WIRE(f, 0, "elem_type"); elem = (int64_t)f.value; }
-        if (f.number == 2) { CHECK_WIRE(f, 2, "shape"); shape = f.bytes; has_shape = 1; }
+        if (f.number == 1) {
+            CHECK_WIRE(f, 0, "elem_type");
+            elem = (int64_t)f.value;
+        }
+        if (f.number == 2) {
+            CHECK_WIRE(f, 2, "shape");
+            shape = f.bytes;
+            has_shape = 1;
+        }
     }
     if (r == PB_BAD) return FAIL("malformed graph %s type", what);
     if (elem != ONNX_FLOAT) return FAIL("graph %s must be FLOAT (1), has element type %lld", what, (long long)elem);
@@ -288,8 +348,7 @@ static dpc_status check_value_info(pb_span s, const char *what, uint32_t dims, p
     }
     if (r == PB_BAD) return FAIL("malformed graph %s shape", what);
     if (rank != 2 && rank != 3) return FAIL("graph %s must have rank 2 or 3, has %u", what, rank);
-    if (last != (int64_t)dims)
-        return FAIL("graph %s: last dimension must be the point dimension %u", what, dims);
+    if (last != (int64_t)dims) return FAIL("graph %s: last dimension must be the point dimension %u", what, dims);
     return DPC_OK;
 }
 
@@ -353,20 +412,29 @@ static dpc_status parse_metadata(const pb_span *entries, size_t n, dpc_cascade *
         pb_field f;
         int r;
         while ((r = pb_next(&s, &f)) == PB_OK) {
-            if (f.number == 1) { CHECK_WIRE(f, 2, "metadata key"); key = f.bytes; }
-            if (f.number == 2) { CHECK_WIRE(f, 2, "metadata value"); value = f.bytes; }
+            if (f.number == 1) {
+                CHECK_WIRE(f, 2, "metadata key");
+                key = f.bytes;
+            }
+            if (f.number == 2) {
+                CHECK_WIRE(f, 2, "metadata value");
+                value = f.bytes;
+            }
         }
         if (r == PB_BAD) return FAIL("malformed metadata entry %zu", i);
-        if (key.n == 0 || key.n > DPC_MAX_META_KEY) return FAIL("metadata entry %zu: key length %zu out of range", i, key.n);
+        if (key.n == 0 || key.n > DPC_MAX_META_KEY)
+            return FAIL("metadata entry %zu: key length %zu out of range", i, key.n);
         if (value.n > DPC_MAX_META_VALUE) return FAIL("metadata entry %zu: value longer than 1 MiB", i);
         if (memchr(key.p, 0, key.n) || (value.n && memchr(value.p, 0, value.n)))
             return FAIL("metadata entry %zu contains a NUL byte", i);
         c->meta_keys[i] = copy_span(key);
         c->meta_values[i] = copy_span(value);
         c->n_meta = i + 1;
-        if (!c->meta_keys[i] || !c->meta_values[i]) return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory reading metadata");
+        if (!c->meta_keys[i] || !c->meta_values[i])
+            return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory reading metadata");
         for (size_t j = 0; j < i; j++)
-            if (strcmp(c->meta_keys[j], c->meta_keys[i]) == 0) return FAIL("metadata key '%s' appears twice", c->meta_keys[i]);
+            if (strcmp(c->meta_keys[j], c->meta_keys[i]) == 0)
+                return FAIL("metadata key '%s' appears twice", c->meta_keys[i]);
     }
     const char *v;
     uint64_t x;
@@ -376,7 +444,8 @@ static dpc_status parse_metadata(const pb_span *entries, size_t n, dpc_cascade *
         return dpc_fail(DPC_ERROR_UNSUPPORTED, "model format version %llu, this libdpc reads version %d",
                         (unsigned long long)x, DPC_FORMAT_VERSION);
     if (!(v = dpc_cascade_meta(c, "dpc.dims"))) return FAIL("metadata 'dpc.dims' is missing");
-    if (!parse_uint(v, DPC_MAX_DIMS, &x) || x == 0) return FAIL("metadata 'dpc.dims' must be 1..%d, is '%.40s'", DPC_MAX_DIMS, v);
+    if (!parse_uint(v, DPC_MAX_DIMS, &x) || x == 0)
+        return FAIL("metadata 'dpc.dims' must be 1..%d, is '%.40s'", DPC_MAX_DIMS, v);
     c->dims = (uint32_t)x;
     if (!(v = dpc_cascade_meta(c, "dpc.n_points"))) return FAIL("metadata 'dpc.n_points' is missing");
     if (!parse_uint(v, DPC_MAX_POINTS, &x) || x == 0)
@@ -398,7 +467,8 @@ static dpc_status parse_metadata(const pb_span *entries, size_t n, dpc_cascade *
             if (prod > DPC_MAX_POINTS) return FAIL("grid has more than %u cells", DPC_MAX_POINTS);
         }
         if ((size_t)na >= c->dims) return FAIL("a gridded model needs at least one free dimension");
-        if (prod != c->n_points) return FAIL("grid cell count %llu differs from dpc.n_points %u", (unsigned long long)prod, c->n_points);
+        if (prod != c->n_points)
+            return FAIL("grid cell count %llu differs from dpc.n_points %u", (unsigned long long)prod, c->n_points);
         c->grid_dims = (uint32_t)na;
     }
     return DPC_OK;
@@ -406,8 +476,8 @@ static dpc_status parse_metadata(const pb_span *entries, size_t n, dpc_cascade *
 
 /* ---- layers ------------------------------------------------------------------------------ */
 
-static dpc_status build_layer(const node_view *nv, unsigned k, pb_span tensor_msg, dpc_cascade *c,
-                              uint64_t grid_mask, size_t *kernel_total) {
+static dpc_status build_layer(const node_view *nv, unsigned k, pb_span tensor_msg, dpc_cascade *c, uint64_t grid_mask,
+                              size_t *kernel_total) {
     dpc_layer *L = &c->layers[k];
     const uint64_t all = c->dims == 64 ? ~0ull : ((1ull << c->dims) - 1);
     if (!nv->subspaces.present || nv->subspaces.type != ATYPE_INTS || nv->subspaces.n == 0)
@@ -419,7 +489,9 @@ static dpc_status build_layer(const node_view *nv, unsigned k, pb_span tensor_ms
     L->n_sub = nv->subspaces.n;
     for (unsigned t = 0; t < L->n_sub; t++) {
         uint64_t m = (uint64_t)nv->subspaces.ints[t];
-        if (m == 0 || (m & ~all)) return FAIL("layer %u: subspace %u mask 0x%llx is empty or names a dimension >= %u", k, t, (unsigned long long)m, c->dims);
+        if (m == 0 || (m & ~all))
+            return FAIL("layer %u: subspace %u mask 0x%llx is empty or names a dimension >= %u", k, t,
+                        (unsigned long long)m, c->dims);
         for (unsigned u = 0; u < t; u++)
             if (L->masks[u] == m) return FAIL("layer %u: subspace mask 0x%llx appears twice", k, (unsigned long long)m);
         L->masks[t] = m;
@@ -430,17 +502,20 @@ static dpc_status build_layer(const node_view *nv, unsigned k, pb_span tensor_ms
     L->eps = 1e-4f;
     if (nv->eps.present) {
         if (nv->eps.type != ATYPE_FLOAT || !nv->eps.has_f) return FAIL("layer %u: attribute 'eps' must be a FLOAT", k);
-        if (!(nv->eps.f >= 0.0f && nv->eps.f <= 1e6f)) return FAIL("layer %u: eps must be in [0, 1e6], is %g", k, (double)nv->eps.f);
+        if (!(nv->eps.f >= 0.0f && nv->eps.f <= 1e6f))
+            return FAIL("layer %u: eps must be in [0, 1e6], is %g", k, (double)nv->eps.f);
         L->eps = nv->eps.f;
     }
     L->fixed = 0;
     if (nv->fixed.present) {
-        if (nv->fixed.type != ATYPE_INT || !nv->fixed.has_i) return FAIL("layer %u: attribute 'fixed' must be an INT", k);
+        if (nv->fixed.type != ATYPE_INT || !nv->fixed.has_i)
+            return FAIL("layer %u: attribute 'fixed' must be an INT", k);
         if ((uint64_t)nv->fixed.i & ~all) return FAIL("layer %u: 'fixed' names a dimension >= %u", k, c->dims);
         L->fixed = (uint64_t)nv->fixed.i;
     }
     if (c->grid_dims && L->fixed != grid_mask)
-        return FAIL("layer %u: 'fixed' (0x%llx) must equal the grid axes (0x%llx)", k, (unsigned long long)L->fixed, (unsigned long long)grid_mask);
+        return FAIL("layer %u: 'fixed' (0x%llx) must equal the grid axes (0x%llx)", k, (unsigned long long)L->fixed,
+                    (unsigned long long)grid_mask);
 
     tensor_view t;
     dpc_status st = parse_tensor_header(tensor_msg, &t);
@@ -451,7 +526,8 @@ static dpc_status build_layer(const node_view *nv, unsigned k, pb_span tensor_ms
         return FAIL("layer %u: kernels must have shape [%u, b] with 2 <= b <= %u", k, L->n_sub, DPC_MAX_BINS);
     L->bins = (uint32_t)t.dims[1];
     size_t n = (size_t)L->n_sub * L->bins;
-    if (n > DPC_MAX_KERNEL_VALUES - *kernel_total) return FAIL("model has more than %u kernel values", DPC_MAX_KERNEL_VALUES);
+    if (n > DPC_MAX_KERNEL_VALUES - *kernel_total)
+        return FAIL("model has more than %u kernel values", DPC_MAX_KERNEL_VALUES);
     /* Bound the allocation by the bytes actually present: 4 per value at least. */
     if (t.raw.p ? t.raw.n != n * 4 : tensor_msg.n < n * 4)
         return FAIL("layer %u: kernel data is shorter than its shape [%u, %u]", k, L->n_sub, L->bins);
@@ -484,15 +560,31 @@ static dpc_status scan_graph(pb_span g, graph_view *gv) {
     pb_span s = g;
     memset(gv, 0, sizeof *gv);
     while ((r = pb_next(&s, &f)) == PB_OK) {
-        if (f.number == GRAPH_NODE) { CHECK_WIRE(f, 2, "graph node"); gv->n_nodes++; }
-        if (f.number == GRAPH_INIT) { CHECK_WIRE(f, 2, "graph initializer"); gv->n_inits++; }
-        if (f.number == GRAPH_INPUT) { CHECK_WIRE(f, 2, "graph input"); gv->input = f.bytes; gv->n_inputs++; }
-        if (f.number == GRAPH_OUTPUT) { CHECK_WIRE(f, 2, "graph output"); gv->output = f.bytes; gv->n_outputs++; }
+        if (f.number == GRAPH_NODE) {
+            CHECK_WIRE(f, 2, "graph node");
+            gv->n_nodes++;
+        }
+        if (f.number == GRAPH_INIT) {
+            CHECK_WIRE(f, 2, "graph initializer");
+            gv->n_inits++;
+        }
+        if (f.number == GRAPH_INPUT) {
+            CHECK_WIRE(f, 2, "graph input");
+            gv->input = f.bytes;
+            gv->n_inputs++;
+        }
+        if (f.number == GRAPH_OUTPUT) {
+            CHECK_WIRE(f, 2, "graph output");
+            gv->output = f.bytes;
+            gv->n_outputs++;
+        }
     }
     if (r == PB_BAD) return FAIL("malformed graph");
     if (gv->n_nodes == 0) return FAIL("graph has no nodes");
-    if (gv->n_nodes > DPC_MAX_LAYERS) return FAIL("graph has %zu nodes, at most %u are allowed", gv->n_nodes, DPC_MAX_LAYERS);
-    if (gv->n_inits > MAX_INITIALIZERS) return FAIL("graph has %zu initializers, at most %u are allowed", gv->n_inits, MAX_INITIALIZERS);
+    if (gv->n_nodes > DPC_MAX_LAYERS)
+        return FAIL("graph has %zu nodes, at most %u are allowed", gv->n_nodes, DPC_MAX_LAYERS);
+    if (gv->n_inits > MAX_INITIALIZERS)
+        return FAIL("graph has %zu initializers, at most %u are allowed", gv->n_inits, MAX_INITIALIZERS);
     if (gv->n_inputs != 1 || gv->n_outputs != 1)
         return FAIL("graph must have exactly one input and one output (has %zu and %zu)", gv->n_inputs, gv->n_outputs);
     gv->nodes = (pb_span *)malloc(gv->n_nodes * sizeof(pb_span));
@@ -530,9 +622,19 @@ static dpc_status parse_model(pb_span file, dpc_cascade *c, graph_view *gv, pb_s
     size_t n_graph = 0, n_meta = 0;
     while ((r = pb_next(&s, &f)) == PB_OK) {
         switch (f.number) {
-        case MODEL_IR_VERSION: CHECK_WIRE(f, 0, "ir_version"); ir = (int64_t)f.value; break;
-        case MODEL_GRAPH: CHECK_WIRE(f, 2, "graph"); graph = f.bytes; n_graph++; break;
-        case MODEL_META: CHECK_WIRE(f, 2, "metadata_props"); n_meta++; break;
+        case MODEL_IR_VERSION:
+            CHECK_WIRE(f, 0, "ir_version");
+            ir = (int64_t)f.value;
+            break;
+        case MODEL_GRAPH:
+            CHECK_WIRE(f, 2, "graph");
+            graph = f.bytes;
+            n_graph++;
+            break;
+        case MODEL_META:
+            CHECK_WIRE(f, 2, "metadata_props");
+            n_meta++;
+            break;
         case MODEL_OPSET: {
             CHECK_WIRE(f, 2, "opset_import");
             pb_span o = f.bytes, domain = {NULL, 0};
@@ -540,8 +642,14 @@ static dpc_status parse_model(pb_span file, dpc_cascade *c, graph_view *gv, pb_s
             int r2;
             int64_t version = -1;
             while ((r2 = pb_next(&o, &g)) == PB_OK) {
-                if (g.number == 1) { CHECK_WIRE(g, 2, "opset domain"); domain = g.bytes; }
-                if (g.number == 2) { CHECK_WIRE(g, 0, "opset version"); version = (int64_t)g.value; }
+                if (g.number == 1) {
+                    CHECK_WIRE(g, 2, "opset domain");
+                    domain = g.bytes;
+                }
+                if (g.number == 2) {
+                    CHECK_WIRE(g, 0, "opset version");
+                    version = (int64_t)g.value;
+                }
             }
             if (r2 == PB_BAD) return FAIL("malformed opset_import");
             if (pb_span_eq(domain, DPC_DOMAIN)) {
@@ -560,7 +668,8 @@ static dpc_status parse_model(pb_span file, dpc_cascade *c, graph_view *gv, pb_s
     if (dpc_opset != DPC_FORMAT_VERSION)
         return dpc_fail(DPC_ERROR_UNSUPPORTED, "model uses '%s' operator version %lld, this libdpc reads version %d",
                         DPC_DOMAIN, (long long)dpc_opset, DPC_FORMAT_VERSION);
-    if (n_meta > DPC_MAX_META) return FAIL("model has %zu metadata entries, at most %u are allowed", n_meta, DPC_MAX_META);
+    if (n_meta > DPC_MAX_META)
+        return FAIL("model has %zu metadata entries, at most %u are allowed", n_meta, DPC_MAX_META);
     *meta = (pb_span *)malloc((n_meta ? n_meta : 1) * sizeof(pb_span));
     if (!*meta) return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory reading metadata");
     size_t i = 0;
@@ -586,11 +695,13 @@ static dpc_status parse_model(pb_span file, dpc_cascade *c, graph_view *gv, pb_s
         node_view nv;
         if ((st = parse_node(gv->nodes[k], &nv)) != DPC_OK) return st;
         if (!pb_span_eq(nv.domain, DPC_DOMAIN) || !pb_span_eq(nv.op, "PointFilter"))
-            return FAIL("node %u is '%.*s:%.*s', expected '%s:PointFilter'", k, (int)(nv.domain.n > 64 ? 64 : nv.domain.n),
-                        (const char *)nv.domain.p, (int)(nv.op.n > 64 ? 64 : nv.op.n), (const char *)nv.op.p, DPC_DOMAIN);
+            return FAIL("node %u is '%.*s:%.*s', expected '%s:PointFilter'", k,
+                        (int)(nv.domain.n > 64 ? 64 : nv.domain.n), (const char *)nv.domain.p,
+                        (int)(nv.op.n > 64 ? 64 : nv.op.n), (const char *)nv.op.p, DPC_DOMAIN);
         if (nv.n_in != 2 || nv.n_out != 1)
             return FAIL("node %u must have 2 inputs and 1 output (has %u and %u)", k, nv.n_in, nv.n_out);
-        if (!pb_spans_equal(nv.in[0], prev)) return FAIL("node %u does not read the previous node's output: the graph is not a chain", k);
+        if (!pb_spans_equal(nv.in[0], prev))
+            return FAIL("node %u does not read the previous node's output: the graph is not a chain", k);
         pb_span tensor = {NULL, 0};
         if ((st = find_initializer(gv, nv.in[1], &tensor)) != DPC_OK) return st;
         if ((st = build_layer(&nv, k, tensor, c, grid_mask, &kernel_total)) != DPC_OK) return st;

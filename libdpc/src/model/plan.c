@@ -20,8 +20,8 @@ int dpc_plan_search(unsigned k, double r, size_t m, uint32_t *G_out, uint32_t *R
     if (G > 16384) G = 16384;
     if (G < 3) return 0;
     const double R = ceil(r * G + margin);
-    if (2 * R + 1 > G) return 0;                   /* a cell would be visited twice */
-    if (pow((2 * R + 1) / G, k) > 0.5) return 0;   /* most of the domain anyway: all pairs is faster */
+    if (2 * R + 1 > G) return 0;                 /* a cell would be visited twice */
+    if (pow((2 * R + 1) / G, k) > 0.5) return 0; /* most of the domain anyway: all pairs is faster */
     /* Guards of the range and cell buffers. The rules above already imply both (R <= 2, so at
      * most 2 * 5^3 = 250 rows; G <= cap, so G^k <= 2m), so they never change a choice. */
     if (2 * pow(2 * R + 1, k - 1) > DPC_PLAN_MAX_RANGES) return 0;

@@ -32,13 +32,13 @@ typedef struct dpc_sub_plan {
     unsigned dim[DPC_MAX_DIMS]; /* subspace axis q -> point dimension */
     int moves;                  /* some dimension of D_t is not fixed (else every backend skips it) */
     /* In the plan's precision; a float32 plan's values are float32 numbers (exact in double). */
-    double h;     /* m^(-1/k) */
-    double r;     /* min(rho h, 1/2) */
-    double e;     /* eps h */
-    double scale; /* (b - 1) / r */
-    double umax;  /* b - 1 */
-    int32_t qmax; /* b - 2 */
-    int grid;     /* 1: cell grid, 0: all pairs */
+    double h;      /* m^(-1/k) */
+    double r;      /* min(rho h, 1/2) */
+    double e;      /* eps h */
+    double scale;  /* (b - 1) / r */
+    double umax;   /* b - 1 */
+    int32_t qmax;  /* b - 2 */
+    int grid;      /* 1: cell grid, 0: all pairs */
     uint32_t G, R; /* grid: cells per axis, cells searched each side */
 } dpc_sub_plan;
 

@@ -14,7 +14,7 @@ typedef struct pb_span {
 
 typedef struct pb_field {
     uint32_t number;
-    uint32_t wire; /* 0 varint, 1 fixed64, 2 length-delimited, 5 fixed32 */
+    uint32_t wire;  /* 0 varint, 1 fixed64, 2 length-delimited, 5 fixed32 */
     uint64_t value; /* varint, fixed64 or fixed32 payload */
     pb_span bytes;  /* payload of a length-delimited field */
 } pb_field;
@@ -50,8 +50,7 @@ static inline int pb_next(pb_span *s, pb_field *f) {
     f->bytes.p = NULL;
     f->bytes.n = 0;
     switch (f->wire) {
-    case 0:
-        return pb_read_varint(s, &f->value);
+    case 0: return pb_read_varint(s, &f->value);
     case 1:
         if (s->n < 8) return PB_BAD;
         f->value = 0;
@@ -70,13 +69,11 @@ static inline int pb_next(pb_span *s, pb_field *f) {
     }
     case 5:
         if (s->n < 4) return PB_BAD;
-        f->value = (uint32_t)s->p[0] | (uint32_t)s->p[1] << 8 | (uint32_t)s->p[2] << 16 |
-                   (uint32_t)s->p[3] << 24;
+        f->value = (uint32_t)s->p[0] | (uint32_t)s->p[1] << 8 | (uint32_t)s->p[2] << 16 | (uint32_t)s->p[3] << 24;
         s->p += 4;
         s->n -= 4;
         return PB_OK;
-    default: /* groups (3, 4) and reserved wire types are not used by ONNX */
-        return PB_BAD;
+    default: /* groups (3, 4) and reserved wire types are not used by ONNX */ return PB_BAD;
     }
 }
 

@@ -23,12 +23,12 @@
 extern const float dpc_sampler_mask_data[DPC_SAMPLER_TILE * DPC_SAMPLER_TILE * DPC_SAMPLER_MASK_CHANNELS];
 
 struct dpc_sampler {
-    uint32_t spp;     /* n: points per table */
-    uint32_t slots;   /* D: tables; dimension d reads table d mod D */
+    uint32_t spp;   /* n: points per table */
+    uint32_t slots; /* D: tables; dimension d reads table d mod D */
     uint64_t seed;
-    uint64_t base;    /* mix64 of the seed: the root of every key */
-    float inv_spp;    /* 1 / n, for 1-D values */
-    float *tables;    /* D * n * 2 floats: table t, point j at (t * n + j) * 2 */
+    uint64_t base;                   /* mix64 of the seed: the root of every key */
+    float inv_spp;                   /* 1 / n, for 1-D values */
+    float *tables;                   /* D * n * 2 floats: table t, point j at (t * n + j) * 2 */
     struct dpc_sampler_keyed *keyed; /* D: what key (d, pass 0) gives, for d < D: the common case */
 };
 
@@ -82,8 +82,8 @@ typedef struct dpc_sampler_point {
 dpc_status dpc_sampler_build(struct dpc_sampler *s, const dpc_sampler_options *o);
 
 /* The pieces every lookup shares (docs/rendering.md, "Definition"). */
-static inline dpc_sampler_point dpc_sampler_locate(const struct dpc_sampler *s, uint32_t x, uint32_t y,
-                                                   uint32_t index, uint32_t dim) {
+static inline dpc_sampler_point dpc_sampler_locate(const struct dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index,
+                                                   uint32_t dim) {
     const uint32_t n = s->spp;
     uint32_t pass = 0, k = index, table = dim;
     if (index >= n) { /* later passes: rare, so the divisions stay off the common path */
@@ -99,7 +99,8 @@ static inline dpc_sampler_point dpc_sampler_locate(const struct dpc_sampler *s, 
     j -= j >= n ? n : 0;
     /* the pixel's mask entry, moved by (ox, oy) for this key */
     const float *m = dpc_sampler_mask_data + (((y + kd.oy) & (DPC_SAMPLER_TILE - 1)) * DPC_SAMPLER_TILE +
-                                              ((x + kd.ox) & (DPC_SAMPLER_TILE - 1))) * DPC_SAMPLER_MASK_CHANNELS;
+                                              ((x + kd.ox) & (DPC_SAMPLER_TILE - 1))) *
+                                                 DPC_SAMPLER_MASK_CHANNELS;
     dpc_sampler_point p;
     p.table = table;
     p.j = j;

@@ -31,7 +31,7 @@ typedef void (*dpc_vk_fill_fn)(void *ctx, size_t set, float *x);
  * out + s * m * dims. Calls on one engine are serialised by its mutex (the engine owns one
  * queue, one command buffer and one set of work buffers); the bits of a set do not depend on
  * the other sets of the run or on timing. */
-dpc_status dpc_vk_run(dpc_vk_engine *e, const dpc_cascade *c, size_t count, size_t m, dpc_vk_fill_fn fill,
-                      void *ctx, float *out);
+dpc_status dpc_vk_run(dpc_vk_engine *e, const dpc_cascade *c, size_t count, size_t m, dpc_vk_fill_fn fill, void *ctx,
+                      float *out);
 
 #endif

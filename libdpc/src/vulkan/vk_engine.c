@@ -24,17 +24,27 @@
 #include "vulkan/vk_spirv.h"
 
 /* Pipelines. */
-enum { P_CELLS, P_SCAN_REDUCE, P_SCAN_PARTIALS, P_SCAN_DOWN, P_SCATTER, P_CELLSORT, P_GRID_SUM, P_APPLY,
-       P_PAIRS_SUM, P_PAIRS, /* + ceil(k / 4) - 1: one all-pairs variant per vec4 count, 1 .. 16 */
-       P_COUNT = P_PAIRS + DPC_MAX_DIMS / 4 };
+enum {
+    P_CELLS,
+    P_SCAN_REDUCE,
+    P_SCAN_PARTIALS,
+    P_SCAN_DOWN,
+    P_SCATTER,
+    P_CELLSORT,
+    P_GRID_SUM,
+    P_APPLY,
+    P_PAIRS_SUM,
+    P_PAIRS, /* + ceil(k / 4) - 1: one all-pairs variant per vec4 count, 1 .. 16 */
+    P_COUNT = P_PAIRS + DPC_MAX_DIMS / 4
+};
 /* Storage buffer bindings (shaders/common.glsl). */
 enum { B_X, B_DELTA, B_CELL_OF, B_COUNTS, B_STARTS, B_SORTED, B_COORDS, B_TABLES, B_PARTIALS, B_SPLIT, B_COUNT };
 
-#define SCAN_BLOCK 1024u            /* cells per scan block (common.glsl SCAN_BLOCK) */
-#define MAX_GROUPS 65535u           /* workgroups per dispatch dimension that every device allows */
-#define WORK_BUDGET (256ull << 20)  /* device bytes a batch aims to stay within (more for one big set) */
-#define PAIR_UNITS 2048u            /* all-pairs workgroups per set that the partner split aims for */
-#define PAIR_CHUNK_MIN 256u         /* fewest partners per split range */
+#define SCAN_BLOCK 1024u           /* cells per scan block (common.glsl SCAN_BLOCK) */
+#define MAX_GROUPS 65535u          /* workgroups per dispatch dimension that every device allows */
+#define WORK_BUDGET (256ull << 20) /* device bytes a batch aims to stay within (more for one big set) */
+#define PAIR_UNITS 2048u           /* all-pairs workgroups per set that the partner split aims for */
+#define PAIR_CHUNK_MIN 256u        /* fewest partners per split range */
 
 /* The push constants: mirrors `Params` in shaders/common.glsl, 4-byte fields in order. */
 typedef struct vk_params {
@@ -81,10 +91,10 @@ struct dpc_vk_engine {
 
 /* ---- small helpers ------------------------------------------------------------------------- */
 
-#define VK_TRY(call, what)                                                                                  \
-    do {                                                                                                    \
-        VkResult r_ = (call);                                                                               \
-        if (r_ != VK_SUCCESS) return dpc_vk_fail(r_, what);                                                 \
+#define VK_TRY(call, what)                                  \
+    do {                                                    \
+        VkResult r_ = (call);                               \
+        if (r_ != VK_SUCCESS) return dpc_vk_fail(r_, what); \
     } while (0)
 
 static int is_gpu(VkPhysicalDeviceType t) {
@@ -125,8 +135,13 @@ static uint32_t groups(size_t items, uint32_t per_group, uint32_t cap) {
 static dpc_status create_instance(dpc_vk_fns *fn, VkInstance *out) {
     dpc_status st = dpc_vk_load_global(fn);
     if (st != DPC_OK) return st;
-    VkApplicationInfo app = {VK_STRUCTURE_TYPE_APPLICATION_INFO, NULL, "libdpc", DPC_VERSION_NUMBER,
-                             "libdpc", DPC_VERSION_NUMBER, VK_API_VERSION_1_0};
+    VkApplicationInfo app = {VK_STRUCTURE_TYPE_APPLICATION_INFO,
+                             NULL,
+                             "libdpc",
+                             DPC_VERSION_NUMBER,
+                             "libdpc",
+                             DPC_VERSION_NUMBER,
+                             VK_API_VERSION_1_0};
     VkInstanceCreateInfo info = {VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO, NULL, 0, &app, 0, NULL, 0, NULL};
     VK_TRY(fn->vkCreateInstance(&info, NULL, out), "vkCreateInstance");
     st = dpc_vk_load_instance(fn, *out);
@@ -233,7 +248,8 @@ static dpc_status pick_device(dpc_vk_engine *e, int gpu_only) {
     }
     if (best < 0) {
         free(devs);
-        if (count == 0) return dpc_fail(DPC_ERROR_UNSUPPORTED, "Vulkan backend: no Vulkan device (the loader found no driver)");
+        if (count == 0)
+            return dpc_fail(DPC_ERROR_UNSUPPORTED, "Vulkan backend: no Vulkan device (the loader found no driver)");
         return dpc_fail(DPC_ERROR_UNSUPPORTED, "Vulkan backend: no usable Vulkan device: %s", seen);
     }
     e->phys = devs[best];
@@ -241,8 +257,10 @@ static dpc_status pick_device(dpc_vk_engine *e, int gpu_only) {
     e->family = compute_family(&e->fn, e->phys);
     snprintf(e->name, sizeof e->name, "%s", best_p.deviceName);
     e->max_range = best_p.limits.maxStorageBufferRange;
-    e->max_groups_x = best_p.limits.maxComputeWorkGroupCount[0] < MAX_GROUPS ? best_p.limits.maxComputeWorkGroupCount[0] : MAX_GROUPS;
-    e->max_groups_y = best_p.limits.maxComputeWorkGroupCount[1] < MAX_GROUPS ? best_p.limits.maxComputeWorkGroupCount[1] : MAX_GROUPS;
+    e->max_groups_x =
+        best_p.limits.maxComputeWorkGroupCount[0] < MAX_GROUPS ? best_p.limits.maxComputeWorkGroupCount[0] : MAX_GROUPS;
+    e->max_groups_y =
+        best_p.limits.maxComputeWorkGroupCount[1] < MAX_GROUPS ? best_p.limits.maxComputeWorkGroupCount[1] : MAX_GROUPS;
     e->fn.vkGetPhysicalDeviceMemoryProperties(e->phys, &e->mem);
     return DPC_OK;
 }
@@ -261,7 +279,8 @@ static dpc_status create_device(dpc_vk_engine *e) {
 /* ---- buffers ------------------------------------------------------------------------------- */
 
 /* A memory type allowed by `bits` with all of `need`, preferring `want` too; UINT32_MAX if none. */
-static uint32_t memory_type(const dpc_vk_engine *e, uint32_t bits, VkMemoryPropertyFlags need, VkMemoryPropertyFlags want) {
+static uint32_t memory_type(const dpc_vk_engine *e, uint32_t bits, VkMemoryPropertyFlags need,
+                            VkMemoryPropertyFlags want) {
     uint32_t fallback = UINT32_MAX;
     for (uint32_t i = 0; i < e->mem.memoryTypeCount; i++) {
         if (!(bits >> i & 1u)) continue;
@@ -284,8 +303,8 @@ static void buffer_free(dpc_vk_engine *e, vk_buffer *b) {
 static dpc_status buffer_create(dpc_vk_engine *e, vk_buffer *b, VkDeviceSize size, VkBufferUsageFlags usage, int host) {
     memset(b, 0, sizeof *b);
     if (size < 16) size = 16;
-    VkBufferCreateInfo info = {VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO, NULL, 0, size, usage,
-                               VK_SHARING_MODE_EXCLUSIVE, 0, NULL};
+    VkBufferCreateInfo info = {
+        VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO, NULL, 0, size, usage, VK_SHARING_MODE_EXCLUSIVE, 0, NULL};
     VK_TRY(e->fn.vkCreateBuffer(e->device, &info, NULL, &b->buf), "vkCreateBuffer");
     VkMemoryRequirements req;
     e->fn.vkGetBufferMemoryRequirements(e->device, b->buf, &req);
@@ -305,7 +324,8 @@ static dpc_status buffer_create(dpc_vk_engine *e, vk_buffer *b, VkDeviceSize siz
     if (r != VK_SUCCESS) {
         buffer_free(e, b);
         char what[160];
-        snprintf(what, sizeof what, "allocating a buffer of %llu bytes (vkAllocateMemory/vkBindBufferMemory/vkMapMemory)",
+        snprintf(what, sizeof what,
+                 "allocating a buffer of %llu bytes (vkAllocateMemory/vkBindBufferMemory/vkMapMemory)",
                  (unsigned long long)size);
         return dpc_vk_fail(r, what);
     }
@@ -318,11 +338,13 @@ static dpc_status buffer_create(dpc_vk_engine *e, vk_buffer *b, VkDeviceSize siz
 static dpc_status create_layout(dpc_vk_engine *e) {
     VkDescriptorSetLayoutBinding bind[B_COUNT];
     for (uint32_t i = 0; i < B_COUNT; i++)
-        bind[i] = (VkDescriptorSetLayoutBinding){i, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, NULL};
+        bind[i] =
+            (VkDescriptorSetLayoutBinding){i, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, NULL};
     VkDescriptorSetLayoutCreateInfo sl = {VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO, NULL, 0, B_COUNT, bind};
     VK_TRY(e->fn.vkCreateDescriptorSetLayout(e->device, &sl, NULL, &e->set_layout), "vkCreateDescriptorSetLayout");
     VkPushConstantRange range = {VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(vk_params)};
-    VkPipelineLayoutCreateInfo pl = {VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO, NULL, 0, 1, &e->set_layout, 1, &range};
+    VkPipelineLayoutCreateInfo pl = {
+        VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO, NULL, 0, 1, &e->set_layout, 1, &range};
     VK_TRY(e->fn.vkCreatePipelineLayout(e->device, &pl, NULL, &e->layout), "vkCreatePipelineLayout");
     VkDescriptorPoolSize size = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, B_COUNT};
     VkDescriptorPoolCreateInfo dp = {VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO, NULL, 0, 1, 1, &size};
@@ -333,16 +355,22 @@ static dpc_status create_layout(dpc_vk_engine *e) {
 }
 
 /* spec: the value of specialization constant 0 (all-pairs: vec4s per point), 0 for none. */
-static dpc_status create_pipeline(dpc_vk_engine *e, const uint32_t *code, size_t bytes, uint32_t spec_value, VkPipeline *out) {
+static dpc_status create_pipeline(dpc_vk_engine *e, const uint32_t *code, size_t bytes, uint32_t spec_value,
+                                  VkPipeline *out) {
     VkShaderModuleCreateInfo mi = {VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO, NULL, 0, bytes, code};
     VkShaderModule module;
     VK_TRY(e->fn.vkCreateShaderModule(e->device, &mi, NULL, &module), "vkCreateShaderModule");
     VkSpecializationMapEntry entry = {0, 0, sizeof(uint32_t)};
     VkSpecializationInfo spec = {1, &entry, sizeof spec_value, &spec_value};
-    VkPipelineShaderStageCreateInfo stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, NULL, 0,
-                                             VK_SHADER_STAGE_COMPUTE_BIT, module, "main", spec_value ? &spec : NULL};
-    VkComputePipelineCreateInfo ci = {VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO, NULL, 0, stage, e->layout,
-                                      VK_NULL_HANDLE, -1};
+    VkPipelineShaderStageCreateInfo stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO,
+                                             NULL,
+                                             0,
+                                             VK_SHADER_STAGE_COMPUTE_BIT,
+                                             module,
+                                             "main",
+                                             spec_value ? &spec : NULL};
+    VkComputePipelineCreateInfo ci = {
+        VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO, NULL, 0, stage, e->layout, VK_NULL_HANDLE, -1};
     VkResult r = e->fn.vkCreateComputePipelines(e->device, VK_NULL_HANDLE, 1, &ci, NULL, out);
     e->fn.vkDestroyShaderModule(e->device, module, NULL);
     if (r != VK_SUCCESS) {
@@ -419,7 +447,8 @@ static dpc_status upload_tables(dpc_vk_engine *e, const dpc_cascade *c) {
         total += n + 2 * (size_t)c->layers[l].n_sub * c->layers[l].bins;
     }
     if (total * sizeof(float) > e->max_range)
-        return dpc_fail(DPC_ERROR_LIMIT, "Vulkan backend: the model's kernel tables need %zu bytes, device %s binds at most %llu",
+        return dpc_fail(DPC_ERROR_LIMIT,
+                        "Vulkan backend: the model's kernel tables need %zu bytes, device %s binds at most %llu",
                         total * sizeof(float), e->name, (unsigned long long)e->max_range);
     vk_buffer host;
     dpc_status st = buffer_create(e, &host, total * sizeof(float), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, 1);
@@ -578,8 +607,8 @@ static dpc_status ensure_buffers(dpc_vk_engine *e, const sizes *s, size_t sets) 
     const VkDeviceSize need = s->staging_per_set * sets;
     if (!e->staging.buf || e->staging.size < need) {
         buffer_free(e, &e->staging);
-        dpc_status st = buffer_create(e, &e->staging, need,
-                                      VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, 1);
+        dpc_status st =
+            buffer_create(e, &e->staging, need, VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, 1);
         if (st != DPC_OK) return st;
     }
     if (changed) {
@@ -588,8 +617,8 @@ static dpc_status ensure_buffers(dpc_vk_engine *e, const sizes *s, size_t sets) 
         for (uint32_t b = 0; b < B_COUNT; b++) {
             const vk_buffer *buf = b == B_TABLES ? &e->tables : &e->work[b];
             info[b] = (VkDescriptorBufferInfo){buf->buf, 0, buf->size};
-            w[b] = (VkWriteDescriptorSet){VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, NULL, e->set, b, 0, 1,
-                                          VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, NULL, &info[b], NULL};
+            w[b] = (VkWriteDescriptorSet){VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, NULL, e->set,   b,   0, 1,
+                                          VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,      NULL, &info[b], NULL};
         }
         e->fn.vkUpdateDescriptorSets(e->device, B_COUNT, w, 0, NULL);
     }

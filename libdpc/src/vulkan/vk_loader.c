@@ -20,7 +20,8 @@ static void open_loader(void) {
     void *lib = dlopen(name, RTLD_NOW | RTLD_LOCAL);
     if (!lib) {
         const char *err = dlerror();
-        snprintf(g_why, sizeof g_why, "cannot load the Vulkan loader %.200s: %.250s", name, err ? err : "unknown error");
+        snprintf(g_why, sizeof g_why, "cannot load the Vulkan loader %.200s: %.250s", name,
+                 err ? err : "unknown error");
         return;
     }
     /* POSIX requires this round trip through void * for function pointers from dlsym. */
@@ -43,8 +44,8 @@ dpc_status dpc_vk_load_global(dpc_vk_fns *fn) {
 }
 
 dpc_status dpc_vk_load_instance(dpc_vk_fns *fn, VkInstance instance) {
-#define LOAD(name)                                                                                          \
-    if (!(fn->name = (PFN_##name)fn->vkGetInstanceProcAddr(instance, #name)))                               \
+#define LOAD(name)                                                            \
+    if (!(fn->name = (PFN_##name)fn->vkGetInstanceProcAddr(instance, #name))) \
         return dpc_fail(DPC_ERROR_UNSUPPORTED, "Vulkan backend: the loader has no " #name);
     DPC_VK_INSTANCE_FNS(LOAD)
 #undef LOAD
@@ -52,8 +53,8 @@ dpc_status dpc_vk_load_instance(dpc_vk_fns *fn, VkInstance instance) {
 }
 
 dpc_status dpc_vk_load_device(dpc_vk_fns *fn, VkDevice device) {
-#define LOAD(name)                                                                                          \
-    if (!(fn->name = (PFN_##name)fn->vkGetDeviceProcAddr(device, #name)))                                   \
+#define LOAD(name)                                                        \
+    if (!(fn->name = (PFN_##name)fn->vkGetDeviceProcAddr(device, #name))) \
         return dpc_fail(DPC_ERROR_UNSUPPORTED, "Vulkan backend: the driver has no " #name);
     DPC_VK_DEVICE_FNS(LOAD)
 #undef LOAD
@@ -62,6 +63,8 @@ dpc_status dpc_vk_load_device(dpc_vk_fns *fn, VkDevice device) {
 
 const char *dpc_vk_result_name(VkResult r) {
     switch (r) {
+        /* A list of macro calls, laid out by hand (clang-format 14 makes a staircase of it). */
+        // clang-format off
 #define NAME(v) case v: return #v;
         NAME(VK_SUCCESS) NAME(VK_NOT_READY) NAME(VK_TIMEOUT) NAME(VK_EVENT_SET) NAME(VK_EVENT_RESET)
         NAME(VK_INCOMPLETE) NAME(VK_ERROR_OUT_OF_HOST_MEMORY) NAME(VK_ERROR_OUT_OF_DEVICE_MEMORY)
@@ -72,7 +75,8 @@ const char *dpc_vk_result_name(VkResult r) {
         NAME(VK_ERROR_INVALID_EXTERNAL_HANDLE) NAME(VK_ERROR_FRAGMENTATION)
         NAME(VK_ERROR_INVALID_OPAQUE_CAPTURE_ADDRESS)
 #undef NAME
-    default: return "unknown VkResult";
+            // clang-format on
+            default : return "unknown VkResult";
     }
 }
 
@@ -84,16 +88,12 @@ dpc_status dpc_vk_fail(VkResult r, const char *call) {
     case VK_ERROR_OUT_OF_POOL_MEMORY:
     case VK_ERROR_FRAGMENTED_POOL:
     case VK_ERROR_FRAGMENTATION:
-    case VK_ERROR_TOO_MANY_OBJECTS:
-        st = DPC_ERROR_OUT_OF_MEMORY;
-        break;
+    case VK_ERROR_TOO_MANY_OBJECTS: st = DPC_ERROR_OUT_OF_MEMORY; break;
     case VK_ERROR_INITIALIZATION_FAILED:
     case VK_ERROR_INCOMPATIBLE_DRIVER:
     case VK_ERROR_LAYER_NOT_PRESENT:
     case VK_ERROR_EXTENSION_NOT_PRESENT:
-    case VK_ERROR_FEATURE_NOT_PRESENT:
-        st = DPC_ERROR_UNSUPPORTED;
-        break;
+    case VK_ERROR_FEATURE_NOT_PRESENT: st = DPC_ERROR_UNSUPPORTED; break;
     default: break;
     }
     return dpc_fail(st, "Vulkan backend: %s failed with %s (VkResult %d)", call, dpc_vk_result_name(r), (int)r);

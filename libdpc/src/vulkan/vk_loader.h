@@ -9,6 +9,9 @@
 
 #include "dpc/dpc.h"
 
+/* X-macro lists, laid out by hand: clang-format 14 makes a staircase of them, and another one
+ * on each run. */
+// clang-format off
 #define DPC_VK_INSTANCE_FNS(X)                                                                              \
     X(vkDestroyInstance) X(vkEnumeratePhysicalDevices) X(vkGetPhysicalDeviceProperties)                    \
     X(vkGetPhysicalDeviceQueueFamilyProperties) X(vkGetPhysicalDeviceMemoryProperties) X(vkCreateDevice)    \
@@ -25,6 +28,7 @@
     X(vkCmdBindPipeline) X(vkCmdBindDescriptorSets) X(vkCmdPushConstants) X(vkCmdDispatch)                 \
     X(vkCmdPipelineBarrier) X(vkCmdCopyBuffer) X(vkCmdFillBuffer) X(vkCreateFence) X(vkDestroyFence)       \
     X(vkResetFences) X(vkWaitForFences) X(vkQueueSubmit)
+// clang-format on
 
 #define DPC_VK_FIELD(name) PFN_##name name;
 typedef struct dpc_vk_fns {

@@ -63,8 +63,8 @@ struct Table {
     ~Table() { dpc_sampler_free(sampler); }
 };
 
-inline std::shared_ptr<Table> build(const std::vector<std::string> &models, uint32_t spp, uint32_t dims,
-                                    uint64_t seed, std::string &error) {
+inline std::shared_ptr<Table> build(const std::vector<std::string> &models, uint32_t spp, uint32_t dims, uint64_t seed,
+                                    std::string &error) {
     std::vector<dpc_model *> loaded;
     auto table = std::make_shared<Table>();
     for (const std::string &m : models) {
@@ -80,7 +80,7 @@ inline std::shared_ptr<Table> build(const std::vector<std::string> &models, uint
         dpc_sampler_options_init(&o);
         std::vector<const dpc_model *> handles(loaded.begin(), loaded.end());
         o.models = handles.data();
-        o.n_models = (uint32_t) handles.size();
+        o.n_models = (uint32_t)handles.size();
         o.samples_per_pixel = spp;
         o.dimensions = dims;
         o.seed = seed;
@@ -101,9 +101,8 @@ inline uint32_t compact_bits(uint32_t v) { // every other bit of v, packed
 
 } // namespace dpc_plugin
 
-template <typename Float, typename Spectrum>
-class DpcSampler final : public Sampler<Float, Spectrum> {
-public:
+template <typename Float, typename Spectrum> class DpcSampler final : public Sampler<Float, Spectrum> {
+  public:
     MI_IMPORT_BASE(Sampler, m_sample_count, m_base_seed, m_dimension_index, m_sample_index)
     MI_IMPORT_TYPES()
 
@@ -115,12 +114,12 @@ public:
         if (m_models.empty()) Throw("property \"model\" names no model");
         int dims = props.get<int>("dimensions", 16);
         int block = props.get<int>("block_size", 32);
-        if (dims < 1 || dims > (int) DPC_SAMPLER_MAX_DIMENSIONS)
+        if (dims < 1 || dims > (int)DPC_SAMPLER_MAX_DIMENSIONS)
             Throw("property \"dimensions\" is %d, must be 1 .. %u", dims, DPC_SAMPLER_MAX_DIMENSIONS);
         if (block < 32 || block > 4096 || (block & (block - 1)))
             Throw("property \"block_size\" is %d: a power of two from 32 (the mask tile) to 4096", block);
-        m_dims = (uint32_t) dims;
-        m_block_pixels = (uint32_t) block * (uint32_t) block;
+        m_dims = (uint32_t)dims;
+        m_block_pixels = (uint32_t)block * (uint32_t)block;
         rebuild();
     }
 
@@ -138,14 +137,14 @@ public:
 
     ref<Sampler<Float, Spectrum>> clone() override { return new DpcSampler(*this); }
 
-    void seed(UInt32 seed, uint32_t wavefront_size = (uint32_t) -1) override {
+    void seed(UInt32 seed, uint32_t wavefront_size = (uint32_t)-1) override {
         Base::seed(seed, wavefront_size);
         if constexpr (!dr::is_jit_v<Float>) {
             if (!m_phase_known) {
                 m_phase = seed;
                 m_phase_known = true;
             }
-            uint32_t i = (uint32_t) (seed - m_phase) & (m_block_pixels - 1);
+            uint32_t i = (uint32_t)(seed - m_phase) & (m_block_pixels - 1);
             m_x = dpc_plugin::compact_bits(i);
             m_y = dpc_plugin::compact_bits(i >> 1);
         }
@@ -166,7 +165,7 @@ public:
     Point2f next_2d(Mask active = true) override {
         if constexpr (!dr::is_jit_v<Float>) {
             DRJIT_MARK_USED(active);
-            float v[2] = { 0.f, 0.f };
+            float v[2] = {0.f, 0.f};
             dpc_sampler_get_2d(m_table->sampler, m_x, m_y, m_sample_index, m_dimension_index++, v);
             return Point2f(v[0], v[1]);
         } else {
@@ -184,7 +183,7 @@ public:
 
     MI_DECLARE_CLASS(DpcSampler)
 
-private:
+  private:
     DpcSampler(const DpcSampler &other) : Base(other) {
         m_models = other.m_models;
         m_dims = other.m_dims;
