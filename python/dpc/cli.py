@@ -21,7 +21,7 @@ import click
 import numpy as np
 
 from . import _atomic, baselines, pointio
-from ._model import DEFAULT_THREADS
+from ._model import _BACKEND, _ISA, DEFAULT_THREADS
 from .errors import DpcError, InvalidArgumentError, ModelNotFoundError
 
 _POINT_EXTS = pointio.EXTENSIONS
@@ -461,7 +461,7 @@ def list_cmd():
 @_threads_option
 @click.option(
     "--isa",
-    type=click.Choice(["auto", "scalar", "avx2", "avx512"]),
+    type=click.Choice(list(_ISA)),  # dpc_isa's members (dpc.Isa), in lower case
     default="auto",
     show_default=True,
     help="CPU code path for models. Every path gives the same bits (a canonical "
@@ -469,7 +469,7 @@ def list_cmd():
 )
 @click.option(
     "--backend",
-    type=click.Choice(["auto", "cpu", "vulkan"]),
+    type=click.Choice(list(_BACKEND)),  # dpc_backend's members (dpc.Backend)
     default="auto",
     show_default=True,
     help="What runs a model: auto (a Vulkan GPU if there is one, else the CPU), cpu, "

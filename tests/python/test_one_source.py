@@ -49,7 +49,7 @@ def test_one_version_everywhere():
 def test_enums_come_from_the_header():
     text = HEADER.read_text()
     for enum, prefix in ((dpc.Isa, "DPC_ISA_"), (dpc.Backend, "DPC_BACKEND_"), (dpc.Input, "DPC_INPUT_")):
-        values = {name: int(v) for name, v in re.findall(rf"^\s*{prefix}(\w+) = (\d+)", text, re.M)}
+        values = {name: int(v) for name, v in re.findall(rf"\b{prefix}(\w+) = (\d+)", text)}
         assert values and {k: int(v) for k, v in enum.__members__.items()} == values, enum
     assert dpc.isa_supported("scalar") and dpc.isa_supported("auto")
     m = dpc.load("bnot-2d", isa="scalar", backend="cpu", input="stratified")
