@@ -26,6 +26,7 @@ BNOT = dpc.model_path("bnot-2d-stratified")
         ([BNOT], 1, 2, 7),
         ([dpc.model_path("bnot-4d"), BNOT], 8, 5, 2**64 - 1),  # 4-D model fills two slots per set
         ([DATA / "model_3d_mixed.onnx"], 12, 3, 99),  # odd dims: the last is left out
+        ([BNOT], 3, 70, 5),  # past the 64 dimensions with precomputed shifted masks
     ],
 )
 def test_lookups_match_the_reference_bit_for_bit(models, spp, dims, seed):

@@ -330,8 +330,10 @@ DPC_API dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, f
  *   number of threads. It does not keep the models: they may be freed after dpc_sampler_create.
  *   To stay within a few nanoseconds, lookups leave the thread's error message alone unless
  *   they fail (the one exception to the convention at the top of this header).
- * - Memory: sizeof(dpc_sampler) + D * (8 * spp + 24) bytes (64 spp, 16 dimensions: 8.4 KiB),
- *   plus a 12 KiB mask shared by all samplers.
+ * - Memory: sizeof(dpc_sampler) + D * (8 * spp + 24) + min(D, 64) * 12,288 bytes (64 spp,
+ *   16 dimensions: 200.4 KiB; the second term holds each of the first 64 dimensions' moved
+ *   mask, so that a lookup reads it instead of computing it), plus a 12 KiB mask shared by all
+ *   samplers.
  * ------------------------------------------------------------------------------------------- */
 
 typedef struct dpc_sampler dpc_sampler;

@@ -68,21 +68,20 @@ void dpc_sampler_free(dpc_sampler *sampler) {
     if (!sampler) return;
     free(sampler->tables);
     free(sampler->keyed);
+    free(sampler->shifted);
     free(sampler);
 }
 
 dpc_status dpc_sampler_get_1d(const dpc_sampler *sampler, uint32_t x, uint32_t y, uint32_t index, uint32_t dimension,
                               float *out) {
     if (!sampler || !out) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "sampler or out is NULL");
-    *out = dpc_sampler_lookup_1d(sampler, x, y, index, dimension);
-    return DPC_OK;
+    return dpc_sampler_lookup_1d(sampler, x, y, index, dimension, out);
 }
 
 dpc_status dpc_sampler_get_2d(const dpc_sampler *sampler, uint32_t x, uint32_t y, uint32_t index, uint32_t dimension,
                               float *out) {
     if (!sampler || !out) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "sampler or out is NULL");
-    dpc_sampler_lookup_2d(sampler, x, y, index, dimension, out);
-    return DPC_OK;
+    return dpc_sampler_lookup_2d(sampler, x, y, index, dimension, out);
 }
 
 dpc_status dpc_sampler_table(const dpc_sampler *sampler, uint32_t t, const float **out_table) {

@@ -43,14 +43,27 @@ dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
     s->inv_spp = 1.0f / (float)n;
     s->tables = (float *)malloc((size_t)D * n * 2 * sizeof(float));
     s->keyed = (struct dpc_sampler_keyed *)malloc((size_t)D * sizeof *s->keyed);
+    s->fast_slots = D < DPC_SAMPLER_FAST_SLOTS ? D : DPC_SAMPLER_FAST_SLOTS;
+    s->shifted = (float *)malloc((size_t)s->fast_slots * DPC_SAMPLER_TILE * DPC_SAMPLER_TILE *
+                                 DPC_SAMPLER_MASK_CHANNELS * sizeof(float));
     float *set = (float *)malloc((size_t)n * widest * sizeof(float)); /* one set of the widest model */
     ranked *scratch = (ranked *)malloc((size_t)n * sizeof *scratch);
     dpc_status st = DPC_OK;
-    if (!s->tables || !s->keyed || !set || !scratch) {
+    if (!s->tables || !s->keyed || !s->shifted || !set || !scratch) {
         st = dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory for a sampler of %u x %u points", D, n);
         goto done;
     }
     for (uint32_t d = 0; d < D; d++) s->keyed[d] = dpc_sampler_keyed_of(dpc_sampler_key(s->base, d, 0));
+    for (uint32_t d = 0; d < s->fast_slots; d++) /* what dpc_sampler_locate and the lookups compute */
+        for (uint32_t y = 0; y < DPC_SAMPLER_TILE; y++)
+            for (uint32_t x = 0; x < DPC_SAMPLER_TILE; x++) {
+                const dpc_sampler_point p = dpc_sampler_locate(s, x, y, 0, d);
+                float *e = s->shifted +
+                           (((size_t)d * DPC_SAMPLER_TILE + y) * DPC_SAMPLER_TILE + x) * DPC_SAMPLER_MASK_CHANNELS;
+                e[0] = dpc_sampler_wrap(p.mask[0], p.c[0]);
+                e[1] = dpc_sampler_wrap(p.mask[1], p.c[1]);
+                e[2] = dpc_sampler_wrap(p.mask[2], p.c[0]);
+            }
     /* Fill the slots in order: the next model in turn gives a set, its dimension pairs fill slots. */
     uint32_t t = 0;
     for (uint64_t k = 0; t < D; k++) {
@@ -70,4 +83,20 @@ done:
     free(set);
     free(scratch);
     return st;
+}
+
+dpc_status dpc_sampler_lookup_2d_general(const dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index, uint32_t dim,
+                                         float out[2]) {
+    const dpc_sampler_point p = dpc_sampler_locate(s, x, y, index, dim);
+    const float *t = s->tables + ((size_t)p.table * s->spp + p.j) * 2;
+    out[0] = dpc_sampler_wrap(t[0], dpc_sampler_wrap(p.mask[0], p.c[0]));
+    out[1] = dpc_sampler_wrap(t[1], dpc_sampler_wrap(p.mask[1], p.c[1]));
+    return DPC_OK;
+}
+
+dpc_status dpc_sampler_lookup_1d_general(const dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index, uint32_t dim,
+                                         float *out) {
+    const dpc_sampler_point p = dpc_sampler_locate(s, x, y, index, dim);
+    *out = dpc_sampler_lattice(s, p.j, dpc_sampler_wrap(p.mask[2], p.c[0]), p.c[1]);
+    return DPC_OK;
 }

@@ -10,6 +10,9 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "common/rng.h"
 #include "dpc/dpc.h"
@@ -30,7 +33,16 @@ struct dpc_sampler {
     float inv_spp;                   /* 1 / n, for 1-D values */
     float *tables;                   /* D * n * 2 floats: table t, point j at (t * n + j) * 2 */
     struct dpc_sampler_keyed *keyed; /* D: what key (d, pass 0) gives, for d < D: the common case */
+    /* The common case precomputed: for pass 0 of dimension d < fast_slots, the mask moved by the
+     * key's (ox, oy) with the key's rotation added, per pixel (x mod 32, y mod 32): 3 floats,
+     * wrap(mask0, c0), wrap(mask1, c1), wrap(mask2, c0): the values the general path computes,
+     * read instead of recomputed (the same bits; bench/bench_sampler.c). */
+    uint32_t fast_slots; /* min(D, DPC_SAMPLER_FAST_SLOTS) */
+    float *shifted;      /* fast_slots * 32 * 32 * 3 floats */
 };
+
+/* Dimensions whose pass-0 lookups use precomputed shifted masks (12 KiB each). */
+#define DPC_SAMPLER_FAST_SLOTS 64u
 
 /* Key of (dimension d, pass r): everything a lookup derives for that dimension and block of
  * spp sample indices comes from it. */
@@ -61,13 +73,21 @@ static inline struct dpc_sampler_keyed dpc_sampler_keyed_of(uint64_t key) {
 /* a + b - floor(a + b) for a, b in [0, 1): the result of the float addition minus 1 when it
  * reaches 1 (exact, so a sum that rounds up to 1 gives 0). */
 static inline float dpc_sampler_wrap(float a, float b) {
-    const float t = a + b;
     /* t - (t >= 1 ? 1 : 0) without a branch (the outcome is a coin flip, so a branch would
-     * mispredict half the time): the bits of 1.0f masked by the comparison. */
+     * mispredict half the time): 1.0f masked by the comparison. */
+#if defined(__SSE2__)
+    /* in SSE registers: compare, and, subtract (the integer form below moves through a general
+     * register and back: twice the instructions on the lookups' critical path) */
+    const __m128 t = _mm_add_ss(_mm_set_ss(a), _mm_set_ss(b));
+    const __m128 one = _mm_and_ps(_mm_cmpge_ss(t, _mm_set_ss(1.0f)), _mm_set_ss(1.0f));
+    return _mm_cvtss_f32(_mm_sub_ss(t, one));
+#else
+    const float t = a + b;
     const uint32_t one_bits = (0u - (uint32_t)(t >= 1.0f)) & 0x3F800000u;
     float one;
     memcpy(&one, &one_bits, sizeof one);
     return t - one;
+#endif
 }
 
 typedef struct dpc_sampler_point {
@@ -112,23 +132,57 @@ static inline dpc_sampler_point dpc_sampler_locate(const struct dpc_sampler *s, 
     return p;
 }
 
-static inline void dpc_sampler_lookup_2d(const struct dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index,
-                                         uint32_t dim, float out[2]) {
-    const dpc_sampler_point p = dpc_sampler_locate(s, x, y, index, dim);
-    const float *t = s->tables + ((size_t)p.table * s->spp + p.j) * 2;
-    out[0] = dpc_sampler_wrap(t[0], dpc_sampler_wrap(p.mask[0], p.c[0]));
-    out[1] = dpc_sampler_wrap(t[1], dpc_sampler_wrap(p.mask[1], p.c[1]));
+/* The pixel's entry of the precomputed shifted mask of slot dim (dim < fast_slots, pass 0). */
+static inline const float *dpc_sampler_shifted_at(const struct dpc_sampler *s, uint32_t x, uint32_t y, uint32_t dim) {
+    return s->shifted + (((size_t)dim * DPC_SAMPLER_TILE + (y & (DPC_SAMPLER_TILE - 1))) * DPC_SAMPLER_TILE +
+                         (x & (DPC_SAMPLER_TILE - 1))) *
+                            DPC_SAMPLER_MASK_CHANNELS;
+}
+
+/* The pass-0 point of a fast slot: k rotated by the pixel's offset (as in dpc_sampler_locate). */
+static inline uint32_t dpc_sampler_fast_j(const struct dpc_sampler *s, uint32_t x, uint32_t y, uint32_t k,
+                                          uint32_t dim) {
+    const uint32_t n = s->spp;
+    const uint64_t h = dpc_mix64(s->keyed[dim].key ^ ((uint64_t)y << 32 | x));
+    uint32_t j = k + (uint32_t)(((h >> 32) * n) >> 32);
+    return j - (j >= n ? n : 0);
+}
+
+/* Later passes and dimensions past fast_slots (sampler.c): out of line, so that the common case
+ * below compiles to a leaf function that tail-calls these (no register saves, no frame). They
+ * return DPC_OK. */
+dpc_status dpc_sampler_lookup_2d_general(const struct dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index,
+                                         uint32_t dim, float out[2]);
+dpc_status dpc_sampler_lookup_1d_general(const struct dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index,
+                                         uint32_t dim, float *out);
+
+/* The value pair for (x, y, index, dim) into out; returns DPC_OK. */
+static inline dpc_status dpc_sampler_lookup_2d(const struct dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index,
+                                               uint32_t dim, float out[2]) {
+    if (index >= s->spp || dim >= s->fast_slots) return dpc_sampler_lookup_2d_general(s, x, y, index, dim, out);
+    /* the common case: one hash, two reads */
+    const float *m = dpc_sampler_shifted_at(s, x, y, dim);
+    const float *t = s->tables + ((size_t)dim * s->spp + dpc_sampler_fast_j(s, x, y, index, dim)) * 2;
+    out[0] = dpc_sampler_wrap(t[0], m[0]);
+    out[1] = dpc_sampler_wrap(t[1], m[1]);
+    return DPC_OK;
+}
+
+/* (j + u) / n rotated by c1: the 1-D value of point j with in-stratum offset u. */
+static inline float dpc_sampler_lattice(const struct dpc_sampler *s, uint32_t j, float u, float c1) {
+    const float lattice = ((float)j + u) * s->inv_spp; /* in [0, 1]: 1 only by rounding */
+    return dpc_sampler_wrap(lattice < 1.0f ? lattice : 0.0f, c1);
 }
 
 /* 1-D: the stratified lattice (j + u) / n, u the pixel's 1-D mask value rotated by c0, then
  * the whole lattice rotated by c1: one value per stratum, and the offset inside the stratum is
  * blue noise across pixels, so neighbouring pixels fill each other's strata. */
-static inline float dpc_sampler_lookup_1d(const struct dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index,
-                                          uint32_t dim) {
-    const dpc_sampler_point p = dpc_sampler_locate(s, x, y, index, dim);
-    const float u = dpc_sampler_wrap(p.mask[2], p.c[0]);
-    const float lattice = ((float)p.j + u) * s->inv_spp; /* in [0, 1]: 1 only by rounding */
-    return dpc_sampler_wrap(lattice < 1.0f ? lattice : 0.0f, p.c[1]);
+static inline dpc_status dpc_sampler_lookup_1d(const struct dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index,
+                                               uint32_t dim, float *out) {
+    if (index >= s->spp || dim >= s->fast_slots) return dpc_sampler_lookup_1d_general(s, x, y, index, dim, out);
+    const uint32_t j = dpc_sampler_fast_j(s, x, y, index, dim);
+    *out = dpc_sampler_lattice(s, j, dpc_sampler_shifted_at(s, x, y, dim)[2], s->keyed[dim].c[1]);
+    return DPC_OK;
 }
 
 #endif
