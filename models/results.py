@@ -64,13 +64,14 @@ def savefig(fig, name: str) -> str:
 
 
 def target_elow(t: MC.Target, nu: float) -> float:
-    """E_low of a radial target: ring means weighted by the ring's share of lattice points
-    (~ b^(n-1)), rings with 0 < ν < nu."""
-    sel = (t.nu > 0) & (t.nu < nu)
-    if not np.any(sel):
+    """E_low of a radial target by the definition the models' E_low follows: the mean, over the
+    integer frequencies with 0 < ν < nu (analysis.frequencies_below), of the target's power on
+    each one's ring (b ≤ |q| < b + 1)."""
+    q = analysis.frequencies_below(t.n_points, t.dims, nu)
+    if len(q) == 0:
         return float("nan")
-    w = t.radius[sel] ** (t.dims - 1)
-    return float(np.sum(w * t.power[sel]) / np.sum(w))
+    b = np.floor(np.sqrt(np.sum(q * q, axis=1)) + 1e-9)
+    return float(np.mean(np.interp(b, t.radius, t.power)))
 
 
 def spectrum_image(ax, sets, dims=(0, 1), nu=2.0, title=""):

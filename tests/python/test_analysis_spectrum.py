@@ -172,6 +172,31 @@ def test_bnot_256_low_frequency_energy_and_peak():
     assert 2.2 < peak < 2.6 and nu == pytest.approx(1.06, abs=0.07)
 
 
+def test_exact_low_frequency_energy_is_its_definition():
+    """E_low in 2-D equals the grid spectrum's (every frequency of the disc); in 3-D it equals a
+    brute-force mean over the integer ball, and the Monte Carlo radial spectrum reports it."""
+    x2 = np.random.default_rng(3).random((4, 300, 2))
+    grid = analysis.power_spectrum_2d(x2, nu_max=1.0, dtype=np.float64)
+    for nu in (0.3, 0.5, 0.75):
+        assert analysis.low_frequency_energy(x2, nu) == pytest.approx(grid.low_frequency_energy(nu), rel=1e-9)
+    x3 = baselines.generate("jitter", 512, dims=3, count=3, seed=2)
+    r = 0.75 * 512 ** (1 / 3)
+    k = int(r)
+    q = np.array([(a, b, c) for a in range(-k, k + 1) for b in range(-k, k + 1) for c in range(-k, k + 1)])
+    q = q[(np.sum(q * q, axis=1) > 0) & (np.sum(q * q, axis=1) < r * r)]
+    want = float(np.mean(analysis.power_spectrum_direct(x3, q)))
+    assert analysis.low_frequency_energy(x3, 0.75) == pytest.approx(want, rel=1e-12)
+    assert analysis.radial_spectrum(x3, nu_max=2.0).low_frequency_energy(0.75) == pytest.approx(want, rel=1e-12)
+    # a subspace: the same as the projection's own E_low
+    assert analysis.low_frequency_energy(x3, 0.75, dims=(0, 2)) == pytest.approx(
+        analysis.low_frequency_energy(x3[:, :, [0, 2]], 0.75), rel=1e-12
+    )
+    with pytest.raises(InvalidArgumentError, match="no integer frequencies"):
+        analysis.low_frequency_energy(np.random.default_rng(0).random((1, 1024, 10)), 0.5)
+    with pytest.raises(InvalidArgumentError):  # LimitError is one
+        analysis.low_frequency_energy(np.random.default_rng(0).random((1, 4096, 6)), 3.0)
+
+
 def test_stride_kicks_in_for_large_sets_and_stays_exact():
     x = np.random.default_rng(10).random((1, 4096, 2))
     s = analysis.power_spectrum_2d(x, max_size=129)

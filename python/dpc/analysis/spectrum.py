@@ -14,11 +14,11 @@ frequency ("stride"), still exact at the frequencies computed.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import InvalidArgumentError
+from ..errors import InvalidArgumentError, LimitError
 from ._common import as_sets, check_dims, map_sets
 
 _TWO_PI = 2.0 * math.pi
@@ -82,7 +82,9 @@ class RadialSpectrum:
 
     ``mean``: radial mean of P; ``anisotropy_db``: 10 log10(variance / mean^2) of P over the
     ring, for the realisation-averaged P; ``weights``: how much of frequency space a ring
-    stands for (grid: its number of frequencies; Monte Carlo: radius^(n-1))."""
+    stands for (grid: its number of frequencies; Monte Carlo: the ring's shell volume).
+    ``points``: the (sub)space's point sets, kept by the Monte Carlo spectrum so that
+    :meth:`low_frequency_energy` is exact there."""
 
     nu: np.ndarray
     radius: np.ndarray
@@ -94,9 +96,16 @@ class RadialSpectrum:
     n_sets: int
     dims: int
     method: str
+    points: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     def low_frequency_energy(self, nu_max: float) -> float:
-        """Mean power over the frequencies with 0 < nu < nu_max (area-weighted)."""
+        """E_low: mean power over the frequencies with 0 < nu < nu_max. Monte Carlo spectra
+        (n >= 3) evaluate it exactly at every integer frequency of that ball
+        (:func:`low_frequency_energy`): a ring average would count the whole ring that straddles
+        nu_max, where the power of a blue-noise spectrum rises steeply. Grid rings: weighted by
+        their frequency counts (exact when nu_max * sqrt(m) is an integer)."""
+        if self.method == "monte-carlo" and self.points is not None:
+            return low_frequency_energy(self.points, nu_max)
         sel = (self.nu < nu_max) & (self.samples > 0)
         if not np.any(sel):
             raise InvalidArgumentError(f"no frequencies below nu = {nu_max}")
@@ -409,7 +418,54 @@ def radial_spectrum_mc(
         n_sets=s_count,
         dims=nd,
         method="monte-carlo",
+        points=sub,
     )
+
+
+# Work bound of the exact E_low: frequencies x points x sets (about 10 s of trigonometry).
+_ELOW_WORK = 4e9
+
+
+def frequencies_below(n_points: int, dims: int, nu_max: float) -> np.ndarray:
+    """The integer frequencies q of a ``dims``-D torus with 0 < |q| / n_points^(1/dims) < nu_max,
+    one of each pair q, -q (the first nonzero coordinate positive; both have the same power):
+    shape (count, dims), ordered lexicographically. LimitError where the ball is too large to
+    list (more than 5e7 candidates)."""
+    if not nu_max > 0:
+        raise InvalidArgumentError(f"nu_max must be positive, got {nu_max}")
+    # |q|^2 < r2, strictly: a frequency exactly at nu_max (|q|^2 = 8 for nu 0.5 at m = 1,024 in
+    # 4-D) is outside whatever the rounding of m^(1/n) does
+    r2 = (nu_max * n_points ** (1.0 / dims)) ** 2 * (1.0 - 1e-12)
+    k = int(math.floor(math.sqrt(r2)))
+    if (2 * k + 1) ** dims > 5e7:
+        raise LimitError(f"the frequencies below nu = {nu_max} in {dims}-D at m = {n_points} are too many to list")
+    axis = np.arange(-k, k + 1)
+    q = np.stack(np.meshgrid(*([axis] * dims), indexing="ij"), axis=-1).reshape(-1, dims)
+    norm2 = np.sum(q * q, axis=1)
+    first = q[np.arange(len(q)), np.argmax(q != 0, axis=1)]  # the first nonzero coordinate
+    return q[(norm2 > 0) & (norm2 < r2) & (first > 0)]
+
+
+def low_frequency_energy(points, nu_max: float, *, dims=None) -> float:
+    """E_low(nu_max) by its definition (docs/analysis.md): the mean of P = |sum_k e^{2 pi i <q, x_k>}|^2 / m,
+    averaged over sets, over every integer frequency q != 0 of the (sub)space ``dims`` with
+    |q| / m^(1/n) < nu_max (:func:`frequencies_below`), each evaluated exactly
+    (:func:`power_spectrum_direct`). InvalidArgumentError where no integer frequency lies below
+    nu_max; LimitError where the ball holds too many (frequencies x points x sets > 4e9): use the
+    2-D grid spectrum or a smaller nu_max there."""
+    sets = as_sets(points)
+    s_count, m, n = sets.shape
+    d = tuple(range(n)) if dims is None else check_dims(dims, n, len(tuple(dims)))
+    q = frequencies_below(m, len(d), nu_max)
+    if len(q) == 0:
+        raise InvalidArgumentError(f"no integer frequencies below nu = {nu_max} (m = {m}, {len(d)}-D)")
+    if float(len(q)) * m * s_count > _ELOW_WORK:
+        raise LimitError(
+            f"E_low below nu = {nu_max} needs {len(q):,} frequencies x {m:,} points x {s_count} sets: "
+            "more than the exact evaluation's bound"
+        )
+    sub = np.ascontiguousarray(sets[:, :, d])
+    return float(np.mean(power_spectrum_direct(sub, q)))
 
 
 def radial_spectrum(
