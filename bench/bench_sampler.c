@@ -2,7 +2,7 @@
  *   dpc_bench_sampler MODEL SPP:DIMS [SPP:DIMS ...]
  * create: dpc_sampler_create of SPP samples per pixel and DIMS dimensions, median over repeats
  * (at least 3, until 1.5 s or 25); lookups: ns per get_2d / get_1d value over a renderer-style
- * loop (256 x 256 pixels, every sample index, 8 dimensions), median of 5 passes. */
+ * loop (256 x 256 pixels, every sample index, 8 dimensions), median of 11 passes. */
 #define _POSIX_C_SOURCE 200809L
 #include <stdio.h>
 #include <stdlib.h>
@@ -32,8 +32,8 @@ static volatile float g_sink;
 
 static double lookup_ns(const dpc_sampler *s, unsigned spp, int two_d) {
     const unsigned W = 256, dims = 8;
-    double t[5];
-    for (int pass = 0; pass < 5; pass++) {
+    double t[11];
+    for (int pass = 0; pass < 11; pass++) {
         float acc = 0.0f, v[2];
         const double start = now();
         for (unsigned y = 0; y < W; y++)
@@ -51,7 +51,7 @@ static double lookup_ns(const dpc_sampler *s, unsigned spp, int two_d) {
         t[pass] = (now() - start) * 1e9 / ((double)W * W * spp * dims);
         g_sink = acc;
     }
-    return median(t, 5);
+    return median(t, 11);
 }
 
 int main(int argc, char **argv) {

@@ -5,7 +5,7 @@
 Builds bench/bench_sampler.c in build/bench (Release) and measures, with bnot-2d-stratified:
 dpc_sampler_create for (samples per pixel, dimensions) = (1, 16), (4, 16), (16, 16), (64, 16),
 (256, 16), (64, 64); lookups in a renderer-style loop (256 x 256 pixels, every sample index up
-to 64, 8 dimensions): ns per dpc_sampler_get_2d / _get_1d value, median of 5 passes; the table
+to 64, 8 dimensions): ns per dpc_sampler_get_2d / _get_1d value, median of 11 passes; the table
 memory. Goals of the sampler issue: 64 spp x 16 dimensions built in <= 1 s, <= 10 ns per 2-D
 value.
 """
@@ -42,7 +42,7 @@ def main() -> None:
              f"`python bench/bench_sampler.py` on {cpu}, one thread, `bnot-2d-stratified`. Construction: "
              "`dpc_sampler_create` (the model's cascade on the scalar path for every table, then the "
              "projections' ranks), median over repeats. Lookups: ns per value in a renderer-style loop "
-             "(256 x 256 pixels, sample indices up to 64, 8 dimensions), median of 5 passes.", "",
+             "(256 x 256 pixels, sample indices up to 64, 8 dimensions), median of 11 passes.", "",
              "| spp | dimensions | create (ms) | get_2d (ns) | get_1d (ns) | tables (bytes) |",
              "|---:|---:|---:|---:|---:|---:|"]
     for r in rows:

@@ -54,6 +54,7 @@ dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
         goto done;
     }
     for (uint32_t d = 0; d < D; d++) s->keyed[d] = dpc_sampler_keyed_of(dpc_sampler_key(s->base, d, 0));
+    for (uint32_t d = 0; d < s->fast_slots; d++) s->fast_key[d] = s->keyed[d].key;
     for (uint32_t d = 0; d < s->fast_slots; d++) /* what dpc_sampler_locate and the lookups compute */
         for (uint32_t y = 0; y < DPC_SAMPLER_TILE; y++)
             for (uint32_t x = 0; x < DPC_SAMPLER_TILE; x++) {

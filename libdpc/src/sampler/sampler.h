@@ -25,6 +25,9 @@
 #define DPC_SAMPLER_MASK_CHANNELS 3u
 extern const float dpc_sampler_mask_data[DPC_SAMPLER_TILE * DPC_SAMPLER_TILE * DPC_SAMPLER_MASK_CHANNELS];
 
+/* Dimensions whose pass-0 lookups use precomputed shifted masks (12 KiB each). */
+#define DPC_SAMPLER_FAST_SLOTS 64u
+
 struct dpc_sampler {
     uint32_t spp;   /* n: points per table */
     uint32_t slots; /* D: tables; dimension d reads table d mod D */
@@ -39,10 +42,10 @@ struct dpc_sampler {
      * read instead of recomputed (the same bits; bench/bench_sampler.c). */
     uint32_t fast_slots; /* min(D, DPC_SAMPLER_FAST_SLOTS) */
     float *shifted;      /* fast_slots * 32 * 32 * 3 floats */
+    /* keyed[d].key for d < fast_slots, inside the object: one dependent load less on the
+     * lookups' critical path (key -> hash -> point -> table read) */
+    uint64_t fast_key[DPC_SAMPLER_FAST_SLOTS];
 };
-
-/* Dimensions whose pass-0 lookups use precomputed shifted masks (12 KiB each). */
-#define DPC_SAMPLER_FAST_SLOTS 64u
 
 /* Key of (dimension d, pass r): everything a lookup derives for that dimension and block of
  * spp sample indices comes from it. */
@@ -143,7 +146,7 @@ static inline const float *dpc_sampler_shifted_at(const struct dpc_sampler *s, u
 static inline uint32_t dpc_sampler_fast_j(const struct dpc_sampler *s, uint32_t x, uint32_t y, uint32_t k,
                                           uint32_t dim) {
     const uint32_t n = s->spp;
-    const uint64_t h = dpc_mix64(s->keyed[dim].key ^ ((uint64_t)y << 32 | x));
+    const uint64_t h = dpc_mix64(s->fast_key[dim] ^ ((uint64_t)y << 32 | x));
     uint32_t j = k + (uint32_t)(((h >> 32) * n) >> 32);
     return j - (j >= n ? n : 0);
 }
