@@ -40,6 +40,22 @@ def _array(a, name: str) -> np.ndarray:
         raise InvalidArgumentError(f"{name} must be an array of numbers: {e}") from None
 
 
+def _layer_args(x, kernels, subspaces, radius, eps, fixed) -> tuple:
+    """The layer's arguments as _core takes them (both directions)."""
+    return (
+        _array(x, "x"),
+        _array(kernels, "kernels"),
+        list(subspaces),
+        [float(r) for r in radius],
+        float(eps),
+        fixed,
+    )
+
+
+def _run_args(threads, isa) -> tuple:
+    return _integer(threads, "threads", 0, 0xFFFFFFFF), _isa(isa)
+
+
 def layer_forward(
     x,
     kernels,
@@ -52,17 +68,7 @@ def layer_forward(
     isa: str = "auto",
 ) -> np.ndarray:
     """y = layer(x): a new float64 array of x's shape."""
-    threads = _integer(threads, "threads", 0, 0xFFFFFFFF)
-    return _core.layer_forward(
-        _array(x, "x"),
-        _array(kernels, "kernels"),
-        list(subspaces),
-        [float(r) for r in radius],
-        float(eps),
-        fixed,
-        threads,
-        _isa(isa),
-    )
+    return _core.layer_forward(*_layer_args(x, kernels, subspaces, radius, eps, fixed), *_run_args(threads, isa))
 
 
 def layer_backward(
@@ -79,15 +85,6 @@ def layer_backward(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Gradients of a scalar loss L from grad_y = dL/dy: (dL/dx like x, dL/dkernels (s, b),
     summed over the sets of a batch)."""
-    threads = _integer(threads, "threads", 0, 0xFFFFFFFF)
     return _core.layer_backward(
-        _array(x, "x"),
-        _array(kernels, "kernels"),
-        list(subspaces),
-        [float(r) for r in radius],
-        float(eps),
-        fixed,
-        _array(grad_y, "grad_y"),
-        threads,
-        _isa(isa),
+        *_layer_args(x, kernels, subspaces, radius, eps, fixed), _array(grad_y, "grad_y"), *_run_args(threads, isa)
     )
