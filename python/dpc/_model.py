@@ -218,6 +218,12 @@ class Model:
         self.neighbours: float = info["neighbours"]  # neighbours per point it asks for (max_neighbours)
         self.metadata: dict[str, str] = dict(self._h.metadata())
         self.name: str = self.metadata.get("dpc.name", self.path.stem)
+        # "progressive": generate() returns ordered points, the first n of a set of m being the
+        # set of n for n = progressive_base * 2^j <= m (docs/progressive.md); "set" otherwise
+        self.order: str = self.metadata.get("dpc.order", "set")
+        self.progressive_base: int | None = (
+            int(self.metadata["dpc.progressive_base"]) if self.order == "progressive" else None
+        )
 
     def __repr__(self) -> str:
         return (

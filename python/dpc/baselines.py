@@ -10,7 +10,9 @@ Every baseline has ``generate_batch(count, n_points, dims, seed)`` returning flo
 Synthetic: ``white`` (uniform random), ``jitter`` (one uniform point per cell of a k^n grid),
 ``sobol`` and ``halton`` (scrambled, scipy.stats.qmc), ``lhs`` (Latin hypercube), ``poisson-disk``
 (scipy's PoissonDisk), ``rank1`` (Korobov rank-1 lattice) and ``fibonacci`` (2-D Fibonacci
-lattice), both with a uniform random shift (Cranley-Patterson rotation).
+lattice), both with a uniform random shift (Cranley-Patterson rotation); ``pmj02`` and
+``pmj02bn`` (progressive multi-jittered (0,2) sequences, 2-D: every prefix of 2^k points is a
+(0,2)-net).
 
 Reference: ``ref-bnot``, ``ref-jitter``, ``ref-step``, ``ref-staircase``: the point sets
 published by the paper's authors (vendored under ``dpc/data/deepsampling/pcf``, BSD-3-Clause,
@@ -169,6 +171,122 @@ def _fibonacci(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
     return _lattice(m, (1, fib[k - 1]), rng)
 
 
+# ---------------------------------------------------------------- progressive (0,2) sequences
+# Christensen, Kensler and Kilpatrick 2018, "Progressive Multi-Jittered Sample Sequences" (PMJ02
+# and its best-candidate variant PMJ02BN), written here from the paper: no maintained Python
+# package generates them (scipy.stats.qmc has Sobol', whose 2-D points are a (0,2)-sequence too,
+# but not PMJ). Every prefix of 2^k points is a (0,2)-net: each elementary interval of area 2^-k
+# (2^a x 2^(k-a) cells) holds one point.
+
+
+def _free_strata(occ: list, level: int, x0: int, y0: int, width: int) -> tuple[np.ndarray, np.ndarray]:
+    """The (x, y) strata of size 2^-level in the square [x0, x0 + width) x [y0, y0 + width)
+    (in strata) whose elementary intervals of every shape are all unoccupied."""
+    xs, ys = np.meshgrid(np.arange(x0, x0 + width), np.arange(y0, y0 + width), indexing="ij")
+    xs, ys = xs.ravel(), ys.ravel()
+    free = np.ones(xs.shape, bool)
+    for a in range(level + 1):
+        free &= ~occ[a][xs >> (level - a), ys >> a]
+    return xs[free], ys[free]
+
+
+def pmj02(m: int, rng: np.random.Generator, candidates: int = 1) -> np.ndarray:
+    """m points of a progressive multi-jittered (0,2) sequence (Christensen et al. 2018, Sec. 5):
+    from 4^k points (one per cell of a 2^k grid) the next 4^k go to the subquadrants diagonally
+    opposite the first ones, the 2 x 4^k after that to the two remaining subquadrants, each point
+    inside the strata that keep every elementary interval of the new power of two free.
+    candidates > 1 is PMJ02BN (their Sec. 6): of that many random valid positions, the one
+    farthest from all earlier points (toroidal distance)."""
+    pts = np.empty((m, 2))
+    pts[0] = rng.random(2)
+    n = 1
+
+    def occupancy(level: int) -> list:
+        cells = np.floor(pts[:n] * (1 << level)).astype(np.int64)
+        occ = [np.zeros((1 << a, 1 << (level - a)), bool) for a in range(level + 1)]
+        for a in range(level + 1):
+            occ[a][cells[:, 0] >> (level - a), cells[:, 1] >> a] = True
+        return occ
+
+    def place(i: int, square: tuple[int, int], width: int, level: int, occ: list) -> bool:
+        xs, ys = _free_strata(occ, level, square[0], square[1], width)
+        if len(xs) == 0:
+            return False
+        pick = rng.integers(0, len(xs), candidates)
+        cand = (np.stack([xs[pick], ys[pick]], 1) + rng.random((candidates, 2))) / (1 << level)
+        best = 0
+        if candidates > 1:
+            d = cand[:, None, :] - pts[None, :i, :]
+            d -= np.round(d)
+            best = int(np.argmax((d * d).sum(-1).min(1)))
+        pts[i] = cand[best]
+        c = np.floor(cand[best] * (1 << level)).astype(np.int64)
+        for a in range(level + 1):
+            occ[a][c[0] >> (level - a), c[1] >> a] = True
+        return True
+
+    def fail() -> None:  # never seen; a (0,2) extension in this order always exists in practice
+        raise RuntimeError("pmj02: no valid position for a point; try another seed")
+
+    while n < m:
+        g = 1 << ((n.bit_length() - 1) // 2)  # n = g^2 points, one per cell of the g x g grid
+        for odd in (False, True):
+            level = (2 * n).bit_length() - 1
+            occ = occupancy(level)
+            sub = (1 << level) // (2 * g)  # a subquadrant's width in strata
+            quad = [tuple(int(v) for v in np.floor(pts[i] * 2 * g)) for i in range(g * g)]
+            if not odd:
+                for i in range(min(n, m - n)):
+                    qx, qy = quad[i]
+                    if not place(n + i, ((qx ^ 1) * sub, (qy ^ 1) * sub), sub, level, occ):
+                        fail()
+            else:
+                half = n // 2  # g^2: the points whose cells get their last two subquadrants
+                first = rng.integers(0, 2, half)
+                for i in range(min(half, m - n)):
+                    qx, qy = quad[i]
+                    opts = (((qx ^ 1) * sub, qy * sub), (qx * sub, (qy ^ 1) * sub))
+                    if not place(n + i, opts[first[i]], sub, level, occ):
+                        first[i] ^= 1
+                        if not place(n + i, opts[first[i]], sub, level, occ):
+                            fail()
+                for i in range(min(half, m - n - half)):
+                    qx, qy = quad[i]
+                    opts = (((qx ^ 1) * sub, qy * sub), (qx * sub, (qy ^ 1) * sub))
+                    if not place(n + half + i, opts[1 - first[i]], sub, level, occ):
+                        fail()
+            n *= 2
+            if n >= m:
+                break
+    return pts[:m]
+
+
+def is_02_net(points) -> bool:
+    """Whether m = 2^k points form a (0,2)-net in base 2: one point in every elementary interval
+    of area 1/m, for every shape 2^a x 2^(k-a)."""
+    p = np.asarray(points, dtype=np.float64)
+    m = len(p)
+    if m < 1 or m & (m - 1):
+        raise InvalidArgumentError(f"a (0,2)-net in base 2 has a power-of-two number of points, got {m}")
+    k = m.bit_length() - 1
+    for a in range(k + 1):
+        cells = (np.floor(p[:, 0] * (1 << a)).astype(np.int64) << (k - a)) + np.floor(p[:, 1] * (1 << (k - a))).astype(
+            np.int64
+        )
+        if len(np.unique(cells)) != m:
+            return False
+    return True
+
+
+def _pmj(candidates: int):
+    def make(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
+        if n != 2:
+            raise InvalidArgumentError(f"PMJ02 sequences are 2-D, got dims = {n}")
+        return pmj02(m, rng, candidates)
+
+    return make
+
+
 @dataclass(frozen=True)
 class Baseline:
     """A synthetic sampler: ``make(m, n, rng) -> (m, n)``."""
@@ -292,6 +410,8 @@ _SYNTHETIC = [
     Baseline("poisson-disk", "maximal Poisson disk (scipy.stats.qmc.PoissonDisk), trimmed to m", _poisson_disk),
     Baseline("rank1", "Korobov rank-1 lattice (P_2-optimal generator), random shift", _rank1),
     Baseline("fibonacci", "2-D Fibonacci lattice z = (1, F_(k-1)), m = F_k, random shift", _fibonacci),
+    Baseline("pmj02", "progressive multi-jittered (0,2) sequence (Christensen et al. 2018), 2-D", _pmj(1)),
+    Baseline("pmj02bn", "PMJ02 with best-candidate blue noise (of 10 valid positions), 2-D", _pmj(10)),
 ]
 _REFERENCE = [
     ReferenceBaseline("ref-bnot", "bnot", "the authors' BNOT sets (De Goes et al. 2012)"),

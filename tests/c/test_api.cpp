@@ -149,7 +149,7 @@ TEST(Errors, MessageNamesTheProblem) {
     ASSERT_FALSE(opset.empty());
     ASSERT_EQ(dpc_model_load_memory(opset.data(), opset.size(), nullptr, &m), DPC_ERROR_UNSUPPORTED);
     std::string msg = dpc_last_error();
-    // docs/model-format.md §6: "a message naming both versions"
+    // docs/model-format.md §7: "a message naming both versions"
     EXPECT_NE(msg.find('1'), std::string::npos) << msg;
     EXPECT_NE(msg.find('2'), std::string::npos) << msg;
 }

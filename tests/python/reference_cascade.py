@@ -225,6 +225,25 @@ def generate(model: RefModel, seed: int, m: int | None = None) -> np.ndarray:
     return run_cascade(model, initial_points(model, seed, m))
 
 
+def generate_progressive(model: RefModel, seed: int, m: int, base: int) -> np.ndarray:
+    """Reference of dpc_generate_n for a progressive model (§6): a set of min(m, base) points,
+    then levels that add min(n, m - n) input points of seed + level * golden to the n so far and
+    run every layer on all of them, the first n put back after each layer."""
+    n = min(m, base)
+    y = run_cascade(model, initial_points(model, seed, n))
+    level = 1
+    while n < m:
+        add = min(n, m - n)
+        level_seed = (seed + level * int(_GOLDEN)) % (1 << 64)
+        x = np.concatenate([y, initial_points(model, level_seed, add).astype(np.float64)])
+        for layer in model.layers:
+            z = filter_layer(x, layer)
+            z[:n] = x[:n]
+            x = z
+        y, n, level = x, n + add, level + 1
+    return y
+
+
 def torus_diff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Per-coordinate distance on the unit torus: |a - b| with 0.999… and 0.000… close."""
     d = np.abs(np.asarray(a, dtype=np.float64) - np.asarray(b, dtype=np.float64))

@@ -48,6 +48,9 @@ class ReferenceSampler:
     def __init__(self, model_paths, spp: int, dims: int, seed: int):
         self.n, self.D, self.base = spp, dims, mix64(seed)
         models = [dpc.load(p, isa="scalar", threads=1) for p in model_paths]
+        # progressive models: tables read in order (rotation range 0), 1-D strata by x rank
+        self.progressive = models[0].order == "progressive"
+        self.rotate = 0 if self.progressive else spp
         self.tables = []
         k = 0
         while len(self.tables) < dims:
@@ -68,7 +71,7 @@ class ReferenceSampler:
         pass_, k = divmod(index, n)
         key = self.key(dim, pass_)
         h = mix64(key ^ ((y << 32) | x))
-        j = k + (((h >> 32) * n) >> 32)
+        j = k + (((h >> 32) * self.rotate) >> 32)
         if j >= n:
             j -= n
         ox, oy = key & 31, (key >> 5) & 31
@@ -83,5 +86,6 @@ class ReferenceSampler:
     def get_1d(self, x: int, y: int, index: int, dim: int) -> np.float32:
         t, j, m, c = self._locate(x, y, index, dim)
         u = wrap(m[2], c[0])
-        lattice = F32(F32(F32(j) + u) * F32(F32(1.0) / F32(self.n)))
+        i = int(F32(self.tables[t][j][0] * F32(self.n))) if self.progressive else j
+        lattice = F32(F32(F32(i) + u) * F32(F32(1.0) / F32(self.n)))
         return wrap(lattice if lattice < F32(1.0) else F32(0.0), c[1])

@@ -16,6 +16,7 @@ from reference_sampler import ReferenceSampler  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 BNOT = dpc.model_path("bnot-2d-stratified")
+PROGRESSIVE = dpc.model_path("bnot-2d-progressive")
 
 
 @pytest.mark.parametrize(
@@ -27,6 +28,8 @@ BNOT = dpc.model_path("bnot-2d-stratified")
         ([dpc.model_path("bnot-4d"), BNOT], 8, 5, 2**64 - 1),  # 4-D model fills two slots per set
         ([DATA / "model_3d_mixed.onnx"], 12, 3, 99),  # odd dims: the last is left out
         ([BNOT], 3, 70, 5),  # past the 64 dimensions with precomputed shifted masks
+        ([PROGRESSIVE], 64, 4, 3),  # progressive: tables in order, 1-D strata by x rank
+        ([PROGRESSIVE], 48, 70, 8),
     ],
 )
 def test_lookups_match_the_reference_bit_for_bit(models, spp, dims, seed):
@@ -73,6 +76,28 @@ def test_structure_each_pixel_gets_the_table_shifted_and_a_stratified_lattice():
             assert np.allclose(gaps, 1 / n, atol=1e-6)
         one = np.sort(s.get_1d(x, y, np.arange(n), d).astype(np.float64))
         assert np.allclose(np.diff(one), 1 / n, atol=1e-6)
+
+
+def test_progressive_pixels_read_the_table_in_order():
+    """A progressive model's pixel gets its table's points in order, shifted by one vector, so its
+    first 2^k samples are the table's prefix of 2^k points (a blue-noise set of its own); later
+    passes are the whole table again, shifted anew."""
+    n = 64
+    s = dpc.Sampler(PROGRESSIVE, samples_per_pixel=n, dimensions=3, seed=2)
+    for x, y, d in [(0, 0, 0), (17, 3, 2), (-5, 40, 1)]:
+        table = s.table(d).astype(np.float64)
+        pts = s.get_2d(x, y, np.arange(2 * n), d).astype(np.float64)
+        for p in (pts[:n], pts[n:]):
+            shift = (p - table) % 1.0
+            spread = np.abs(((shift - shift[0]) + 0.5) % 1.0 - 0.5)
+            assert spread.max() < 1e-6
+        # 1-D values: stratum rank(x of point i), so the first 16 spread like the prefix's x
+        one = s.get_1d(x, y, np.arange(n), d).astype(np.float64)
+        strata = np.floor(((one - one[0]) % 1.0) * n + 1e-4).astype(int) % n
+        ranks = np.floor(table[:, 0] * n).astype(int)
+        assert np.array_equal((strata - strata[0]) % n, (ranks - ranks[0]) % n)
+    with pytest.raises(dpc.InvalidArgumentError, match="progressive"):
+        dpc.Sampler([PROGRESSIVE, BNOT])
 
 
 def test_same_options_same_values_and_threads_agree():

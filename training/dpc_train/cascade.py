@@ -51,10 +51,13 @@ class CascadeSpec:
     eps: float = 1e-4
     grid_axes: list = field(default_factory=list)
     grid_shape: list = field(default_factory=list)
-    init: str = "zero"  # "zero" (identity cascade) or "repulsion"
+    init: str = "zero"  # "zero" (identity cascade), "repulsion", or "model" (init_model's kernels)
+    init_model: str = ""  # init = "model": a bundled model's name or a model file path
     init_sigma: float = 0.85  # repulsion: Gaussian width, in mean spacings
     init_amplitude: float = 0.05  # repulsion: kernel value at d = 0 (units of spacing)
     input: str = "uniform"  # training inputs: "uniform" or "stratified" (format §5)
+    order: str = "set"  # "set", or "progressive": generated level by level (format §6)
+    progressive_base: int = 16  # progressive: the first level's point count
 
     def __post_init__(self):
         if not 1 <= self.dims <= 64:
@@ -80,17 +83,41 @@ class CascadeSpec:
                 raise FilterConfigError(
                     f"prod(grid_shape) = {math.prod(self.grid_shape)} must equal n_points = {self.n_points}"
                 )
-        if self.init not in ("zero", "repulsion"):
-            raise FilterConfigError(f"init must be 'zero' or 'repulsion', got {self.init!r}")
+        if self.init not in ("zero", "repulsion", "model"):
+            raise FilterConfigError(f"init must be 'zero', 'repulsion' or 'model', got {self.init!r}")
+        if (self.init == "model") != bool(self.init_model):
+            raise FilterConfigError("init = 'model' goes with init_model (a model name or file), and only it")
         if self.input not in ("uniform", "stratified"):
             raise FilterConfigError(f"input must be 'uniform' or 'stratified', got {self.input!r}")
         if self.input == "stratified" and self.grid_axes:
             raise FilterConfigError("stratified input is for patterns without grid axes")
+        if self.order not in ("set", "progressive"):
+            raise FilterConfigError(f"order must be 'set' or 'progressive', got {self.order!r}")
+        if self.order == "progressive" and (self.grid_axes or not 1 <= self.progressive_base <= self.n_points):
+            raise FilterConfigError("a progressive cascade has no grid axes and 1 <= progressive_base <= n_points")
         check_layer(self.dims, torch.zeros(len(self.masks), self.bins), self.masks, self.radius, self.eps, self.fixed)
 
     @property
     def fixed(self) -> int:
         return sum(1 << a for a in self.grid_axes)
+
+
+# SplitMix64's increment: level j >= 1 of a progressive set of seed s takes its new input points
+# from seed s + j * GOLDEN (mod 2^64), docs/model-format.md §6.
+GOLDEN = 0x9E3779B97F4A7C15
+
+
+def progressive_levels(m: int, base: int) -> list[tuple[int, int]]:
+    """(start, count) of each level of a progressive set of m points (format §6): the first
+    min(m, base) points, then each level doubles the set (the last one stops at m). The first n
+    points of a set of m are the set of n for every level size n = base * 2^j <= m."""
+    levels = [(0, min(m, base))]
+    n = levels[0][1]
+    while n < m:
+        a = min(n, m - n)
+        levels.append((n, a))
+        n += a
+    return levels
 
 
 def repulsion_kernel(bins: int, rho: float, sigma: float, amplitude: float) -> torch.Tensor:
@@ -107,7 +134,8 @@ def repulsion_kernel(bins: int, rho: float, sigma: float, amplitude: float) -> t
 class Cascade(torch.nn.Module):
     """l filter layers from l_u unique [s, b] kernels, linearly interpolated across depth."""
 
-    def __init__(self, spec: CascadeSpec):
+    def __init__(self, spec: CascadeSpec, initialise: bool = True):
+        """initialise = False: zero kernels, for a caller that loads trained ones next."""
         super().__init__()
         self.spec = spec
         s, b = len(spec.masks), spec.bins
@@ -116,6 +144,30 @@ class Cascade(torch.nn.Module):
             for t, rho in enumerate(spec.radius):
                 theta[:, t] = repulsion_kernel(b, rho, spec.init_sigma, spec.init_amplitude)
         self.theta = torch.nn.Parameter(theta.float())
+        if spec.init == "model" and initialise:
+            with torch.no_grad():
+                self.theta.copy_(self._kernels_of(spec.init_model))
+
+    def _kernels_of(self, name: str) -> torch.Tensor:
+        """The unique kernels whose interpolation gives a model file's layer tables (exactly, for a
+        file trained with this architecture: least squares over the interpolation otherwise)."""
+        import dpc
+        from dpc.model_file import read_model
+
+        path = name if name.endswith(".onnx") else dpc.model_path(name)
+        f = read_model(path)
+        sp = self.spec
+        same = f.dims == sp.dims and len(f.layers) == sp.layers
+        same = same and all(L.subspaces == sp.masks and list(L.radius) == sp.radius for L in f.layers)
+        if not same or f.layers[0].kernels.shape != (len(sp.masks), sp.bins):
+            raise FilterConfigError(f"init_model {name}: its architecture differs from this config's [model]")
+        lo, hi, frac = self.layer_weights()
+        interp = torch.zeros(sp.layers, sp.unique_kernels, dtype=torch.float64)
+        interp[torch.arange(sp.layers), lo] += 1 - frac
+        interp[torch.arange(sp.layers), hi] += frac
+        tables = torch.from_numpy(np.stack([L.kernels for L in f.layers]).astype(np.float64)).reshape(sp.layers, -1)
+        theta = torch.linalg.lstsq(interp, tables).solution
+        return theta.reshape(sp.unique_kernels, len(sp.masks), sp.bins).float()
 
     def layer_weights(self) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """(lo, hi, frac): layer i uses (1−frac[i])·θ[lo[i]] + frac[i]·θ[hi[i]]."""
@@ -136,10 +188,28 @@ class Cascade(torch.nn.Module):
         move less than skin/2 (NeighbourCache; same result); None searches afresh per layer."""
         sp = self.spec
         tabs = self.tables().to(x.dtype)
+        if sp.order == "progressive":
+            if return_all:
+                raise FilterConfigError("return_all is for set cascades")
+            # level by level: the points of earlier levels are neighbours that never move. The
+            # gradient stops at them: each level learns to insert points into the set it is
+            # given (through all levels, 40 layers each, the gradient's norm grows ~10^4-fold and
+            # Adam's steps overshoot: docs/progressive.md)
+            y = x[..., :0, :]
+            for start, count in progressive_levels(x.shape[-2], sp.progressive_base):
+                level = torch.cat([y.detach(), x[..., start : start + count, :]], dim=-2)
+                y = self._run(level, tabs, impl, skin, start)
+            return y
+        return self._run(x, tabs, impl, skin, 0, return_all)
+
+    def _run(self, x, tabs, impl, skin, frozen: int, return_all: bool = False):
+        """All layers on x; the first `frozen` points stay where they are."""
+        sp = self.spec
         cache = NeighbourCache(sp.masks, sp.radius, skin) if skin is not None else None
         outs = []
         for i in range(sp.layers):
-            x = filter_layer(x, tabs[i], sp.masks, sp.radius, sp.eps, sp.fixed, impl=impl, cache=cache)
+            y = filter_layer(x, tabs[i], sp.masks, sp.radius, sp.eps, sp.fixed, impl=impl, cache=cache)
+            x = torch.cat([x[..., :frozen, :], y[..., frozen:, :]], dim=-2) if frozen else y
             if return_all:
                 outs.append(x)
         return outs if return_all else x
@@ -152,11 +222,20 @@ class Cascade(torch.nn.Module):
         generator, so a model trained on them sees what dpc.load(..., input="stratified") feeds it."""
         sp = self.spec
         m = sp.n_points if m is None else m
-        if sp.input == "stratified":
-            import dpc  # libdpc's generator, not a copy of it
+        if sp.input == "stratified" or sp.order == "progressive":
+            import dpc  # libdpc's generators, not copies of them
 
+            make = dpc.stratified if sp.input == "stratified" else dpc.uniform
             seeds = torch.randint(0, 1 << 62, (batch,), generator=generator).tolist()
-            x = torch.from_numpy(np.stack([dpc.stratified(s, m, sp.dims) for s in seeds])).double()
+            if sp.order == "progressive":  # each level's new points from the level's seed (format §6)
+                levels = progressive_levels(m, sp.progressive_base)
+                sets = [
+                    np.concatenate([make((s + j * GOLDEN) % (1 << 64), a, sp.dims) for j, (_, a) in enumerate(levels)])
+                    for s in seeds
+                ]
+            else:
+                sets = [make(s, m, sp.dims) for s in seeds]
+            x = torch.from_numpy(np.stack(sets)).double()
             return x.to(dtype=dtype, device=device)
         x = torch.rand(batch, m, sp.dims, generator=generator, dtype=torch.float64)
         if sp.grid_axes:

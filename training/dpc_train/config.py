@@ -1,8 +1,10 @@
 """Training configuration: one TOML file per pattern, backed by dataclasses.
 
     [pattern]  name, dims, points, grid_axes, grid_shape, description
-    [model]    layers, unique_kernels, bins, subspaces, radius, eps, init, init_sigma,
-               init_amplitude, input ("uniform" or "stratified": the training inputs)
+    [model]    layers, unique_kernels, bins, subspaces, radius, eps, init ("zero", "repulsion" or
+               "model"), init_sigma, init_amplitude, init_model (init = "model": a bundled
+               model's name or a model file, whose kernels the run starts from), input
+               ("uniform" or "stratified": the training inputs), order ("set" or "progressive"), progressive_base
     [loss]     name + params (registered) | source (Python code) | file (Python file)
     [train]    steps, batch, lr, lr_final, seed, device, threads, impl, checkpoint_every,
                log_every, eval_sets, run_dir, diverge_factor, diverge_patience
@@ -50,7 +52,10 @@ class ModelConfig:
     init: str = "zero"
     init_sigma: float = 0.85
     init_amplitude: float = 0.05
+    init_model: str = ""  # init = "model": start from this model's kernels (a bundled name or a file)
     input: str = "uniform"
+    order: str = "set"  # "progressive": generated level by level, every prefix a set (format §6)
+    progressive_base: int = 16
 
 
 @dataclass
@@ -101,7 +106,10 @@ class Config:
             init=m.init,
             init_sigma=m.init_sigma,
             init_amplitude=m.init_amplitude,
+            init_model=m.init_model,
             input=m.input,
+            order=m.order,
+            progressive_base=m.progressive_base,
         )
 
     def to_dict(self) -> dict:

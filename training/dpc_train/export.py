@@ -36,6 +36,9 @@ def model_spec_from_checkpoint(st: dict, quality: dict | None = None, name: str 
         "dpc.quality": json.dumps(quality, sort_keys=True),
         "dpc.input": sp.input,  # the input points it was trained on: load it with that input
     }
+    if sp.order == "progressive":  # libdpc generates it level by level (format §6)
+        meta["dpc.order"] = "progressive"
+        meta["dpc.progressive_base"] = str(sp.progressive_base)
     return mf.ModelSpec(
         dims=sp.dims,
         n_points=sp.n_points,
@@ -162,6 +165,9 @@ def export(
         loss_fn, _ = build_loss(cfg.loss, cfg.pattern.points, cfg.pattern.dims, cfg.base_dir())
         quality = measure_quality(model, loss_fn, cfg)
     spec = model_spec_from_checkpoint(st, quality or {}, name)
+    if standard_ops and spec.metadata.get("dpc.order") == "progressive":
+        # standard ONNX has no way to hold earlier levels' points in place (format §6)
+        raise ValueError("a progressive model has no standard-ops variant: export it without --standard-ops")
     # Both files are built in memory first, then each written atomically (temporary file in
     # its folder, fsync, rename): a failure leaves any existing file as it was, and no half file.
     data = model_file.build_onnx(spec).SerializeToString()

@@ -31,6 +31,15 @@ def _batch(X: torch.Tensor) -> torch.Tensor:
     return X
 
 
+def prefix(X: torch.Tensor, n: int) -> torch.Tensor:
+    """The first n points of each set: prefix(X, 256) → [B, 256, dims]. For progressive
+    patterns, whose every prefix of a level size is a point set of its own (training.md §3)."""
+    X = _batch(X)
+    if not 1 <= int(n) <= X.shape[1]:
+        raise LossError(f"prefix length must be in 1..{X.shape[1]}, got {n}")
+    return X[:, : int(n)]
+
+
 # ----------------------------------------------------------------------------------------
 # Swizzles
 # ----------------------------------------------------------------------------------------

@@ -383,6 +383,6 @@ class Trainer:
 def cascade_from_checkpoint(st: dict) -> tuple[Cascade, Config]:
     """Rebuild the trained cascade and its config from a checkpoint dict."""
     cfg = config_from_dict(st["config"], st.get("config_path", ""))
-    model = Cascade(cfg.cascade_spec())
+    model = Cascade(cfg.cascade_spec(), initialise=False)
     model.load_state_dict(st["model"])
     return model, cfg

@@ -96,6 +96,11 @@ static dpc_status choose_input(dpc_model *model, dpc_input requested) {
 static dpc_status choose_backend(dpc_model *model, dpc_backend requested) {
     model->backend = DPC_BACKEND_CPU;
     if (requested == DPC_BACKEND_CPU) return DPC_OK;
+    if (model->cascade.progressive_base) { /* its levels hold points in place: a CPU engine feature */
+        if (requested == DPC_BACKEND_AUTO) return DPC_OK;
+        return dpc_fail(DPC_ERROR_UNSUPPORTED,
+                        "a progressive model (dpc.order = \"progressive\") runs on the CPU backend only");
+    }
 #if defined(DPC_HAVE_VULKAN)
     if (requested == DPC_BACKEND_AUTO) {
         if (dpc_vk_gpu_present() && dpc_vk_engine_create(&model->cascade, 1, &model->vk) == DPC_OK)
@@ -562,7 +567,7 @@ static dpc_status generate_batch(const dpc_model *model, uint64_t seed, size_t c
     dpc_status st = dpc_generate_size(model, count, n_points, &floats);
     if (st != DPC_OK) return st;
     if (!n_points) n_points = model->cascade.n_points;
-    if (p) p->total = (uint64_t)count * model->cascade.n_layers;
+    if (p) p->total = (uint64_t)count * model->cascade.n_layers * dpc_cpu_filter_runs(&model->cascade, n_points);
 #if defined(DPC_HAVE_VULKAN)
     if (model->backend == DPC_BACKEND_VULKAN) { /* many sets per dispatch: progress once, at the end */
         if (progress_add(p, 0) != DPC_OK) return dpc_fail(DPC_ERROR_CANCELLED, "cancelled by the progress callback");

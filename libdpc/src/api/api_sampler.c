@@ -34,6 +34,12 @@ static dpc_status check_options(const dpc_sampler_options *o) {
             return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
                             "options.models[%u] (%.64s) is gridded: a sampler needs point models", j,
                             dpc_model_name(m));
+        if (!m->cascade.progressive_base != !o->models[0]->cascade.progressive_base)
+            return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
+                            "options.models[%u] (%.64s) is %s and options.models[0] (%.64s) is not: give only "
+                            "progressive models or only set models",
+                            j, dpc_model_name(m), m->cascade.progressive_base ? "progressive" : "a set model",
+                            dpc_model_name(o->models[0]));
     }
     if (o->samples_per_pixel < 1 || o->samples_per_pixel > DPC_SAMPLER_MAX_SPP)
         return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "options.samples_per_pixel is %u, must be 1 .. %u",

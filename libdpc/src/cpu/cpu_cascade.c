@@ -43,6 +43,7 @@ typedef struct workspace {
     float *x, *x_tmp;
     uint32_t *order, *order_tmp, *cell_tmp;
     float *gather;     /* per worker: 4 columns of DPC_GATHER_STRIDE floats (kernel scratch) */
+    size_t frozen;     /* points whose caller index is below this never move (progressive levels) */
     dpc_cpu_hook hook; /* NULL: never stopped */
     void *hook_ctx;
     _Atomic int stop; /* the status a hook returned (DPC_OK: go on); read by every worker */
@@ -173,12 +174,19 @@ static void sub_pass_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
         } else {
             e = s + block_cap < hi ? s + block_cap : hi;
         }
-        const unsigned count = (unsigned)(e - s);
-        for (unsigned b = 0; b < count; b++)
-            for (unsigned q = 0; q < k; q++) xs[b * k + q] = p->job.coord[q][s + b];
-        p->engine->block(&p->job, xs, count, ranges, n_ranges, acc, scratch);
+        /* the block's points that move (held points of a progressive level are skipped: each
+         * point's sum is its own, so the others' bits do not change) */
+        uint32_t which[DPC_BLOCK_MAX];
+        unsigned count = 0;
+        for (size_t t = s; t < e; t++) {
+            if (ws->order[ws->perm[t]] < ws->frozen) continue;
+            which[count] = (uint32_t)t;
+            for (unsigned q = 0; q < k; q++) xs[count * k + q] = p->job.coord[q][t];
+            count++;
+        }
+        if (count) p->engine->block(&p->job, xs, count, ranges, n_ranges, acc, scratch);
         for (unsigned b = 0; b < count; b++) {
-            float *d = ws->delta + (size_t)ws->perm[s + b] * n;
+            float *d = ws->delta + (size_t)ws->perm[which[b]] * n;
             for (unsigned q = 0; q < k; q++) d[p->dim[q]] += p->h * acc[b * k + q];
         }
         s = e;
@@ -190,14 +198,16 @@ static void sub_pass_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
 typedef struct apply_pass {
     float *x;
     const float *delta;
-    size_t n;
+    const uint32_t *order; /* working point -> caller index */
+    size_t n, frozen;
     float count[DPC_MAX_DIMS]; /* c_k, 0 for dimensions that do not move */
 } apply_pass;
 
 static void apply_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
     (void)slot;
     const apply_pass *a = (const apply_pass *)ctx;
-    for (size_t i = lo; i < hi; i++)
+    for (size_t i = lo; i < hi; i++) {
+        if (a->order[i] < a->frozen) continue;
         for (size_t d = 0; d < a->n; d++) {
             if (a->count[d] == 0.0f) continue;
             const float step = a->delta[i * a->n + d];
@@ -210,6 +220,7 @@ static void apply_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
              * maps to 0, so every output and every cell index stays in range. */
             a->x[i * a->n + d] = (y >= 0.0f && y < 1.0f) ? y : 0.0f;
         }
+    }
 }
 
 /* Physically reorder the working points by the cell order sort_cells just computed; afterwards
@@ -273,7 +284,9 @@ static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws
     }
     a.x = ws->x;
     a.delta = ws->delta;
+    a.order = ws->order;
     a.n = n;
+    a.frozen = ws->frozen;
     parallel_for(e->threads, m, apply_range, &a);
 }
 
@@ -283,9 +296,15 @@ dpc_status dpc_cpu_filter(const dpc_cascade *c, const dpc_cpu_engine *e, size_t 
 
 dpc_status dpc_cpu_filter_hooked(const dpc_cascade *c, const dpc_cpu_engine *e, size_t m, float *x, dpc_cpu_hook hook,
                                  void *ctx) {
+    return dpc_cpu_filter_frozen(c, e, m, 0, x, hook, ctx);
+}
+
+dpc_status dpc_cpu_filter_frozen(const dpc_cascade *c, const dpc_cpu_engine *e, size_t m, size_t frozen, float *x,
+                                 dpc_cpu_hook hook, void *ctx) {
     workspace ws;
     dpc_status st = workspace_init(&ws, m, c->dims, e->threads);
     if (st != DPC_OK) return st;
+    ws.frozen = frozen;
     ws.hook = hook;
     ws.hook_ctx = ctx;
     atomic_init(&ws.stop, DPC_OK);
@@ -310,8 +329,30 @@ dpc_status dpc_cpu_filter_hooked(const dpc_cascade *c, const dpc_cpu_engine *e, 
 static dpc_status generate_one(const dpc_cascade *c, dpc_input input, const dpc_cpu_engine *e, uint64_t seed, size_t m,
                                float *out, dpc_cpu_hook hook, void *ctx) {
     if (hook && hook(ctx, 0) != DPC_OK) return DPC_ERROR_CANCELLED;
-    dpc_input_fill(c, input, seed, m, out);
-    return dpc_cpu_filter_hooked(c, e, m, out, hook, ctx);
+    if (!c->progressive_base) {
+        dpc_input_fill(c, input, seed, m, out);
+        return dpc_cpu_filter_hooked(c, e, m, out, hook, ctx);
+    }
+    /* Progressive (format §6): level 0 is a set of min(m, base) points; level j >= 1 adds
+     * min(n, m - n) input points of seed + j * 0x9E3779B97F4A7C15 to the n points so far and
+     * filters them past those, which stay where they are. */
+    size_t n = m < c->progressive_base ? m : c->progressive_base;
+    dpc_input_fill(c, input, seed, n, out);
+    dpc_status st = dpc_cpu_filter_hooked(c, e, n, out, hook, ctx);
+    for (uint64_t level = 1; st == DPC_OK && n < m; level++) {
+        const size_t add = n < m - n ? n : m - n;
+        dpc_input_fill(c, input, seed + level * 0x9E3779B97F4A7C15ull, add, out + n * c->dims);
+        st = dpc_cpu_filter_frozen(c, e, n + add, n, out, hook, ctx);
+        n += add;
+    }
+    return st;
+}
+
+size_t dpc_cpu_filter_runs(const dpc_cascade *c, size_t m) {
+    size_t runs = 1;
+    if (c->progressive_base)
+        for (size_t n = m < c->progressive_base ? m : c->progressive_base; n < m; n += n < m - n ? n : m - n) runs++;
+    return runs;
 }
 
 /* Batches with several threads: whole sets go to workers, set c always from seed + c, so the

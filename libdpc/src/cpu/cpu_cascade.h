@@ -36,13 +36,23 @@ typedef dpc_status (*dpc_cpu_hook)(void *ctx, int layer_done);
 dpc_status dpc_cpu_filter_hooked(const dpc_cascade *c, const dpc_cpu_engine *e, size_t m, float *x, dpc_cpu_hook hook,
                                  void *ctx);
 
+/* dpc_cpu_filter_hooked with the first `frozen` points held in place: they are neighbours of
+ * the others but never move (the levels of a progressive model, format §6). */
+dpc_status dpc_cpu_filter_frozen(const dpc_cascade *c, const dpc_cpu_engine *e, size_t m, size_t frozen, float *x,
+                                 dpc_cpu_hook hook, void *ctx);
+
 /* count sets of m points (m already checked): set s is the input points of seed + s (kind
  * `input`, model/input.h) filtered through the cascade, at out + s * m * dims. With several
  * threads and sets below 65,536 points, whole sets go to workers (one single-threaded engine
  * each); otherwise sets run in order, each using the engine's threads. The bits are the same
  * either way. hook (or NULL) is also called (layer_done = 0) before each set; when it stops the
- * run the result is DPC_ERROR_CANCELLED with a message. */
+ * run the result is DPC_ERROR_CANCELLED with a message. A progressive cascade's sets are made
+ * level by level (format §6): dpc_cpu_filter_runs filter runs of each set. */
 dpc_status dpc_cpu_generate(const dpc_cascade *c, dpc_input input, const dpc_cpu_engine *e, uint64_t seed, size_t count,
                             size_t m, float *out, dpc_cpu_hook hook, void *ctx);
+
+/* The cascade runs (filter passes over all layers) one set of m points takes: 1, or for a
+ * progressive cascade its number of levels. */
+size_t dpc_cpu_filter_runs(const dpc_cascade *c, size_t m);
 
 #endif

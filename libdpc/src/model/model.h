@@ -36,6 +36,7 @@ typedef struct dpc_cascade {
     uint32_t grid_dims;
     uint32_t grid_axis[DPC_MAX_DIMS];
     uint32_t grid_shape[DPC_MAX_DIMS];
+    uint32_t progressive_base; /* 0: a set; else generated level by level from this count (format §6) */
     size_t n_meta;
     char **meta_keys;
     char **meta_values;

@@ -471,6 +471,18 @@ static dpc_status parse_metadata(const pb_span *entries, size_t n, dpc_cascade *
             return FAIL("grid cell count %llu differs from dpc.n_points %u", (unsigned long long)prod, c->n_points);
         c->grid_dims = (uint32_t)na;
     }
+    const char *order = dpc_cascade_meta(c, "dpc.order");
+    const char *base = dpc_cascade_meta(c, "dpc.progressive_base");
+    if (order && strcmp(order, "set") != 0) {
+        if (strcmp(order, "progressive") != 0)
+            return FAIL("metadata 'dpc.order' is '%.40s': 'set' or 'progressive'", order);
+        if (!base || !parse_uint(base, DPC_MAX_POINTS, &x) || x == 0)
+            return FAIL("a progressive model needs metadata 'dpc.progressive_base' in 1..%u", DPC_MAX_POINTS);
+        if (c->grid_dims) return FAIL("a progressive model has no grid axes");
+        c->progressive_base = (uint32_t)x;
+    } else if (base) {
+        return FAIL("metadata 'dpc.progressive_base' belongs to a model with dpc.order = 'progressive'");
+    }
     return DPC_OK;
 }
 

@@ -41,6 +41,8 @@ dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
     s->seed = o->seed;
     s->base = dpc_mix64(o->seed);
     s->inv_spp = 1.0f / (float)n;
+    s->progressive = o->models[0]->cascade.progressive_base != 0; /* all or none (api_sampler.c) */
+    s->rotate = s->progressive ? 0 : n;
     s->tables = (float *)malloc((size_t)D * n * 2 * sizeof(float));
     s->keyed = (struct dpc_sampler_keyed *)malloc((size_t)D * sizeof *s->keyed);
     s->fast_slots = D < DPC_SAMPLER_FAST_SLOTS ? D : DPC_SAMPLER_FAST_SLOTS;
@@ -98,6 +100,6 @@ dpc_status dpc_sampler_lookup_2d_general(const dpc_sampler *s, uint32_t x, uint3
 dpc_status dpc_sampler_lookup_1d_general(const dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index, uint32_t dim,
                                          float *out) {
     const dpc_sampler_point p = dpc_sampler_locate(s, x, y, index, dim);
-    *out = dpc_sampler_lattice(s, p.j, dpc_sampler_wrap(p.mask[2], p.c[0]), p.c[1]);
+    *out = dpc_sampler_lattice(s, p.table, p.j, dpc_sampler_wrap(p.mask[2], p.c[0]), p.c[1]);
     return DPC_OK;
 }

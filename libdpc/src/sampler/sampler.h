@@ -32,8 +32,12 @@ struct dpc_sampler {
     uint32_t spp;   /* n: points per table */
     uint32_t slots; /* D: tables; dimension d reads table d mod D */
     uint64_t seed;
-    uint64_t base;                   /* mix64 of the seed: the root of every key */
-    float inv_spp;                   /* 1 / n, for 1-D values */
+    uint64_t base; /* mix64 of the seed: the root of every key */
+    float inv_spp; /* 1 / n, for 1-D values */
+    /* Progressive models (format §6): tables are read in order, so that the first 2^k samples
+     * of a pixel are a progressive prefix; set models: rotated per pixel. */
+    int progressive;
+    uint32_t rotate;                 /* n for set models, 0 for progressive ones: the range of a pixel's rotation */
     float *tables;                   /* D * n * 2 floats: table t, point j at (t * n + j) * 2 */
     struct dpc_sampler_keyed *keyed; /* D: what key (d, pass 0) gives, for d < D: the common case */
     /* The common case precomputed: for pass 0 of dimension d < fast_slots, the mask moved by the
@@ -116,9 +120,10 @@ static inline dpc_sampler_point dpc_sampler_locate(const struct dpc_sampler *s, 
     if (dim >= s->slots) table = dim % s->slots;
     const struct dpc_sampler_keyed kd =
         pass == 0 && dim < s->slots ? s->keyed[dim] : dpc_sampler_keyed_of(dpc_sampler_key(s->base, dim, pass));
-    /* the pixel's rotation of the sample index: decorrelates how dimensions pair up */
+    /* the pixel's rotation of the sample index: decorrelates how dimensions pair up (none for
+     * progressive tables, whose order is their point) */
     const uint64_t h = dpc_mix64(kd.key ^ ((uint64_t)y << 32 | x));
-    uint32_t j = k + (uint32_t)(((h >> 32) * n) >> 32);
+    uint32_t j = k + (uint32_t)(((h >> 32) * s->rotate) >> 32);
     j -= j >= n ? n : 0;
     /* the pixel's mask entry, moved by (ox, oy) for this key */
     const float *m = dpc_sampler_mask_data + (((y + kd.oy) & (DPC_SAMPLER_TILE - 1)) * DPC_SAMPLER_TILE +
@@ -147,7 +152,7 @@ static inline uint32_t dpc_sampler_fast_j(const struct dpc_sampler *s, uint32_t 
                                           uint32_t dim) {
     const uint32_t n = s->spp;
     const uint64_t h = dpc_mix64(s->fast_key[dim] ^ ((uint64_t)y << 32 | x));
-    uint32_t j = k + (uint32_t)(((h >> 32) * n) >> 32);
+    uint32_t j = k + (uint32_t)(((h >> 32) * s->rotate) >> 32);
     return j - (j >= n ? n : 0);
 }
 
@@ -171,9 +176,12 @@ static inline dpc_status dpc_sampler_lookup_2d(const struct dpc_sampler *s, uint
     return DPC_OK;
 }
 
-/* (j + u) / n rotated by c1: the 1-D value of point j with in-stratum offset u. */
-static inline float dpc_sampler_lattice(const struct dpc_sampler *s, uint32_t j, float u, float c1) {
-    const float lattice = ((float)j + u) * s->inv_spp; /* in [0, 1]: 1 only by rounding */
+/* (i + u) / n rotated by c1: the 1-D value of point j of table t with in-stratum offset u, where
+ * i = j, or for progressive tables the rank of point j's x (its table value (i + 1/2) / n times n,
+ * exact for n < 2^22), so that a prefix's strata are spread like its points. */
+static inline float dpc_sampler_lattice(const struct dpc_sampler *s, uint32_t t, uint32_t j, float u, float c1) {
+    const uint32_t i = s->progressive ? (uint32_t)(s->tables[((size_t)t * s->spp + j) * 2] * (float)s->spp) : j;
+    const float lattice = ((float)i + u) * s->inv_spp; /* in [0, 1]: 1 only by rounding */
     return dpc_sampler_wrap(lattice < 1.0f ? lattice : 0.0f, c1);
 }
 
@@ -184,7 +192,7 @@ static inline dpc_status dpc_sampler_lookup_1d(const struct dpc_sampler *s, uint
                                                uint32_t dim, float *out) {
     if (index >= s->spp || dim >= s->fast_slots) return dpc_sampler_lookup_1d_general(s, x, y, index, dim, out);
     const uint32_t j = dpc_sampler_fast_j(s, x, y, index, dim);
-    *out = dpc_sampler_lattice(s, j, dpc_sampler_shifted_at(s, x, y, dim)[2], s->keyed[dim].c[1]);
+    *out = dpc_sampler_lattice(s, dim, j, dpc_sampler_shifted_at(s, x, y, dim)[2], s->keyed[dim].c[1]);
     return DPC_OK;
 }
 

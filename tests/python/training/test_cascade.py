@@ -2,6 +2,7 @@
 
 import math
 
+import numpy as np
 import pytest
 import torch
 
@@ -161,3 +162,47 @@ def test_stratified_training_inputs_are_libdpcs():
         assert torch.equal(x[b], torch.from_numpy(dpc.stratified(s, 64, 2)).double())
     cells = (x[0] * 8).floor().long()
     assert len({(int(i), int(j)) for i, j in cells}) == 64  # one point in each of the 8 x 8 cells
+
+
+def test_init_from_a_model_reproduces_its_tables():
+    """init = "model": the unique kernels are solved from the file's per-layer tables, so the
+    cascade starts as exactly that model (bnot-2d-stratified: 40 layers from 10 kernels)."""
+    import dpc
+    from dpc.model_file import read_model
+
+    spec = CascadeSpec(
+        dims=2, n_points=1024, layers=40, unique_kernels=10, bins=32, init="model", init_model="bnot-2d-stratified"
+    )
+    tables = Cascade(spec).tables().detach().numpy()
+    want = np.stack([L.kernels for L in read_model(dpc.model_path("bnot-2d-stratified")).layers])
+    assert np.abs(tables - want).max() < 1e-6
+    with pytest.raises(FilterConfigError, match="architecture"):
+        Cascade(CascadeSpec(dims=2, n_points=64, layers=8, unique_kernels=2, init="model", init_model="bnot-2d"))
+    with pytest.raises(FilterConfigError, match="init_model"):
+        CascadeSpec(dims=2, n_points=64, init="model")
+    assert np.count_nonzero(Cascade(spec, initialise=False).tables().detach().numpy()) == 0
+
+
+def test_progressive_levels_and_forward_hold_earlier_levels():
+    from dpc_train.cascade import progressive_levels
+
+    assert progressive_levels(100, 16) == [(0, 16), (16, 16), (32, 32), (64, 36)]
+    assert progressive_levels(10, 16) == [(0, 10)]
+    spec = CascadeSpec(
+        dims=2,
+        n_points=64,
+        layers=3,
+        unique_kernels=2,
+        bins=8,
+        radius=[3.0],
+        init="repulsion",
+        order="progressive",
+        progressive_base=16,
+    )
+    model = Cascade(spec)
+    x = torch.rand(2, 64, 2, dtype=torch.float64, generator=torch.Generator().manual_seed(0))
+    with torch.no_grad():
+        y = model(x)
+        first = model(x[:, :32])
+    assert torch.equal(y[:, :32], first)  # the set of 32 is the prefix of the set of 64
+    assert not torch.equal(y[:, 32:], x[:, 32:])  # the last level moved

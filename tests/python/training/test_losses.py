@@ -277,3 +277,17 @@ def test_radial_target_sources_and_2d_spectrum_radials():
     assert g[0] == 0
     with pytest.raises(T.LossError):
         T.spectrum2d_radial("green", 1024, nu_max=4.0)  # stored only to ν ≈ 1.97
+
+
+def test_prefix_keeps_the_first_points_and_its_gradient():
+    X = torch.rand(2, 20, 2, dtype=torch.float64, requires_grad=True)
+    assert torch.equal(L.prefix(X, 8), X[:, :8])
+    assert L.prefix(X[0], 5).shape == (1, 5, 2)
+    with pytest.raises(L.LossError):
+        L.prefix(X, 21)
+    with pytest.raises(L.LossError):
+        L.prefix(X, 0)
+    # a loss over prefixes, as a progressive pattern's: gradient reaches only the points it sees
+    assert torch.autograd.gradcheck(lambda x: L.radspec(L.prefix(x, 12), nu_max=1.5).sum(), (X,))
+    L.radspec(L.prefix(X, 12), nu_max=1.5).sum().backward()
+    assert torch.all(X.grad[:, 12:] == 0) and torch.any(X.grad[:, :12] != 0)

@@ -1,0 +1,166 @@
+"""Quality of every power-of-two prefix of progressive point sets (docs/progressive.md).
+
+    python bench/bench_progressive.py                 # 64 sets, m = 1,024 and 4,096: writes docs/progressive.md
+    python bench/bench_progressive.py --quick         # 16 sets, m = 1,024, prints only
+    python bench/bench_progressive.py --quick --model runs/x.onnx    # another progressive model
+
+For each m and each prefix n = 16, 32, ..., m, over the same sets: E_low below nu = 0.5 and 0.75
+(exact, dpc.analysis.low_frequency_energy; white noise = 1), delta_min (minimum toroidal distance
+/ that of the densest packing of n discs) and the relative variance of the Monte Carlo estimate
+for a family of Gaussians and of half-planes (dpc.analysis.integration). Samplers: the
+progressive model's first n points, a dpc set made for n points (bnot-2d-stratified, not
+progressive: the quality a prefix is held to), PMJ02BN and PMJ02 (dpc.baselines, from
+Christensen et al. 2018), scrambled Sobol' (scipy) and white noise; every set of a sampler is one
+seed. The goals of the progressive-dpc issue are checked and printed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import re
+import subprocess
+import time
+from pathlib import Path
+
+import numpy as np
+
+import dpc
+from dpc import baselines
+from dpc.analysis.integration import integrands, relative_variance
+from dpc.analysis.pcf import min_distance
+from dpc.analysis.spectrum import low_frequency_energy
+
+ROOT = Path(__file__).resolve().parents[1]
+DOC = ROOT / "docs" / "progressive.md"
+PROGRESSIVE = "bnot-2d-progressive"
+SET_MODEL = "bnot-2d-stratified"
+SAMPLERS = ["progressive dpc", "dpc set", "pmj02bn", "pmj02", "sobol", "white"]
+METRICS = [
+    ("elow50", "E_low nu<0.5"),
+    ("elow75", "E_low nu<0.75"),
+    ("dmin", "delta_min"),
+    ("gauss", "Gaussian rel. variance"),
+    ("half", "half-plane rel. variance"),
+]
+FAMILIES = {"gauss": integrands("gaussian", 16, seed=7), "half": integrands("heaviside", 16, seed=7)}
+
+
+def prefixes(m: int) -> list[int]:
+    return [1 << k for k in range(4, m.bit_length()) if 1 << k <= m]
+
+
+def measure(sets: np.ndarray) -> dict[str, float]:
+    return {
+        "elow50": low_frequency_energy(sets, 0.5),
+        "elow75": low_frequency_energy(sets, 0.75),
+        "dmin": min_distance(sets).mean_ratio,
+        "gauss": float(relative_variance(sets, FAMILIES["gauss"]).mean()),
+        "half": float(relative_variance(sets, FAMILIES["half"]).mean()),
+    }
+
+
+def run(m: int, count: int, seed: int, model: str = PROGRESSIVE) -> dict:
+    prog, plain = dpc.load(model, backend="cpu"), dpc.load(SET_MODEL, backend="cpu")
+    t = time.perf_counter()
+    full = {
+        "progressive dpc": prog.generate_batch(count, seed, m).astype(np.float64),
+        "pmj02bn": baselines.generate("pmj02bn", m, 2, count, seed),
+        "pmj02": baselines.generate("pmj02", m, 2, count, seed),
+        "sobol": baselines.generate("sobol", m, 2, count, seed),
+        "white": baselines.generate("white", m, 2, count, seed),
+    }
+    print(f"m = {m}: {count} sets of each sampler in {time.perf_counter() - t:.0f} s")
+    res: dict = {}
+    for n in prefixes(m):
+        row = {name: measure(sets[:, :n]) for name, sets in full.items()}
+        row["dpc set"] = measure(plain.generate_batch(count, seed, n).astype(np.float64))
+        res[n] = row
+        print(
+            f"  n = {n:5d}: E_low<0.5 "
+            + "  ".join(f"{s} {row[s]['elow50']:.4f}" for s in SAMPLERS)
+        )
+    return res
+
+
+def goals(results: dict[int, dict]) -> list[tuple[str, bool, str]]:
+    out = []
+    for m, res in results.items():
+        ns = sorted(res)
+        r_dpc = [res[n]["progressive dpc"]["elow50"] / res[n]["dpc set"]["elow50"] for n in ns]
+        r_pmj = [res[n]["progressive dpc"]["elow50"] / res[n]["pmj02bn"]["elow50"] for n in ns]
+        r_var = [res[n]["progressive dpc"]["gauss"] / res[n]["pmj02bn"]["gauss"] for n in ns]
+        full = res[m]
+        r_full = max(full["progressive dpc"][k] / full["dpc set"][k] for k in ("elow50", "elow75"))
+        worst = lambda r: f"worst x{max(r):.2f} at n = {ns[int(np.argmax(r))]}"  # noqa: E731
+        out += [
+            (f"m = {m}: every prefix's E_low nu<0.5 <= 3 x a dpc set's", max(r_dpc) <= 3.0, worst(r_dpc)),
+            (f"m = {m}: every prefix's E_low nu<0.5 <= 0.1 x PMJ02BN's", max(r_pmj) <= 0.1, worst(r_pmj)),
+            (
+                f"m = {m}: the full set within 1.2 x {SET_MODEL}'s E_low (both bands)",
+                r_full <= 1.2,
+                f"x{r_full:.2f}",
+            ),
+            (f"m = {m}: every prefix's Gaussian variance <= PMJ02BN's", max(r_var) <= 1.0, worst(r_var)),
+        ]
+    return out
+
+
+def tree() -> str:
+    try:
+        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
+    except OSError:
+        return "?"
+
+
+def section(results: dict[int, dict], checks, count: int) -> str:
+    cpu = platform.processor() or platform.machine()
+    try:
+        cpu = next(ln.split(":", 1)[1].strip() for ln in open("/proc/cpuinfo") if ln.startswith("model name"))
+    except (OSError, StopIteration):
+        pass
+    lines = [
+        f"Measured by `python bench/bench_progressive.py` (tree {tree()}) on {cpu}: {count} sets of each "
+        "sampler and size, set i from seed i. White noise has E_low = 1; delta_min = 1 is the densest packing.",
+        "",
+        "Goals:",
+        "",
+    ]
+    lines += [f"- **{'met' if ok else 'missed'}**: {g} ({msg})" for g, ok, msg in checks]
+    for m, res in results.items():
+        for key, title in METRICS:
+            lines += ["", f"### m = {m:,}: {title}", ""]
+            lines += ["| prefix n | " + " | ".join(SAMPLERS) + " |", "|---:|" + "---:|" * len(SAMPLERS)]
+            fmt = "{:.3f}" if key == "dmin" else "{:.3g}"
+            for n in sorted(res):
+                lines.append(f"| {n:,} | " + " | ".join(fmt.format(res[n][s][key]) for s in SAMPLERS) + " |")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--sets", type=int, default=64)
+    ap.add_argument("--sizes", type=int, nargs="+", default=[1024, 4096])
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--quick", action="store_true", help="16 sets at m = 1,024; prints, does not write docs/")
+    ap.add_argument("--model", default=PROGRESSIVE, help="another progressive model (name or .onnx); prints only")
+    args = ap.parse_args()
+    if args.quick:
+        args.sets, args.sizes = 16, [1024]
+    results = {m: run(m, args.sets, args.seed, args.model) for m in args.sizes}
+    checks = goals(results)
+    print("\nGoals:")
+    for g, ok, msg in checks:
+        print(f"  [{'met' if ok else 'MISSED'}] {g}: {msg}")
+    if args.quick or args.model != PROGRESSIVE:
+        return
+    text = DOC.read_text()
+    begin, end = "<!-- bench_progressive:begin -->", "<!-- bench_progressive:end -->"
+    new = f"{begin}\n{section(results, checks, args.sets)}\n{end}"
+    text = re.sub(re.escape(begin) + ".*?" + re.escape(end), lambda _: new, text, flags=re.S)
+    DOC.write_text(text)
+    print(f"wrote {DOC}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,119 @@
+"""Progressive models (docs/model-format.md §6, docs/progressive.md): the ordering contract (the
+first n points of a set of m are the set of n exactly for the level sizes n = base * 2^j),
+libdpc against the independent float64 reference of §6, the same bits on every ISA path, thread
+count and batch, refused metadata, and the bundled model's prefix quality on a small case."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import dpc
+import reference_cascade as rc
+from cpu_isa import VECTOR_ISAS
+from dpc.analysis.pcf import min_distance
+from dpc.analysis.spectrum import low_frequency_energy
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+
+
+def progressive_copy(path: Path, **meta) -> Path:
+    from dpc.model_file import read_model, write_model
+
+    spec = read_model(DATA / "model_2d.onnx")
+    spec.metadata.update(meta)
+    write_model(spec, path)
+    return path
+
+
+@pytest.fixture(scope="module")
+def prog_path(tmp_path_factory) -> Path:
+    path = tmp_path_factory.mktemp("progressive") / "model_2d_progressive.onnx"
+    return progressive_copy(path, **{"dpc.order": "progressive", "dpc.progressive_base": "16"})
+
+
+def test_the_order_is_in_the_metadata(prog_path):
+    m = dpc.load(prog_path)
+    assert (m.order, m.progressive_base) == ("progressive", 16)
+    assert (dpc.load(DATA / "model_2d.onnx").order, dpc.load(DATA / "model_2d.onnx").progressive_base) == ("set", None)
+    assert dpc.load("bnot-2d-progressive").order == "progressive"
+
+
+@pytest.mark.parametrize("seed", [0, 7, 2**64 - 1])
+def test_prefixes_of_level_sizes_are_the_smaller_sets(prog_path, seed):
+    m = dpc.load(prog_path)
+    full = m.generate(seed, 300)  # levels 16, 32, ..., 256, then 44 more
+    for n in (1, 5, 16, 32, 64, 128, 256):
+        assert np.array_equal(full[:n], m.generate(seed, n)[:n]) == (n >= 16), n
+    # a count that is not a level size: its levels are 16 .. 64 and 36 more, so it shares the
+    # first 64 points with the set of 300 and not the next 36
+    part = m.generate(seed, 100)
+    assert np.array_equal(part[:64], full[:64])
+    assert not np.array_equal(part[64:], full[64:100])
+
+
+def test_the_first_level_is_a_set_of_its_own(prog_path):
+    # below the base count the model is an ordinary set model: all points move together
+    m, plain = dpc.load(prog_path), dpc.load(DATA / "model_2d.onnx")
+    assert np.array_equal(m.generate(3, 12), plain.generate(3, 12))
+    assert np.array_equal(m.generate(3, 16), plain.generate(3, 16))
+    assert not np.array_equal(m.generate(3, 40), plain.generate(3, 40))
+
+
+@pytest.mark.parametrize("isa", ["scalar"] + VECTOR_ISAS)
+def test_matches_the_float64_reference(prog_path, isa):
+    ref = rc.load_reference(prog_path)
+    model = dpc.load(prog_path, isa=isa)
+    for seed, m in [(0, 200), (11, 48), (2**63, 16)]:
+        want = rc.generate_progressive(ref, seed, m, 16)
+        got = model.generate(seed, m)
+        assert float(rc.torus_diff(got, want).max()) < 1e-5, (seed, m)
+
+
+def test_same_bits_on_every_path_thread_count_and_batch(prog_path):
+    one = dpc.load(prog_path, isa="scalar", threads=1).generate_batch(3, 5, 500)
+    for isa in ["scalar"] + VECTOR_ISAS:
+        for threads in (1, 2, 4):
+            got = dpc.load(prog_path, isa=isa, threads=threads).generate_batch(3, 5, 500)
+            assert np.array_equal(got.view(np.uint32), one.view(np.uint32)), (isa, threads)
+    single = dpc.load(prog_path).generate(6, 500)
+    assert np.array_equal(single, one[1])
+
+
+@pytest.mark.parametrize(
+    "meta,match",
+    [
+        ({"dpc.order": "sideways", "dpc.progressive_base": "16"}, "dpc.order"),
+        ({"dpc.order": "progressive"}, "progressive_base"),
+        ({"dpc.order": "progressive", "dpc.progressive_base": "0"}, "progressive_base"),
+        ({"dpc.order": "progressive", "dpc.progressive_base": "sixteen"}, "progressive_base"),
+        ({"dpc.progressive_base": "16"}, "progressive_base"),
+    ],
+)
+def test_bad_order_metadata_is_a_format_error(tmp_path, meta, match):
+    path = progressive_copy(tmp_path / "bad.onnx", **meta)
+    with pytest.raises(dpc.ModelFormatError, match=match):
+        dpc.load(path)
+
+
+def test_runs_on_the_cpu_and_says_so_for_vulkan(prog_path):
+    assert dpc.load(prog_path, backend="auto").backend == "cpu"
+    with pytest.raises(dpc.UnsupportedError):
+        dpc.load(prog_path, backend="vulkan")
+
+
+def test_progress_counts_every_level(prog_path):
+    seen = []
+    dpc.load(prog_path).generate(1, 256, progress=lambda done, total: seen.append((done, total)))
+    assert seen and seen[-1][0] == seen[-1][1] == 4 * 5  # 4 layers x levels 16, 32, 64, 128, 256
+
+
+def test_bundled_model_prefixes_are_blue_noise():
+    """A small case of bench/bench_progressive.py: 16 sets of 256 points; each power-of-two
+    prefix's low-frequency energy (white noise: 1) and minimum distance."""
+    sets = dpc.load("bnot-2d-progressive", backend="cpu").generate_batch(16, 0, 256).astype(np.float64)
+    for n in (16, 32, 64, 128, 256):
+        assert low_frequency_energy(sets[:, :n], 0.5) < 0.05, n
+        assert min_distance(sets[:, :n]).mean_ratio > 0.5, n
