@@ -76,10 +76,7 @@ def run(m: int, count: int, seed: int, model: str = PROGRESSIVE) -> dict:
         row = {name: measure(sets[:, :n]) for name, sets in full.items()}
         row["dpc set"] = measure(plain.generate_batch(count, seed, n).astype(np.float64))
         res[n] = row
-        print(
-            f"  n = {n:5d}: E_low<0.5 "
-            + "  ".join(f"{s} {row[s]['elow50']:.4f}" for s in SAMPLERS)
-        )
+        print(f"  n = {n:5d}: E_low<0.5 " + "  ".join(f"{s} {row[s]['elow50']:.4f}" for s in SAMPLERS))
     return res
 
 
@@ -92,7 +89,10 @@ def goals(results: dict[int, dict]) -> list[tuple[str, bool, str]]:
         r_var = [res[n]["progressive dpc"]["gauss"] / res[n]["pmj02bn"]["gauss"] for n in ns]
         full = res[m]
         r_full = max(full["progressive dpc"][k] / full["dpc set"][k] for k in ("elow50", "elow75"))
-        worst = lambda r: f"worst x{max(r):.2f} at n = {ns[int(np.argmax(r))]}"  # noqa: E731
+
+        def worst(r: list[float], ns: list[int] = ns) -> str:
+            return f"worst x{max(r):.2f} at n = {ns[int(np.argmax(r))]}"
+
         out += [
             (f"m = {m}: every prefix's E_low nu<0.5 <= 3 x a dpc set's", max(r_dpc) <= 3.0, worst(r_dpc)),
             (f"m = {m}: every prefix's E_low nu<0.5 <= 0.1 x PMJ02BN's", max(r_pmj) <= 0.1, worst(r_pmj)),
@@ -108,7 +108,8 @@ def goals(results: dict[int, dict]) -> list[tuple[str, bool, str]]:
 
 def tree() -> str:
     try:
-        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
+        git = ["git", "rev-parse", "--short", "HEAD"]
+        return subprocess.run(git, cwd=ROOT, capture_output=True, text=True).stdout.strip()
     except OSError:
         return "?"
 
