@@ -33,16 +33,18 @@ from dpc.analysis.spectrum import low_frequency_energy
 
 ROOT = Path(__file__).resolve().parents[1]
 DOC = ROOT / "docs" / "progressive.md"
-PROGRESSIVE = "bnot-2d-progressive"
+PROGRESSIVE = "progressive-2d"
 SET_MODEL = "bnot-2d-stratified"
-SAMPLERS = ["progressive dpc", "dpc set", "pmj02bn", "pmj02", "sobol", "white"]
+SAMPLERS = ["progressive dpc", "progressive dpc (0,2)", "dpc set", "pmj02bn", "pmj02", "sobol", "white"]
 METRICS = [
     ("elow50", "E_low nu<0.5"),
     ("elow75", "E_low nu<0.75"),
     ("dmin", "delta_min"),
     ("gauss", "Gaussian rel. variance"),
     ("half", "half-plane rel. variance"),
+    ("net", "elementary-interval occupancy (1: a (0,2)-net)"),
 ]
+STRATIFIED_UP_TO = [0, 16, 64, 256, 1024, 4096]  # the stratified variant's trade-off curve
 FAMILIES = {"gauss": integrands("gaussian", 16, seed=7), "half": integrands("heaviside", 16, seed=7)}
 
 
@@ -57,14 +59,17 @@ def measure(sets: np.ndarray) -> dict[str, float]:
         "dmin": min_distance(sets).mean_ratio,
         "gauss": float(relative_variance(sets, FAMILIES["gauss"]).mean()),
         "half": float(relative_variance(sets, FAMILIES["half"]).mean()),
+        "net": float(np.mean([baselines.net_occupancy(s) for s in sets])),
     }
 
 
 def run(m: int, count: int, seed: int, model: str = PROGRESSIVE) -> dict:
     prog, plain = dpc.load(model, backend="cpu"), dpc.load(SET_MODEL, backend="cpu")
     t = time.perf_counter()
+    prog_sets = prog.generate_batch(count, seed, m).astype(np.float64)
     full = {
-        "progressive dpc": prog.generate_batch(count, seed, m).astype(np.float64),
+        "progressive dpc": prog_sets,
+        "progressive dpc (0,2)": np.stack([dpc.stratify.stratify_02(x) for x in prog_sets]),
         "pmj02bn": baselines.generate("pmj02bn", m, 2, count, seed),
         "pmj02": baselines.generate("pmj02", m, 2, count, seed),
         "sobol": baselines.generate("sobol", m, 2, count, seed),
@@ -78,6 +83,28 @@ def run(m: int, count: int, seed: int, model: str = PROGRESSIVE) -> dict:
         res[n] = row
         print(f"  n = {n:5d}: E_low<0.5 " + "  ".join(f"{s} {row[s]['elow50']:.4f}" for s in SAMPLERS))
     return res
+
+
+def tradeoff(m: int, count: int, seed: int, model: str = PROGRESSIVE) -> dict[float, dict]:
+    """The stratified variant with its first 0, 16, ..., m points (0,2)-stratified: over all
+    power-of-two prefixes from 16, the worst E_low nu<0.5 relative to a dpc set of the same size,
+    the mean elementary-interval occupancy, delta_min of the full set, and the full set's Gaussian
+    variance relative to PMJ02BN's."""
+    prog = dpc.load(model, backend="cpu").generate_batch(count, seed, m).astype(np.float64)
+    plain = dpc.load(SET_MODEL, backend="cpu")
+    ref = {n: low_frequency_energy(plain.generate_batch(count, seed, n).astype(np.float64), 0.5) for n in prefixes(m)}
+    pmj = relative_variance(baselines.generate("pmj02bn", m, 2, count, seed), FAMILIES["gauss"]).mean()
+    out = {}
+    for t in [u for u in STRATIFIED_UP_TO if u <= m]:
+        sets = np.stack([dpc.stratify.stratify_02(x, up_to=t) for x in prog]) if t else prog
+        out[t] = {
+            "elow": max(low_frequency_energy(sets[:, :n], 0.5) / ref[n] for n in prefixes(m)),
+            "net": float(np.mean([baselines.net_occupancy(s[:n]) for s in sets for n in prefixes(m)])),
+            "dmin": min_distance(sets).mean_ratio,
+            "gauss": float(relative_variance(sets, FAMILIES["gauss"]).mean() / pmj),
+        }
+        print(f"  stratified up to {t:5d}: " + ", ".join(f"{k} {v:.3f}" for k, v in out[t].items()))
+    return out
 
 
 def goals(results: dict[int, dict]) -> list[tuple[str, bool, str]]:
@@ -114,7 +141,7 @@ def tree() -> str:
         return "?"
 
 
-def section(results: dict[int, dict], checks, count: int) -> str:
+def section(results: dict[int, dict], checks, count: int, curve: dict[float, dict], curve_m: int) -> str:
     cpu = platform.processor() or platform.machine()
     try:
         cpu = next(ln.split(":", 1)[1].strip() for ln in open("/proc/cpuinfo") if ln.startswith("model name"))
@@ -128,6 +155,22 @@ def section(results: dict[int, dict], checks, count: int) -> str:
         "",
     ]
     lines += [f"- **{'met' if ok else 'missed'}**: {g} ({msg})" for g, ok, msg in checks]
+    lines += [
+        "",
+        f"### The stratified variant's trade-off (m = {curve_m:,})",
+        "",
+        "`dpc.stratify.stratify_02(points, up_to)` on the progressive sets (their first `up_to` points "
+        "made a (0,2)-sequence, the rest as they are): every prefix's E_low "
+        "ν<0.5 over a dpc set's (the worst prefix), the elementary-interval occupancy averaged over "
+        "prefixes and shapes (1: every prefix a (0,2)-net), the full set's δ_min and its Gaussian "
+        "variance over PMJ02BN's.",
+        "",
+        "| stratified up to | worst E_low ratio | occupancy | δ_min | Gaussian variance / PMJ02BN's |",
+        "|---:|---:|---:|---:|---:|",
+    ]
+    lines += [
+        f"| {t:g} | {r['elow']:.2f} | {r['net']:.3f} | {r['dmin']:.3f} | {r['gauss']:.2f} |" for t, r in curve.items()
+    ]
     for m, res in results.items():
         for key, title in METRICS:
             lines += ["", f"### m = {m:,}: {title}", ""]
@@ -149,6 +192,8 @@ def main() -> None:
     if args.quick:
         args.sets, args.sizes = 16, [1024]
     results = {m: run(m, args.sets, args.seed, args.model) for m in args.sizes}
+    print(f"stratified variant, m = {args.sizes[0]}:")
+    curve = tradeoff(args.sizes[0], args.sets, args.seed, args.model)
     checks = goals(results)
     print("\nGoals:")
     for g, ok, msg in checks:
@@ -157,7 +202,7 @@ def main() -> None:
         return
     text = DOC.read_text()
     begin, end = "<!-- bench_progressive:begin -->", "<!-- bench_progressive:end -->"
-    new = f"{begin}\n{section(results, checks, args.sets)}\n{end}"
+    new = f"{begin}\n{section(results, checks, args.sets, curve, args.sizes[0])}\n{end}"
     text = re.sub(re.escape(begin) + ".*?" + re.escape(end), lambda _: new, text, flags=re.S)
     DOC.write_text(text)
     print(f"wrote {DOC}")

@@ -1,23 +1,25 @@
 """The design study behind progressive dpc (docs/progressive.md, "Design"): prefix quality of
-the alternatives that were measured before bnot-2d-progressive was trained.
+the alternatives measured before progressive-2d was chosen.
 
     python bench/progressive_alternatives.py            # 16 sets of 1,024 points, prints a table
 
+For each alternative and prefix n = 16 ... 1,024: E_low nu<0.5 of the prefixes over that of a
+bnot-2d-stratified set made for n points (the progressive-dpc issue's goal: <= 3), and delta_min.
 * reorder: a finished bnot-2d-stratified set, ordered by greedy sample elimination (Yuksel 2015,
   weights (1 - d / 2r)^8 with r the hexagonal-packing radius of the target count): halve the set,
   keep the survivors as the prefix, repeat on them. The full set stays a dpc set; each prefix
   is a subset of it.
-* levels, untrained: bnot-2d-stratified's cascade run level by level with the earlier points held
-  in place (docs/model-format.md §6), i.e. the progressive generation rule with a cascade that
-  was trained for whole sets.
-* levels, trained: bnot-2d-progressive (the same rule, a cascade fine-tuned for it).
-Reference: a bnot-2d-stratified set made for each prefix size.
+* levels: the progressive rule (docs/model-format.md §6: each level's new points filtered past
+  the earlier levels' points, which stay in place) with trained set cascades (bnot-2d-stratified
+  and bnot-2d, their 40 layers repeated 1 or 4 times) and with Gaussian repulsion kernels (160
+  layers, A = 0.3, sigma 0.85, 1.1 (progressive-2d), 1.5 mean spacings, radius 3.75 sigma).
 """
 
 from __future__ import annotations
 
 import argparse
 import heapq
+import sys
 import tempfile
 from pathlib import Path
 
@@ -27,7 +29,10 @@ from scipy.spatial import cKDTree
 import dpc
 from dpc.analysis.pcf import min_distance
 from dpc.analysis.spectrum import low_frequency_energy
-from dpc.model_file import read_model, write_model
+from dpc.model_file import ModelSpec, read_model, write_model
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "models"))
+from make_progressive_2d import repulsion_layers  # noqa: E402
 
 
 def eliminate(points: np.ndarray, target: int) -> tuple[np.ndarray, np.ndarray]:
@@ -73,6 +78,12 @@ def elimination_order(points: np.ndarray) -> np.ndarray:
     return np.concatenate([idx] + tail[::-1])
 
 
+def levels_model(layers: list, path: Path) -> dpc.Model:
+    meta = {"dpc.order": "progressive", "dpc.progressive_base": "16", "dpc.input": "stratified"}
+    write_model(ModelSpec(dims=2, n_points=1024, layers=layers, name=path.stem, metadata=meta), path)
+    return dpc.load(path, backend="cpu")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--sets", type=int, default=16)
@@ -80,29 +91,29 @@ def main() -> None:
     args = ap.parse_args()
     s, m = args.sets, args.points
     plain = dpc.load("bnot-2d-stratified", backend="cpu")
-    with tempfile.TemporaryDirectory() as tmp:
-        spec = read_model(dpc.model_path("bnot-2d-stratified"))
-        spec.metadata.update({"dpc.order": "progressive", "dpc.progressive_base": "16"})
-        write_model(spec, Path(tmp) / "untrained.onnx")
-        untrained = dpc.load(Path(tmp) / "untrained.onnx", backend="cpu").generate_batch(s, 0, m)
     full = plain.generate_batch(s, 0, m).astype(np.float64)
-    samplers = {
-        "reorder (elimination)": np.stack([p[elimination_order(p)] for p in full]),
-        "levels, untrained": untrained.astype(np.float64),
-        "levels, trained": dpc.load("bnot-2d-progressive", backend="cpu").generate_batch(s, 0, m).astype(np.float64),
+    samplers = {"reorder (elimination)": np.stack([p[elimination_order(p)] for p in full])}
+    trained = {n: read_model(dpc.model_path(n)).layers for n in ("bnot-2d-stratified", "bnot-2d")}
+    variants = {
+        "levels, bnot-2d-stratified x1": trained["bnot-2d-stratified"],
+        "levels, bnot-2d-stratified x4": trained["bnot-2d-stratified"] * 4,
+        "levels, bnot-2d x4": trained["bnot-2d"] * 4,
     }
-    print(f"{s} sets of {m} points; E_low nu<0.5 (delta_min) of each prefix; white noise: E_low 1")
-    print("prefix | dpc set | " + " | ".join(samplers))
-    n = 16
-    while n <= m:
-        ref = plain.generate_batch(s, 1000, n).astype(np.float64)
-        cells = [f"{low_frequency_energy(ref, 0.5):.4f} ({min_distance(ref).mean_ratio:.2f})"]
-        cells += [
-            f"{low_frequency_energy(x[:, :n], 0.5):.4f} ({min_distance(x[:, :n]).mean_ratio:.2f})"
-            for x in samplers.values()
+    for sigma in (0.85, 1.1, 1.5):
+        variants[f"levels, repulsion sigma {sigma}"] = repulsion_layers(0.3, sigma, 3.75 * sigma, 160)
+    with tempfile.TemporaryDirectory() as tmp:
+        for i, (name, layers) in enumerate(variants.items()):
+            model = levels_model(list(layers), Path(tmp) / f"v{i}.onnx")
+            samplers[name] = model.generate_batch(s, 0, m).astype(np.float64)
+    ns = [1 << k for k in range(4, m.bit_length()) if 1 << k <= m]
+    ref = {n: low_frequency_energy(plain.generate_batch(s, 1000, n).astype(np.float64), 0.5) for n in ns}
+    print(f"{s} sets of {m} points: E_low nu<0.5 of each prefix / a dpc set's of that size (delta_min)")
+    print(f"{'alternative':34s} " + " ".join(f"{n:>12d}" for n in ns))
+    for name, x in samplers.items():
+        cells = [
+            f"{low_frequency_energy(x[:, :n], 0.5) / ref[n]:6.2f} ({min_distance(x[:, :n]).mean_ratio:.2f})" for n in ns
         ]
-        print(f"{n:6d} | " + " | ".join(cells))
-        n *= 2
+        print(f"{name:34s} " + " ".join(f"{c:>12s}" for c in cells))
 
 
 if __name__ == "__main__":

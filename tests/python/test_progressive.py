@@ -38,7 +38,7 @@ def test_the_order_is_in_the_metadata(prog_path):
     m = dpc.load(prog_path)
     assert (m.order, m.progressive_base) == ("progressive", 16)
     assert (dpc.load(DATA / "model_2d.onnx").order, dpc.load(DATA / "model_2d.onnx").progressive_base) == ("set", None)
-    assert dpc.load("bnot-2d-progressive").order == "progressive"
+    assert dpc.load("progressive-2d").order == "progressive"
 
 
 @pytest.mark.parametrize("seed", [0, 7, 2**64 - 1])
@@ -113,7 +113,25 @@ def test_progress_counts_every_level(prog_path):
 def test_bundled_model_prefixes_are_blue_noise():
     """A small case of bench/bench_progressive.py: 16 sets of 256 points; each power-of-two
     prefix's low-frequency energy (white noise: 1) and minimum distance."""
-    sets = dpc.load("bnot-2d-progressive", backend="cpu").generate_batch(16, 0, 256).astype(np.float64)
+    sets = dpc.load("progressive-2d", backend="cpu").generate_batch(16, 0, 256).astype(np.float64)
     for n in (16, 32, 64, 128, 256):
         assert low_frequency_energy(sets[:, :n], 0.5) < 0.05, n
         assert min_distance(sets[:, :n]).mean_ratio > 0.5, n
+
+
+def test_stratify_02_makes_every_power_of_two_prefix_a_net():
+    from dpc import baselines
+
+    x = dpc.load("progressive-2d").generate(4, 512).astype(np.float64)
+    y = dpc.stratify.stratify_02(x)
+    assert all(baselines.is_02_net(y[: 1 << k]) for k in range(10))
+    assert not baselines.is_02_net(x[:64])  # blue noise alone is not one
+    # each point moves into its nearest free interval: about a mean spacing, not across the set
+    step = np.abs((y - x + 0.5) % 1.0 - 0.5).max(1) * np.sqrt(512)
+    assert np.median(step) < 1.0
+    part = dpc.stratify.stratify_02(x, up_to=64)
+    assert np.array_equal(part[:64], y[:64]) and np.array_equal(part[64:], x[64:])
+    assert baselines.net_occupancy(x[:256]) < baselines.net_occupancy(y[:256]) == 1.0
+    for bad in [dict(points=x[:, :1]), dict(points=x + 1.0), dict(points=x, up_to=0), dict(points=x, up_to=2.5)]:
+        with pytest.raises(dpc.InvalidArgumentError):
+            dpc.stratify.stratify_02(**bad)

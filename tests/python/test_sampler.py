@@ -16,7 +16,7 @@ from reference_sampler import ReferenceSampler  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 BNOT = dpc.model_path("bnot-2d-stratified")
-PROGRESSIVE = dpc.model_path("bnot-2d-progressive")
+PROGRESSIVE = dpc.model_path("progressive-2d")
 
 
 @pytest.mark.parametrize(

@@ -250,7 +250,7 @@ DPC_API dpc_status dpc_generate(const dpc_model *model, uint64_t seed, float *ou
 /* Generate n_points points (0 = the trained count). Radii scale with the point count (see
  * docs/model-format.md), so counts other than the trained one are served; quality away from the
  * trained count is measured in docs/models.md. Gridded models accept only their grid's count.
- * A progressive model (metadata dpc.order = "progressive", e.g. bnot-2d-progressive) returns its
+ * A progressive model (metadata dpc.order = "progressive", e.g. progressive-2d) returns its
  * points in order: for the same seed, the first n points of a set of m are the set of n for
  * every n = dpc.progressive_base * 2^j <= m (docs/model-format.md §6); it runs on the CPU. */
 DPC_API dpc_status dpc_generate_n(const dpc_model *model, uint64_t seed, size_t n_points, float *out);
@@ -325,7 +325,7 @@ DPC_API dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, f
  *   seamlessly). Any dimension: d >= D reuses table d mod D with its own index rotation and
  *   shift. Any index: indices i >= spp continue in passes of spp samples, pass i / spp rotated
  *   by its own shift (each pass is a shifted copy of the table: use spp >= the samples you take).
- * - Progressive models (dpc.order = "progressive", e.g. bnot-2d-progressive; all of the
+ * - Progressive models (dpc.order = "progressive", e.g. progressive-2d; all of the
  *   sampler's models or none): tables are read in order, not rotated per pixel, so a pixel's
  *   first 2^k samples (k >= 4) are a blue-noise set of their own and an adaptive renderer may
  *   stop at any of them; get_1d then uses the stratum of point i's x rank

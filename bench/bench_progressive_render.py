@@ -1,0 +1,202 @@
+"""Progressive samplers in Mitsuba 3: image error against samples per pixel (docs/progressive.md).
+
+    python bench/bench_progressive_render.py            # writes docs/progressive.md's rendering section
+    python bench/bench_progressive_render.py --quick    # smaller, prints only
+
+The soft-shadow scene of bench/bench_rendering.py (direct lighting, a large area light) at
+`--width`^2 pixels, rendered at 1, 2, 4, ..., `--max-spp` samples per pixel over `--seeds` seeds
+with: the dpc plugin on progressive-2d (progressive tables: a pixel's first n samples are
+the table's prefix), the dpc plugin on bnot-2d-stratified (a set made for each count), Mitsuba's
+ldsampler and independent, and PMJ02BN. Mitsuba has no PMJ sampler, so the bench brings its
+own (`Pmj02bnSampler`, a Python mitsuba.Sampler): pixel p's dimension pair d reads sequence
+h(p, d) mod 32 of a pool of 32 PMJ02BN sequences (dpc.baselines, Christensen et al. 2018) at
+the sample index, Cranley-Patterson-rotated by a second hash of (p, d); 1-D values are the x
+coordinates. Being Python, it is the slow one; its error does not depend on that.
+Image MSE against bench_rendering.py's reference (ldsampler at 8,192 spp, two halves of other seeds),
+mean over seeds; a figure of MSE against spp goes to docs/figures/progressive/.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "bench"))
+import bench_rendering as BR  # noqa: E402  (the scenes and the reference of the rendering bench)
+
+DOC = ROOT / "docs" / "progressive.md"
+FIG = ROOT / "docs" / "figures" / "progressive" / "render-mse.png"
+SCENE = "soft-shadow"
+SAMPLERS = ["dpc progressive", "dpc set", "pmj02bn", "ldsampler", "independent"]
+POOL = 32
+M64 = (1 << 64) - 1
+
+
+def mix64(z: int) -> int:
+    z &= M64
+    z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & M64
+    z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & M64
+    return z ^ (z >> 31)
+
+
+def pmj02bn_sampler_class(mi, max_spp: int):
+    from dpc import baselines
+
+    pool = baselines.generate("pmj02bn", max_spp, 2, POOL, seed=0).astype(np.float32).tolist()
+
+    class Pmj02bnSampler(mi.Sampler):
+        def __init__(self, props):
+            mi.Sampler.__init__(self, props)
+            self.base = mix64(props.get("seed", 0) + 0x5EED)
+            self.pixel = self.index = self.dim = 0
+
+        def seed(self, seed, wavefront_size=1):
+            mi.Sampler.seed(self, seed, wavefront_size)
+            self.pixel, self.index, self.dim = int(seed), 0, 0
+
+        def advance(self):
+            mi.Sampler.advance(self)
+            self.index += 1
+            self.dim = 0
+
+        def _point(self):
+            h = mix64(self.base ^ mix64((self.pixel << 16) + self.dim))
+            self.dim += 1
+            p = pool[h % POOL][self.index % max_spp]
+            u = (h >> 16 & 0xFFFFFF) / 16777216.0
+            v = (h >> 40 & 0xFFFFFF) / 16777216.0
+            return (p[0] + u) % 1.0, (p[1] + v) % 1.0
+
+        def next_1d(self, active=True):
+            return self._point()[0]
+
+        def next_2d(self, active=True):
+            return mi.Point2f(*self._point())
+
+        def clone(self):
+            s = Pmj02bnSampler(mi.Properties())
+            s.base = self.base
+            s.set_sample_count(self.sample_count())
+            return s
+
+        def fork(self):
+            return self.clone()
+
+        def to_string(self):
+            return "Pmj02bnSampler"
+
+    return Pmj02bnSampler
+
+
+def render(mi, sampler: str, spp: int, seed: int, width: int) -> np.ndarray:
+    d = BR.scene_dict(mi, SCENE, width)
+    kind, extra = {
+        "dpc progressive": ("dpc", {"model": "progressive-2d"}),
+        "dpc set": ("dpc", {"model": "bnot-2d-stratified"}),
+        "pmj02bn": ("pmj02bn_bench", {}),
+    }.get(sampler, (sampler, {}))
+    d["sensor"]["sampler"] = {"type": kind, "sample_count": spp, "seed": seed, **extra}
+    sc = mi.load_dict(d)
+    if sc.sensors()[0].sampler().sample_count() != spp:
+        return None  # ldsampler takes at least 4 samples: no value at 1 and 2 spp
+    return np.array(mi.render(sc), dtype=np.float64)
+
+
+def run(width: int, seeds: int, max_spp: int) -> dict:
+    import mitsuba as mi
+
+    mi.set_variant("scalar_rgb")
+    import dpc.mitsuba  # noqa: F401  (registers the dpc plugin)
+
+    cls = pmj02bn_sampler_class(mi, max_spp)
+    mi.register_sampler("pmj02bn_bench", lambda props: cls(props))
+    ref, ref_mse = BR.reference(mi, SCENE, width)
+    counts = [1 << k for k in range(max_spp.bit_length()) if 1 << k <= max_spp]
+    mse: dict[str, list[float]] = {}
+    for s in SAMPLERS:
+        t = time.perf_counter()
+        mse[s] = []
+        for n in counts:
+            imgs = [render(mi, s, n, k, width) for k in range(seeds)]
+            mse[s].append(float("nan") if imgs[0] is None else float(np.mean([((i - ref) ** 2).mean() for i in imgs])))
+        print(f"{s:16s} " + " ".join(f"{v:.2e}" for v in mse[s]) + f"   ({time.perf_counter() - t:.0f} s)")
+    return {"counts": counts, "mse": mse, "ref_mse": ref_mse, "width": width, "seeds": seeds, "cpu": BR.cpu_name()}
+
+
+def figure(res: dict) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    FIG.parent.mkdir(parents=True, exist_ok=True)
+    fig, ax = plt.subplots(figsize=(6, 4.2))
+    for s in SAMPLERS:
+        ok = ~np.isnan(res["mse"][s])
+        marker = "o-" if s.startswith("dpc") else "s--"
+        ax.loglog(np.array(res["counts"])[ok], np.array(res["mse"][s])[ok], marker, label=s, ms=4)
+    ax.set_xlabel("samples per pixel")
+    ax.set_ylabel("image MSE")
+    ax.set_title(f"{SCENE}, {res['width']}x{res['width']} px, mean of {res['seeds']} seeds")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(FIG, dpi=110)
+    plt.close(fig)
+
+
+def section(res: dict) -> str:
+    counts = res["counts"]
+    lines = [
+        f"Measured by `python bench/bench_progressive_render.py` on {res['cpu']}: Mitsuba 3 `scalar_rgb`, "
+        f"the {SCENE} scene at {res['width']} x {res['width']} pixels, {res['seeds']} seeds per cell; reference "
+        f"ldsampler at {BR.REF_SPP:,} spp (its own MSE {res['ref_mse']:.1e}).",
+        "",
+        "| sampler | " + " | ".join(f"{n} spp" for n in counts) + " |",
+        "|---|" + "---:|" * len(counts),
+    ]
+    for s in SAMPLERS:
+        lines.append(f"| {s} | " + " | ".join("—" if np.isnan(v) else f"{v:.2e}" for v in res["mse"][s]) + " |")
+    best = {n: np.nanmin([res["mse"][s][i] for s in SAMPLERS if s != "dpc progressive"]) for i, n in enumerate(counts)}
+    ratio = [res["mse"]["dpc progressive"][i] / res["mse"]["pmj02bn"][i] for i in range(len(counts))]
+    lines += [
+        "",
+        "MSE of progressive dpc over PMJ02BN's: " + ", ".join(f"{n}: x{r:.2f}" for n, r in zip(counts, ratio)) + ".",
+        "Over the best of the others: "
+        + ", ".join(f"{n}: x{res['mse']['dpc progressive'][i] / best[n]:.2f}" for i, n in enumerate(counts))
+        + ".",
+        "",
+        f"![MSE against samples per pixel](figures/progressive/{FIG.name})",
+    ]
+    return "\n".join(lines)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--width", type=int, default=64)
+    ap.add_argument("--seeds", type=int, default=8)
+    ap.add_argument("--max-spp", type=int, default=64)
+    ap.add_argument("--quick", action="store_true", help="24 x 24 pixels, 2 seeds, up to 16 spp; prints only")
+    args = ap.parse_args()
+    if args.quick:
+        args.width, args.seeds, args.max_spp = 24, 2, 16
+    res = run(args.width, args.seeds, args.max_spp)
+    if args.quick:
+        return
+    figure(res)
+    text = DOC.read_text()
+    begin, end = "<!-- bench_progressive_render:begin -->", "<!-- bench_progressive_render:end -->"
+    new = f"{begin}\n{section(res)}\n{end}"
+    text = re.sub(re.escape(begin) + ".*?" + re.escape(end), lambda _: new, text, flags=re.S)
+    DOC.write_text(text)
+    print(f"wrote {DOC} and {FIG}")
+
+
+if __name__ == "__main__":
+    main()
