@@ -168,7 +168,7 @@ def section(res: dict) -> str:
     lines += [
         "",
         "MSE of progressive dpc over PMJ02BN's: " + ", ".join(f"{n}: x{r:.2f}" for n, r in zip(counts, ratio)) + ".",
-        "Over the best of the others: "
+        "Over the best of the others at that count (ldsampler renders only 4, 16 and 64): "
         + ", ".join(f"{n}: x{res['mse']['dpc progressive'][i] / best[n]:.2f}" for i, n in enumerate(counts))
         + ".",
         "",

@@ -73,6 +73,7 @@ __all__ = [
     "Input",
     "training",
     "masks",
+    "stratify",
     "mask",
     "__version__",
 ]

@@ -193,8 +193,8 @@ class Cascade(torch.nn.Module):
                 raise FilterConfigError("return_all is for set cascades")
             # level by level: the points of earlier levels are neighbours that never move. The
             # gradient stops at them: each level learns to insert points into the set it is
-            # given (through all levels, 40 layers each, the gradient's norm grows ~10^4-fold and
-            # Adam's steps overshoot: docs/progressive.md)
+            # given (through all levels the gradient compounds and Adam's steps overshot:
+            # docs/training.md §2)
             y = x[..., :0, :]
             for start, count in progressive_levels(x.shape[-2], sp.progressive_base):
                 level = torch.cat([y.detach(), x[..., start : start + count, :]], dim=-2)
