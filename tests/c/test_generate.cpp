@@ -356,3 +356,64 @@ TEST(Golden, EveryIsaMatchesTheFloat64Reference) {
     EXPECT_EQ(models_seen.size(), model_names().size()) << "golden files should cover every test model";
     EXPECT_GE(files, 5);
 }
+
+// ---- progressive models (docs/model-format.md §6) ---------------------------------------------
+
+namespace {
+std::vector<float> head(const std::vector<float> &x, size_t points) {
+    return std::vector<float>(x.begin(), x.begin() + (ptrdiff_t)(points * 2));
+}
+} // namespace
+
+TEST(Progressive, LevelSizesArePrefixesOfLargerSets) {
+    ModelPtr m = load(model_path("model_2d_progressive"));
+    ASSERT_TRUE(m);
+    EXPECT_STREQ(dpc_model_metadata(m.get(), "dpc.order"), "progressive");
+    for (uint64_t seed : {0ull, 9ull, ~0ull}) {
+        const std::vector<float> big = generate(m.get(), seed, 300); // levels 16, 32, ..., 256, +44
+        for (size_t n : {16u, 32u, 64u, 128u, 256u})
+            EXPECT_EQ(head(big, n), generate(m.get(), seed, n)) << "n " << n << ", seed " << seed;
+        // 100 is no level size of 300: its levels are 16 .. 64 and 36 more
+        const std::vector<float> odd = generate(m.get(), seed, 100);
+        EXPECT_EQ(head(odd, 64), head(big, 64));
+        EXPECT_NE(odd, head(big, 100));
+        // the first level is the cascade on the seed's input points, as for a set model
+        std::vector<float> x = input_points(info_of(m.get()), seed, 16);
+        ASSERT_EQ(dpc_filter(m.get(), 16, x.data()), DPC_OK) << dpc_last_error();
+        EXPECT_EQ(x, head(big, 16));
+    }
+}
+
+TEST(Progressive, ThreadsIsasAndBatchesGiveTheSameBits) {
+    // 20,000 points: the last levels are large enough for the engine's threads inside a set
+    ModelPtr ref = load(model_path("model_2d_progressive"), DPC_ISA_SCALAR, 1);
+    ASSERT_TRUE(ref);
+    const std::vector<float> want = generate(ref.get(), 4, 20000);
+    std::vector<dpc_isa> isas = {DPC_ISA_SCALAR};
+    for (dpc_isa v : vector_isas()) isas.push_back(v);
+    for (dpc_isa isa : isas)
+        for (uint32_t threads : {1u, 3u}) {
+            ModelPtr m = load(model_path("model_2d_progressive"), isa, threads);
+            ASSERT_TRUE(m);
+            EXPECT_EQ(generate(m.get(), 4, 20000), want) << isa_name(isa) << ", " << threads << " threads";
+            std::vector<float> batch(3 * 500 * 2);
+            ASSERT_EQ(dpc_generate_batch(m.get(), 7, 3, 500, batch.data()), DPC_OK) << dpc_last_error();
+            EXPECT_EQ(std::vector<float>(batch.begin() + 1000, batch.begin() + 2000), generate(ref.get(), 8, 500));
+        }
+}
+
+TEST(Progressive, RunsOnTheCpuAndVulkanSaysWhy) {
+    dpc_load_options o;
+    dpc_load_options_init(&o);
+    o.backend = DPC_BACKEND_VULKAN;
+    dpc_model *m = nullptr;
+    EXPECT_EQ(dpc_model_load_file(model_path("model_2d_progressive").c_str(), &o, &m), DPC_ERROR_UNSUPPORTED);
+    EXPECT_EQ(m, nullptr);
+    EXPECT_NE(std::string(dpc_last_error()).find("progressive"), std::string::npos) << dpc_last_error();
+    o.backend = DPC_BACKEND_AUTO;
+    ASSERT_EQ(dpc_model_load_file(model_path("model_2d_progressive").c_str(), &o, &m), DPC_OK) << dpc_last_error();
+    dpc_backend b = DPC_BACKEND_VULKAN;
+    EXPECT_EQ(dpc_model_get_backend(m, &b), DPC_OK);
+    EXPECT_EQ(b, DPC_BACKEND_CPU);
+    dpc_model_free(m);
+}

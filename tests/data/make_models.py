@@ -19,6 +19,7 @@ Models (docs/model-format.md):
   model_3d_mixed.onnx  3-D, full space xyz + 1-D subspace x (normalised sum), 3 layers
   model_grid_3to1.onnx 3-D, x and y gridded 32x32 (fixed), value z, 3 layers, 1024 points
   model_10d.onnx       10-D, five 2-D pairs, two 1-D, one 3-D and the full space, 3 layers
+  model_2d_progressive.onnx  model_2d's layers as a progressive model (dpc.order, base 16: §6)
 
 The metadata entries are stored with the optional keys first and the required keys last
 (dpc.n_points is the very last field of the file), so that every proper prefix of a file lacks a
@@ -221,8 +222,17 @@ def model_10d() -> ModelSpec:
     )
 
 
+def model_2d_progressive() -> ModelSpec:
+    spec = model_2d()
+    spec.name = "test-2d-progressive"
+    spec.description = "Test model: model_2d's cascade, generated level by level (format §6)."
+    spec.metadata.update({"dpc.order": "progressive", "dpc.progressive_base": "16"})
+    return spec
+
+
 MODELS = {
     "model_2d.onnx": model_2d,
+    "model_2d_progressive.onnx": model_2d_progressive,
     "model_3d_proj.onnx": model_3d_proj,
     "model_3d_mixed.onnx": model_3d_mixed,
     "model_grid_3to1.onnx": model_grid_3to1,

@@ -79,6 +79,23 @@ def test_values_are_those_of_dpc_sampler():
             fork.advance()
 
 
+def test_progressive_models_render_their_prefixes():
+    """A progressive model (docs/progressive.md) in the plugin: a pixel's samples follow its
+    table in order, so its first 16 are the table of 16 shifted (the same values as dpc.Sampler),
+    and a render with it is finite; mixing it with a set model is refused with the reason."""
+    plugin = mi.load_dict({"type": "dpc", "sample_count": 64, "seed": 2, "model": "progressive-2d", "dimensions": 2})
+    ref = dpc.Sampler("progressive-2d", samples_per_pixel=64, dimensions=2, seed=2)
+    fork = plugin.fork()
+    fork.seed(40)
+    for i in range(16):
+        assert np.array_equal(np.array(fork.next_2d()), ref.get_2d(0, 0, i, 0))
+        fork.advance()
+    img = np.array(mi.render(_scene({"type": "dpc", "model": "progressive-2d"}, 16, width=16)))
+    assert np.all(np.isfinite(img)) and img.mean() > 0
+    with pytest.raises(Exception, match="progressive"):
+        mi.load_dict({"type": "dpc", "model": "progressive-2d,bnot-2d-stratified"})
+
+
 def test_bad_properties_say_what_is_wrong():
     for props, says in [
         ({"model": "no-such-model"}, "no-such-model"),
