@@ -288,7 +288,11 @@ def scale_section(name: str, model, t: Target) -> list[str]:
             "Scale-aware radius; \"lowest frequencies\" = q in {(1,0), (0,1), (1,1), (1,−1)}, white "
             "noise = 1. At 64 m the spectrum is measured to ν = 1.5.", "", *table, "",
             f"![{name} at other point counts](figures/models/{fig.name})", "",
-            ("A cascade of local filters moves each point a bounded distance per layer, so density "
+            ("A progressive model's levels hold their earlier points in place, so whatever imbalance a "
+             "level's insertion leaves at the torus scale stays in every larger set: the last column "
+             "keeps a small power that the stratified input of a set model would not leave "
+             "(bnot-2d-stratified: at most 0.0008; docs/progressive.md)." if model.order == "progressive" else
+             "A cascade of local filters moves each point a bounded distance per layer, so density "
              "fluctuations on scales far beyond the receptive field relax slowly: E_low stays within "
              "a small factor of its trained value, but the torus-scale frequencies (last column) keep "
              "more and more of their white-noise power as m grows." if model.input == "uniform" else
