@@ -53,8 +53,8 @@ def test_pmj02_prefixes_are_02_nets(name):
 
 def test_pmj02bn_is_bluer_than_pmj02():
     """The best-candidate choice moves points apart where the (0,2) strata leave room: a larger
-    minimum distance in the small prefixes (16 sets: 0.47 against 0.36 at 16 points, 0.39
-    against 0.28 at 32; from 256 on the two are level, docs/progressive.md)."""
+    minimum distance, most in the small prefixes (16 sets: 0.47 against 0.36 at 16 points, 0.39
+    against 0.28 at 32; docs/progressive.md has the larger ones)."""
     from dpc.analysis.pcf import min_distance
 
     plain = baselines.generate("pmj02", 64, count=16, seed=0)
