@@ -17,13 +17,13 @@ seed. The goals of the progressive-dpc issue are checked and printed.
 from __future__ import annotations
 
 import argparse
-import platform
-import re
 import subprocess
 import time
 from pathlib import Path
 
 import numpy as np
+from bench_generate import cpu_name  # one CPU description for every benchmark page
+from doc_sections import replace_section
 
 import dpc
 from dpc import baselines
@@ -142,13 +142,8 @@ def tree() -> str:
 
 
 def section(results: dict[int, dict], checks, count: int, curve: dict[float, dict], curve_m: int) -> str:
-    cpu = platform.processor() or platform.machine()
-    try:
-        cpu = next(ln.split(":", 1)[1].strip() for ln in open("/proc/cpuinfo") if ln.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
     lines = [
-        f"Measured by `python bench/bench_progressive.py` (tree {tree()}) on {cpu}: {count} sets of each "
+        f"Measured by `python bench/bench_progressive.py` (tree {tree()}) on {cpu_name()}: {count} sets of each "
         "sampler and size, set i from seed i. White noise has E_low = 1; delta_min = 1 is the densest packing.",
         "",
         "Goals:",
@@ -200,11 +195,7 @@ def main() -> None:
         print(f"  [{'met' if ok else 'MISSED'}] {g}: {msg}")
     if args.quick or args.model != PROGRESSIVE:
         return
-    text = DOC.read_text()
-    begin, end = "<!-- bench_progressive:begin -->", "<!-- bench_progressive:end -->"
-    new = f"{begin}\n{section(results, checks, args.sets, curve, args.sizes[0])}\n{end}"
-    text = re.sub(re.escape(begin) + ".*?" + re.escape(end), lambda _: new, text, flags=re.S)
-    DOC.write_text(text)
+    replace_section(DOC, "bench_progressive", section(results, checks, args.sets, curve, args.sizes[0]))
     print(f"wrote {DOC}")
 
 

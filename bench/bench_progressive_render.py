@@ -19,7 +19,6 @@ mean over seeds; a figure of MSE against spp goes to docs/figures/progressive/.
 from __future__ import annotations
 
 import argparse
-import re
 import sys
 import time
 from pathlib import Path
@@ -29,6 +28,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "bench"))
 import bench_rendering as BR  # noqa: E402  (the scenes and the reference of the rendering bench)
+from doc_sections import replace_section  # noqa: E402
 
 DOC = ROOT / "docs" / "progressive.md"
 FIG = ROOT / "docs" / "figures" / "progressive" / "render-mse.png"
@@ -190,11 +190,7 @@ def main() -> None:
     if args.quick:
         return
     figure(res)
-    text = DOC.read_text()
-    begin, end = "<!-- bench_progressive_render:begin -->", "<!-- bench_progressive_render:end -->"
-    new = f"{begin}\n{section(res)}\n{end}"
-    text = re.sub(re.escape(begin) + ".*?" + re.escape(end), lambda _: new, text, flags=re.S)
-    DOC.write_text(text)
+    replace_section(DOC, "bench_progressive_render", section(res))
     print(f"wrote {DOC} and {FIG}")
 
 

@@ -24,12 +24,12 @@ from __future__ import annotations
 import argparse
 import json
 import platform
-import re
 import subprocess
 import time
 from pathlib import Path
 
 import numpy as np
+from doc_sections import replace_section
 
 ROOT = Path(__file__).resolve().parents[1]
 CACHE = ROOT / "build" / "bench-rendering"
@@ -327,11 +327,7 @@ def main() -> None:
     figs = figures(res)
     CACHE.mkdir(parents=True, exist_ok=True)
     (CACHE / "results.json").write_text(json.dumps({k: v for k, v in res.items() if k != "figure_errors"}, indent=1))
-    text = DOC.read_text()
-    begin, end = "<!-- bench_rendering:begin -->", "<!-- bench_rendering:end -->"
-    new = f"{begin}\n{section(res, checks, figs)}\n{end}"
-    text = re.sub(re.escape(begin) + ".*?" + re.escape(end), lambda _: new, text, flags=re.S)
-    DOC.write_text(text)
+    replace_section(DOC, "bench_rendering", section(res, checks, figs))
     print(f"wrote {DOC} and {len(figs)} figures in {FIGS}")
 
 

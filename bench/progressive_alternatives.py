@@ -32,7 +32,7 @@ from dpc.analysis.spectrum import low_frequency_energy
 from dpc.model_file import ModelSpec, read_model, write_model
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "models"))
-from make_progressive_2d import repulsion_layers  # noqa: E402
+from make_progressive_2d import PROGRESSIVE, repulsion_layers  # noqa: E402
 
 
 def eliminate(points: np.ndarray, target: int) -> tuple[np.ndarray, np.ndarray]:
@@ -79,8 +79,7 @@ def elimination_order(points: np.ndarray) -> np.ndarray:
 
 
 def levels_model(layers: list, path: Path) -> dpc.Model:
-    meta = {"dpc.order": "progressive", "dpc.progressive_base": "16", "dpc.input": "stratified"}
-    write_model(ModelSpec(dims=2, n_points=1024, layers=layers, name=path.stem, metadata=meta), path)
+    write_model(ModelSpec(dims=2, n_points=1024, layers=layers, name=path.stem, metadata=PROGRESSIVE), path)
     return dpc.load(path, backend="cpu")
 
 

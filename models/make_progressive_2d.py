@@ -24,6 +24,10 @@ HERE = Path(__file__).resolve().parent
 AMPLITUDE, SIGMA, RHO, BINS, LAYERS, M, BASE = 0.3, 1.1, 4.125, 32, 160, 1024, 16
 
 
+# What makes a cascade progressive (docs/model-format.md §6), with stratified input for each level.
+PROGRESSIVE = {"dpc.order": "progressive", "dpc.progressive_base": str(BASE), "dpc.input": "stratified"}
+
+
 def repulsion_layers(amplitude: float, sigma: float, rho: float, layers: int) -> list[Layer]:
     d = np.linspace(0.0, rho, BINS)
     kernel = -amplitude * np.exp(-(d**2) / (2 * sigma**2))
@@ -43,13 +47,7 @@ def progressive_spec(amplitude=AMPLITUDE, sigma=SIGMA, rho=RHO, layers=LAYERS, n
             f"{sigma}, rho = {rho} mean spacings) run level by level, the earlier points held in place. "
             "Not trained."
         ),
-        metadata={
-            "dpc.order": "progressive",
-            "dpc.progressive_base": str(BASE),
-            "dpc.input": "stratified",
-            "dpc.source": "models/make_progressive_2d.py",
-            "dpc.trained": "no",
-        },
+        metadata={**PROGRESSIVE, "dpc.source": "models/make_progressive_2d.py", "dpc.trained": "no"},
     )
 
 

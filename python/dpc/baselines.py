@@ -190,6 +190,47 @@ def _free_strata(occ: list, level: int, x0: int, y0: int, width: int) -> tuple[n
     return xs[free], ys[free]
 
 
+def _occupancy(points: np.ndarray, level: int) -> list[np.ndarray]:
+    """Per shape a = 0 .. level, which elementary intervals (2^a x 2^(level-a) cells) hold a point."""
+    occ = [np.zeros((1 << a, 1 << (level - a)), bool) for a in range(level + 1)]
+    for p in points:
+        _mark(occ, level, p)
+    return occ
+
+
+def _mark(occ: list, level: int, point: np.ndarray) -> None:
+    c = np.floor(point * (1 << level)).astype(np.int64)
+    for a in range(level + 1):
+        occ[a][c[0] >> (level - a), c[1] >> a] = True
+
+
+def _pmj02_steps(points: np.ndarray, m: int):
+    """PMJ02's doublings (Christensen et al. 2018, Sec. 5) up to m points, for a caller that fills
+    points[n .. 2n) at each: yields (n, odd, level, width, squares, occupancy). From n = 4^k points
+    (one per cell of a 2^k grid; odd False) the squares are the subquadrants diagonally opposite
+    the first n points; from n = 2 x 4^k (odd True), the two remaining subquadrants of each cell
+    (those of cell i at i and 4^k + i). A point placed in its square's free strata (:func:`_free_strata`, then
+    :func:`_mark`) keeps every elementary interval of the new power of two free."""
+    n = 1
+    while n < m:
+        g = 1 << ((n.bit_length() - 1) // 2)  # the first g^2 points, one per cell of the g x g grid
+        level = (2 * n).bit_length() - 1
+        width = (1 << level) // (2 * g)  # a subquadrant's width in strata
+        q = np.floor(points[: g * g] * 2 * g).astype(np.int64)
+        odd = n != g * g
+        if not odd:
+            squares = np.stack([(q[:, 0] ^ 1) * width, (q[:, 1] ^ 1) * width], 1)
+        else:
+            squares = np.concatenate(
+                [
+                    np.stack([(q[:, 0] ^ 1) * width, q[:, 1] * width], 1),
+                    np.stack([q[:, 0] * width, (q[:, 1] ^ 1) * width], 1),
+                ]
+            )
+        yield n, odd, level, width, squares, _occupancy(points[:n], level)
+        n *= 2
+
+
 def pmj02(m: int, rng: np.random.Generator, candidates: int = 1) -> np.ndarray:
     """m points of a progressive multi-jittered (0,2) sequence (Christensen et al. 2018, Sec. 5):
     from 4^k points (one per cell of a 2^k grid) the next 4^k go to the subquadrants diagonally
@@ -199,17 +240,9 @@ def pmj02(m: int, rng: np.random.Generator, candidates: int = 1) -> np.ndarray:
     farthest from all earlier points (toroidal distance)."""
     pts = np.empty((m, 2))
     pts[0] = rng.random(2)
-    n = 1
 
-    def occupancy(level: int) -> list:
-        cells = np.floor(pts[:n] * (1 << level)).astype(np.int64)
-        occ = [np.zeros((1 << a, 1 << (level - a)), bool) for a in range(level + 1)]
-        for a in range(level + 1):
-            occ[a][cells[:, 0] >> (level - a), cells[:, 1] >> a] = True
-        return occ
-
-    def place(i: int, square: tuple[int, int], width: int, level: int, occ: list) -> bool:
-        xs, ys = _free_strata(occ, level, square[0], square[1], width)
+    def place(i: int, square: np.ndarray, width: int, level: int, occ: list) -> bool:
+        xs, ys = _free_strata(occ, level, int(square[0]), int(square[1]), width)
         if len(xs) == 0:
             return False
         pick = rng.integers(0, len(xs), candidates)
@@ -220,44 +253,28 @@ def pmj02(m: int, rng: np.random.Generator, candidates: int = 1) -> np.ndarray:
             d -= np.round(d)
             best = int(np.argmax((d * d).sum(-1).min(1)))
         pts[i] = cand[best]
-        c = np.floor(cand[best] * (1 << level)).astype(np.int64)
-        for a in range(level + 1):
-            occ[a][c[0] >> (level - a), c[1] >> a] = True
+        _mark(occ, level, pts[i])
         return True
 
     def fail() -> None:  # never seen; a (0,2) extension in this order always exists in practice
         raise RuntimeError("pmj02: no valid position for a point; try another seed")
 
-    while n < m:
-        g = 1 << ((n.bit_length() - 1) // 2)  # n = g^2 points, one per cell of the g x g grid
-        for odd in (False, True):
-            level = (2 * n).bit_length() - 1
-            occ = occupancy(level)
-            sub = (1 << level) // (2 * g)  # a subquadrant's width in strata
-            quad = [tuple(int(v) for v in np.floor(pts[i] * 2 * g)) for i in range(g * g)]
-            if not odd:
-                for i in range(min(n, m - n)):
-                    qx, qy = quad[i]
-                    if not place(n + i, ((qx ^ 1) * sub, (qy ^ 1) * sub), sub, level, occ):
-                        fail()
-            else:
-                half = n // 2  # g^2: the points whose cells get their last two subquadrants
-                first = rng.integers(0, 2, half)
-                for i in range(min(half, m - n)):
-                    qx, qy = quad[i]
-                    opts = (((qx ^ 1) * sub, qy * sub), (qx * sub, (qy ^ 1) * sub))
-                    if not place(n + i, opts[first[i]], sub, level, occ):
-                        first[i] ^= 1
-                        if not place(n + i, opts[first[i]], sub, level, occ):
-                            fail()
-                for i in range(min(half, m - n - half)):
-                    qx, qy = quad[i]
-                    opts = (((qx ^ 1) * sub, qy * sub), (qx * sub, (qy ^ 1) * sub))
-                    if not place(n + half + i, opts[1 - first[i]], sub, level, occ):
-                        fail()
-            n *= 2
-            if n >= m:
-                break
+    for n, odd, level, width, squares, occ in _pmj02_steps(pts, m):
+        if not odd:  # the diagonally opposite subquadrants
+            for i in range(min(n, m - n)):
+                if not place(n + i, squares[i], width, level, occ):
+                    fail()
+            continue
+        half = n // 2  # g^2: the points whose cells get their last two subquadrants
+        first = rng.integers(0, 2, half)  # which of the two each cell fills first
+        for i in range(min(half, m - n)):
+            if not place(n + i, squares[first[i] * half + i], width, level, occ):
+                first[i] ^= 1
+                if not place(n + i, squares[first[i] * half + i], width, level, occ):
+                    fail()
+        for i in range(min(half, m - n - half)):
+            if not place(n + half + i, squares[(1 - first[i]) * half + i], width, level, occ):
+                fail()
     return pts[:m]
 
 

@@ -22,18 +22,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .baselines import _free_strata
+from .baselines import _free_strata, _mark, _pmj02_steps
 from .errors import InvalidArgumentError
 
 __all__ = ["stratify_02"]
-
-
-def _occupancy(points: np.ndarray, level: int) -> list[np.ndarray]:
-    cells = np.floor(points * (1 << level)).astype(np.int64)
-    occ = [np.zeros((1 << a, 1 << (level - a)), bool) for a in range(level + 1)]
-    for a in range(level + 1):
-        occ[a][cells[:, 0] >> (level - a), cells[:, 1] >> a] = True
-    return occ
 
 
 def _place(target: np.ndarray, square: np.ndarray, width: int, level: int, occ: list) -> np.ndarray:
@@ -47,9 +39,7 @@ def _place(target: np.ndarray, square: np.ndarray, width: int, level: int, occ: 
     p = np.clip(t, lo, np.nextafter(hi, lo))
     best = int(np.argmin(((p - t) ** 2).sum(1)))
     y = p[best] % 1.0
-    c = np.floor(y * (1 << level)).astype(np.int64)
-    for a in range(level + 1):
-        occ[a][c[0] >> (level - a), c[1] >> a] = True
+    _mark(occ, level, y)
     return y
 
 
@@ -69,31 +59,13 @@ def stratify_02(points, up_to: int | None = None) -> np.ndarray:
         raise InvalidArgumentError(f"up_to must be a positive integer, got {up_to!r}")
     m = len(x) if up_to is None else min(len(x), up_to)
     y = x.copy()
-    n = 1
-    while n < m:
-        g = 1 << ((n.bit_length() - 1) // 2)  # n = g^2 points, one per cell of the g x g grid
-        for odd in (False, True):
-            level = (2 * n).bit_length() - 1
-            occ = _occupancy(y[:n], level)
-            sub = (1 << level) // (2 * g)  # a subquadrant's width in strata
-            q = np.floor(y[: g * g] * 2 * g).astype(np.int64)
-            if not odd:  # the subquadrants diagonally opposite the first g^2 points
-                squares = np.stack([(q[:, 0] ^ 1) * sub, (q[:, 1] ^ 1) * sub], 1)
-            else:  # the two remaining subquadrants of each cell
-                squares = np.concatenate(
-                    [
-                        np.stack([(q[:, 0] ^ 1) * sub, q[:, 1] * sub], 1),
-                        np.stack([q[:, 0] * sub, (q[:, 1] ^ 1) * sub], 1),
-                    ]
-                )
-            new = np.arange(n, min(2 * n, m))
-            d = x[new][:, None, :] - (squares + sub / 2)[None, :, :] / (1 << level)
-            d -= np.round(d)
-            rows, cols = linear_sum_assignment((d * d).sum(-1))
-            square_of = dict(zip(new[rows].tolist(), cols.tolist()))
-            for i in new.tolist():
-                y[i] = _place(x[i], squares[square_of[i]], sub, level, occ)
-            n = min(2 * n, m)
-            if n >= m:
-                break
+    for n, _, level, width, squares, occ in _pmj02_steps(y, m):
+        # the new points to the subquadrants this step opens: nearest centres, one each
+        new = np.arange(n, min(2 * n, m))
+        d = x[new][:, None, :] - (squares + width / 2)[None, :, :] / (1 << level)
+        d -= np.round(d)
+        rows, cols = linear_sum_assignment((d * d).sum(-1))
+        square_of = dict(zip(new[rows].tolist(), cols.tolist()))
+        for i in new.tolist():
+            y[i] = _place(x[i], squares[square_of[i]], width, level, occ)
     return y

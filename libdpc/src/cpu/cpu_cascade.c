@@ -175,11 +175,12 @@ static void sub_pass_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
             e = s + block_cap < hi ? s + block_cap : hi;
         }
         /* the block's points that move (held points of a progressive level are skipped: each
-         * point's sum is its own, so the others' bits do not change) */
+         * point's sum is its own, so the others' bits do not change; set models hold none, and
+         * skip the two index loads) */
         uint32_t which[DPC_BLOCK_MAX];
         unsigned count = 0;
         for (size_t t = s; t < e; t++) {
-            if (ws->order[ws->perm[t]] < ws->frozen) continue;
+            if (ws->frozen && ws->order[ws->perm[t]] < ws->frozen) continue;
             which[count] = (uint32_t)t;
             for (unsigned q = 0; q < k; q++) xs[count * k + q] = p->job.coord[q][t];
             count++;
@@ -207,7 +208,7 @@ static void apply_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
     (void)slot;
     const apply_pass *a = (const apply_pass *)ctx;
     for (size_t i = lo; i < hi; i++) {
-        if (a->order[i] < a->frozen) continue;
+        if (a->frozen && a->order[i] < a->frozen) continue;
         for (size_t d = 0; d < a->n; d++) {
             if (a->count[d] == 0.0f) continue;
             const float step = a->delta[i * a->n + d];
@@ -326,6 +327,11 @@ dpc_status dpc_cpu_filter_frozen(const dpc_cascade *c, const dpc_cpu_engine *e, 
 
 /* ---- whole sets: input points, then the cascade; batches fanned out over threads ------------ */
 
+/* The levels of a progressive set of m points (format §6): the first holds min(m, base)
+ * points, each next one adds min(n, m - n) to the n so far. */
+static size_t first_level(const dpc_cascade *c, size_t m) { return m < c->progressive_base ? m : c->progressive_base; }
+static size_t level_size(size_t n, size_t m) { return n < m - n ? n : m - n; }
+
 static dpc_status generate_one(const dpc_cascade *c, dpc_input input, const dpc_cpu_engine *e, uint64_t seed, size_t m,
                                float *out, dpc_cpu_hook hook, void *ctx) {
     if (hook && hook(ctx, 0) != DPC_OK) return DPC_ERROR_CANCELLED;
@@ -333,14 +339,13 @@ static dpc_status generate_one(const dpc_cascade *c, dpc_input input, const dpc_
         dpc_input_fill(c, input, seed, m, out);
         return dpc_cpu_filter_hooked(c, e, m, out, hook, ctx);
     }
-    /* Progressive (format §6): level 0 is a set of min(m, base) points; level j >= 1 adds
-     * min(n, m - n) input points of seed + j * 0x9E3779B97F4A7C15 to the n points so far and
-     * filters them past those, which stay where they are. */
-    size_t n = m < c->progressive_base ? m : c->progressive_base;
+    /* Progressive: level j >= 1 adds its input points, of seed + j * 0x9E3779B97F4A7C15, to the
+     * n points so far and filters them past those, which stay where they are. */
+    size_t n = first_level(c, m);
     dpc_input_fill(c, input, seed, n, out);
     dpc_status st = dpc_cpu_filter_hooked(c, e, n, out, hook, ctx);
     for (uint64_t level = 1; st == DPC_OK && n < m; level++) {
-        const size_t add = n < m - n ? n : m - n;
+        const size_t add = level_size(n, m);
         dpc_input_fill(c, input, seed + level * 0x9E3779B97F4A7C15ull, add, out + n * c->dims);
         st = dpc_cpu_filter_frozen(c, e, n + add, n, out, hook, ctx);
         n += add;
@@ -351,7 +356,7 @@ static dpc_status generate_one(const dpc_cascade *c, dpc_input input, const dpc_
 size_t dpc_cpu_filter_runs(const dpc_cascade *c, size_t m) {
     size_t runs = 1;
     if (c->progressive_base)
-        for (size_t n = m < c->progressive_base ? m : c->progressive_base; n < m; n += n < m - n ? n : m - n) runs++;
+        for (size_t n = first_level(c, m); n < m; n += level_size(n, m)) runs++;
     return runs;
 }
 

@@ -41,8 +41,7 @@ dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
     s->seed = o->seed;
     s->base = dpc_mix64(o->seed);
     s->inv_spp = 1.0f / (float)n;
-    s->progressive = o->models[0]->cascade.progressive_base != 0; /* all or none (api_sampler.c) */
-    s->rotate = s->progressive ? 0 : n;
+    s->rotate = o->models[0]->cascade.progressive_base ? 0 : n; /* all progressive or none (api_sampler.c) */
     s->tables = (float *)malloc((size_t)D * n * 2 * sizeof(float));
     s->keyed = (struct dpc_sampler_keyed *)malloc((size_t)D * sizeof *s->keyed);
     s->fast_slots = D < DPC_SAMPLER_FAST_SLOTS ? D : DPC_SAMPLER_FAST_SLOTS;

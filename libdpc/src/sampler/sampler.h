@@ -34,10 +34,10 @@ struct dpc_sampler {
     uint64_t seed;
     uint64_t base; /* mix64 of the seed: the root of every key */
     float inv_spp; /* 1 / n, for 1-D values */
-    /* Progressive models (format §6): tables are read in order, so that the first 2^k samples
-     * of a pixel are a progressive prefix; set models: rotated per pixel. */
-    int progressive;
-    uint32_t rotate;                 /* n for set models, 0 for progressive ones: the range of a pixel's rotation */
+    /* The range of a pixel's rotation of the sample index: n for set models; 0 for progressive
+     * models (format §6), whose tables are read in order so that the first 2^k samples of a
+     * pixel are a progressive prefix. */
+    uint32_t rotate;
     float *tables;                   /* D * n * 2 floats: table t, point j at (t * n + j) * 2 */
     struct dpc_sampler_keyed *keyed; /* D: what key (d, pass 0) gives, for d < D: the common case */
     /* The common case precomputed: for pass 0 of dimension d < fast_slots, the mask moved by the
@@ -180,7 +180,7 @@ static inline dpc_status dpc_sampler_lookup_2d(const struct dpc_sampler *s, uint
  * i = j, or for progressive tables the rank of point j's x (its table value (i + 1/2) / n times n,
  * exact for n < 2^22), so that a prefix's strata are spread like its points. */
 static inline float dpc_sampler_lattice(const struct dpc_sampler *s, uint32_t t, uint32_t j, float u, float c1) {
-    const uint32_t i = s->progressive ? (uint32_t)(s->tables[((size_t)t * s->spp + j) * 2] * (float)s->spp) : j;
+    const uint32_t i = s->rotate ? j : (uint32_t)(s->tables[((size_t)t * s->spp + j) * 2] * (float)s->spp);
     const float lattice = ((float)i + u) * s->inv_spp; /* in [0, 1]: 1 only by rounding */
     return dpc_sampler_wrap(lattice < 1.0f ? lattice : 0.0f, c1);
 }
