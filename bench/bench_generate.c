@@ -1,6 +1,7 @@
-/* Times dpc_generate_n on one thread and prints one JSON line per point count:
- *   dpc_bench_generate MODEL ISA(scalar|avx2|avx512) M [M ...]
- * Each count runs once to warm up, then repeats until 1.5 s or 25 runs (at least 3). */
+/* Times dpc_generate_n and prints one JSON line per point count:
+ *   dpc_bench_generate MODEL ISA(scalar|avx2|avx512)[:THREADS] M [M ...]
+ * on one thread unless ISA:THREADS says more. Each count runs once to warm up, then repeats
+ * until 1.5 s or 25 runs (at least 3). */
 #define _POSIX_C_SOURCE 200809L
 #include <stdio.h>
 #include <stdlib.h>
@@ -29,12 +30,17 @@ static int cmp(const void *a, const void *b) {
 
 int main(int argc, char **argv) {
     if (argc < 4) {
-        fprintf(stderr, "usage: %s MODEL scalar|avx2|avx512 M [M ...]\n", argv[0]);
+        fprintf(stderr, "usage: %s MODEL scalar|avx2|avx512[:THREADS] M [M ...]\n", argv[0]);
         return 2;
     }
     dpc_load_options opt;
     dpc_load_options_init(&opt);
     opt.threads = 1;
+    char *colon = strchr(argv[2], ':');
+    if (colon) {
+        *colon = '\0';
+        opt.threads = (unsigned)strtoul(colon + 1, NULL, 10);
+    }
     if (strcmp(argv[2], "scalar") == 0) opt.isa = DPC_ISA_SCALAR;
     else if (strcmp(argv[2], "avx2") == 0) opt.isa = DPC_ISA_AVX2;
     else if (strcmp(argv[2], "avx512") == 0) opt.isa = DPC_ISA_AVX512;
@@ -68,9 +74,9 @@ int main(int argc, char **argv) {
         }
         qsort(times, (size_t)runs, sizeof(double), cmp);
         qsort(cpu, (size_t)runs, sizeof(double), cmp);
-        printf("{\"model\": \"%s\", \"isa\": \"%s\", \"m\": %zu, \"layers\": %u, \"runs\": %d, "
+        printf("{\"model\": \"%s\", \"isa\": \"%s\", \"threads\": %u, \"m\": %zu, \"layers\": %u, \"runs\": %d, "
                "\"median_s\": %.9f, \"min_s\": %.9f, \"cpu_median_s\": %.9f}\n",
-               argv[1], argv[2], m, info.layers, runs, times[runs / 2], times[0], cpu[runs / 2]);
+               argv[1], argv[2], opt.threads, m, info.layers, runs, times[runs / 2], times[0], cpu[runs / 2]);
         fflush(stdout);
         free(out);
     }

@@ -3,8 +3,10 @@
  * Per layer and subspace, candidates come from a toroidal cell grid over the subspace's dims
  * (points counting-sorted by cell, coordinates copied structure-of-arrays so each row of
  * neighbouring cells is one contiguous index range), or from all pairs where the grid does not
- * pay (few points, high-dimensional subspaces, radius near the domain size). Each point's sum is
- * computed by exactly one thread in a fixed order, so the bits do not depend on the thread count. */
+ * pay (few points, high-dimensional subspaces, radius near the domain size). All pairs in 5 or
+ * more dimensions go through the neighbour prefilter (cpu_near.h), which drops the candidate
+ * blocks with no point in reach and leaves the bits as they are. Each point's sum is computed
+ * by exactly one thread in a fixed order, so the bits do not depend on the thread count. */
 #include "cpu/cpu_cascade.h"
 
 #include <math.h>
@@ -21,6 +23,18 @@
 #define MAX_RANGES DPC_PLAN_MAX_RANGES /* index ranges per point (2 per row of cells) */
 
 #define PARALLEL_MIN_POINTS 8192 /* below this, threads cost more than they save */
+
+/* All pairs in subspaces of at least this many dimensions and sets of at least this many points
+ * go through the prefilter: in fewer dimensions the grid serves (or the radius covers most of the
+ * torus), and small sets scan all pairs in no time. */
+#define PREFILTER_MIN_DIMS 5
+#define PREFILTER_MIN_POINTS 256
+/* Neighbour lists kept across layers (below): radius (1 + LIST_SKIN) r, at most LIST_RANGES
+ * ranges per point, and only where a list's ball is expected to hold at most LIST_MAX_EXPECTED
+ * points (denser subspaces filter every layer). */
+#define LIST_SKIN 0.2
+#define LIST_RANGES 32u
+#define LIST_MAX_EXPECTED 24.0
 
 /* The engine's loops over points: one range per worker (dpc_parallel_ranges), or the whole
  * range on the calling thread for small sets. */
@@ -42,7 +56,17 @@ typedef struct workspace {
      * the caller's index of working point i; x_tmp / order_tmp are the reorder targets. */
     float *x, *x_tmp;
     uint32_t *order, *order_tmp, *cell_tmp;
-    float *gather;     /* per worker: 4 columns of DPC_GATHER_STRIDE floats (kernel scratch) */
+    float *gather; /* per worker: 4 columns of DPC_GATHER_STRIDE floats (kernel scratch) */
+    uint8_t *code; /* prefilter codes: DPC_MAX_DIMS / 2 columns of 2 * stride + 128 bytes (allocated on first use) */
+    /* The prefilter's lists, kept across layers while they stay exact (Verlet lists): built for
+     * radius list_r around the subspace positions list_x (working order), they hold every point
+     * within r of a query as long as every point has moved at most (list_r - r) / 2 since, less a
+     * margin. Dropped when the working order changes (reorder_points). */
+    uint32_t *list;     /* m x 2 LIST_RANGES: each point's ranges */
+    uint16_t *list_n;   /* ranges per point; LIST_RANGES + 1: more than fit */
+    float *list_x;      /* m x k */
+    uint64_t list_mask; /* the subspace the lists are for; 0: none */
+    float list_r;
     size_t frozen;     /* points whose caller index is below this never move (progressive levels) */
     dpc_cpu_hook hook; /* NULL: never stopped */
     void *hook_ctx;
@@ -74,6 +98,10 @@ static void workspace_free(workspace *w) {
     free(w->order_tmp);
     free(w->cell_tmp);
     free(w->gather);
+    free(w->code);
+    free(w->list);
+    free(w->list_n);
+    free(w->list_x);
 }
 
 static dpc_status workspace_init(workspace *w, size_t m, size_t n, unsigned threads) {
@@ -111,6 +139,11 @@ typedef struct sub_pass {
     float h;             /* mean spacing of the subspace */
     int grid;            /* 0: all pairs */
     uint32_t G, R;       /* cells per axis, cell offsets searched per axis */
+    int near;            /* all pairs through the prefilter */
+    dpc_near_job near_job;
+    int lists;             /* near, with the workspace's lists */
+    int build;             /* lists: (re)build them in this pass, else read them */
+    dpc_near_job list_job; /* near_job with list_r's limit */
 } sub_pass;
 
 /* Sort points by cell (stable counting sort): cell_of, cell_start and perm. */
@@ -147,12 +180,67 @@ static void fill_soa(sub_pass *p, const float *x) {
     }
 }
 
+/* The prefilter's codes of the subspace's coordinates (sorted order), two dimensions per pair;
+ * 0 when there is no memory for them. */
+static int fill_codes(sub_pass *p) {
+    workspace *ws = p->ws;
+    const size_t m = ws->m, column = 2 * ws->stride + 128;
+    if (!ws->code && !(ws->code = (uint8_t *)calloc(DPC_MAX_DIMS / 2 * column, 1))) return 0;
+    dpc_near_job *nj = &p->near_job;
+    nj->pairs = (p->job.k + 1) / 2;
+    nj->m = (uint32_t)m;
+    nj->limit = dpc_near_limit(p->job.radius);
+    for (unsigned pr = 0; pr < nj->pairs; pr++) {
+        uint8_t *c = ws->code + pr * column;
+        for (unsigned e = 0; e < 2; e++) {
+            const unsigned q = 2 * pr + e;
+            if (q >= p->job.k) {
+                for (size_t s = 0; s < m; s++) c[2 * s + e] = 0;
+                continue;
+            }
+            const float *col = p->job.coord[q];
+            for (size_t s = 0; s < m; s++) c[2 * s + e] = (uint8_t)(col[s] * 256.0f); /* exact: x in [0, 1) */
+        }
+        nj->code[pr] = c;
+    }
+    return 1;
+}
+
 static void sub_pass_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
     const sub_pass *p = (const sub_pass *)ctx;
     workspace *ws = p->ws;
     const unsigned k = p->job.k;
     const size_t m = ws->m, n = ws->n;
     uint32_t ranges[2 * MAX_RANGES];
+    if (p->near) { /* one point at a time, each with its own ranges */
+        float xs[DPC_MAX_DIMS], acc[DPC_MAX_DIMS];
+        for (size_t s = lo; s < hi; s++) {
+            if (((s - lo) & (DPC_CPU_POLL_POINTS - 1)) == DPC_CPU_POLL_POINTS - 1 && poll_stop(ws, 0)) return;
+            if (ws->frozen && ws->order[ws->perm[s]] < ws->frozen) continue;
+            const uint32_t *rg = ranges;
+            unsigned n_ranges;
+            if (p->lists) {
+                uint32_t *mine = ws->list + s * 2 * LIST_RANGES;
+                if (p->build) ws->list_n[s] = (uint16_t)p->engine->near(&p->list_job, (uint32_t)s, mine, LIST_RANGES);
+                n_ranges = ws->list_n[s];
+                if (n_ranges <= LIST_RANGES) rg = mine;
+                else n_ranges = p->engine->near(&p->near_job, (uint32_t)s, ranges, MAX_RANGES); /* a crowded point */
+            } else {
+                n_ranges = p->engine->near(&p->near_job, (uint32_t)s, ranges, MAX_RANGES);
+            }
+            if (n_ranges > MAX_RANGES) { /* too many blocks pass: all of them */
+                ranges[0] = 0;
+                ranges[1] = (uint32_t)m;
+                n_ranges = 1;
+                rg = ranges;
+            }
+            for (unsigned q = 0; q < k; q++) xs[q] = p->job.coord[q][s];
+            p->engine->block(&p->job, xs, 1, rg, n_ranges, acc, NULL);
+            float *d = ws->delta + (size_t)ws->perm[s] * n;
+            for (unsigned q = 0; q < k; q++) d[p->dim[q]] += p->h * acc[q];
+        }
+        return;
+    }
     float xs[DPC_BLOCK_MAX * 4], acc[DPC_BLOCK_MAX * 4]; /* blocks hold DPC_BLOCK_MAX * 4 floats */
     const unsigned block_cap = k <= 4 ? DPC_BLOCK_MAX : (DPC_BLOCK_MAX * 4) / k;
     float *scratch = p->grid ? ws->gather + (size_t)slot * 4 * DPC_GATHER_STRIDE : NULL; /* grid: k <= 4 */
@@ -235,6 +323,7 @@ static void reorder_points(workspace *ws) {
         ws->cell_tmp[s] = ws->cell_of[i];
     }
     for (size_t s = 0; s < m; s++) ws->perm[s] = (uint32_t)s;
+    ws->list_mask = 0; /* the lists hold working indices */
     float *xt = ws->x;
     ws->x = ws->x_tmp;
     ws->x_tmp = xt;
@@ -244,6 +333,52 @@ static void reorder_points(workspace *ws) {
     t = ws->cell_of;
     ws->cell_of = ws->cell_tmp;
     ws->cell_tmp = t;
+}
+
+/* Whether the prefilter keeps lists for this pass, and whether they are still exact: every point
+ * that was farther than list_r from a query at the build is now farther than
+ * list_r - 2 max_i |x_i - list_x_i| (torus), which must exceed r by a margin for the kernel's
+ * float32 distances. Otherwise the lists are rebuilt here for radius (1 + LIST_SKIN) r. */
+static void plan_lists(sub_pass *p, uint64_t mask, float rho) {
+    workspace *ws = p->ws;
+    const size_t m = ws->m;
+    const unsigned k = p->job.k;
+    const float r = p->job.radius;
+    double list_r = (1.0 + LIST_SKIN) * r;
+    if (list_r > 0.5) list_r = 0.5;
+    const double ball = pow(3.14159265358979323846, 0.5 * k) / tgamma(0.5 * k + 1.0);
+    if (list_r <= r || ball * pow((1.0 + LIST_SKIN) * rho, k) > LIST_MAX_EXPECTED) return;
+    if (!ws->list) {
+        ws->list = (uint32_t *)malloc(m * 2 * LIST_RANGES * sizeof(uint32_t));
+        ws->list_n = (uint16_t *)malloc(m * sizeof(uint16_t));
+        ws->list_x = (float *)malloc(m * DPC_MAX_DIMS * sizeof(float));
+        if (!ws->list || !ws->list_n || !ws->list_x) { /* no memory: filter every layer */
+            free(ws->list), free(ws->list_n), free(ws->list_x);
+            ws->list = NULL, ws->list_n = NULL, ws->list_x = NULL;
+            return;
+        }
+    }
+    p->lists = 1;
+    if (ws->list_mask == mask && (double)r < ws->list_r) {
+        double most = 0.0; /* the largest move since the build */
+        for (size_t s = 0; s < m; s++) {
+            double d2 = 0.0;
+            for (unsigned q = 0; q < k; q++) {
+                double t = (double)p->job.coord[q][s] - (double)ws->list_x[s * k + q];
+                t -= nearbyint(t);
+                d2 += t * t;
+            }
+            if (d2 > most) most = d2;
+        }
+        if (2.0 * sqrt(most) <= (double)ws->list_r - (double)r * (1.0 + 1e-4)) return; /* still exact */
+    }
+    p->build = 1;
+    ws->list_mask = mask;
+    ws->list_r = (float)list_r;
+    p->list_job = p->near_job;
+    p->list_job.limit = dpc_near_limit(ws->list_r);
+    for (size_t s = 0; s < m; s++)
+        for (unsigned q = 0; q < k; q++) ws->list_x[s * k + q] = p->job.coord[q][s];
 }
 
 static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws) {
@@ -276,9 +411,12 @@ static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws
         p.grid = plan.grid;
         p.G = plan.G;
         p.R = plan.R;
+        p.near = e->prefilter && !plan.grid && plan.k >= PREFILTER_MIN_DIMS && m >= PREFILTER_MIN_POINTS;
         sort_cells(&p, ws->x);
         if (p.grid && !accumulated) reorder_points(ws);
         fill_soa(&p, ws->x);
+        if (p.near && !fill_codes(&p)) p.near = 0; /* no memory for it: all pairs, the same bits */
+        if (p.near) plan_lists(&p, L->masks[t], L->radius[t]);
         parallel_for(e->threads, m, sub_pass_range, &p);
         accumulated = 1;
         if (ws->hook && atomic_load(&ws->stop) != DPC_OK) return;

@@ -85,11 +85,14 @@ dpc_status dpc_cpu_engine_init(dpc_cpu_engine *e, dpc_isa isa, unsigned threads)
     const dpc_status st = dpc_cpu_resolve_isa(isa, &isa);
     if (st != DPC_OK) return st;
     e->block = dpc_block_scalar;
+    e->near = dpc_near_scalar;
+    e->prefilter = 1;
 #if defined(DPC_HAVE_AVX2)
     /* the scalar path's source compiled with -mfma: fmaf is an instruction, the bits the same */
     if (isa == DPC_ISA_SCALAR && cpu_has_fma()) e->block = dpc_block_scalar_fma;
     if (isa == DPC_ISA_AVX2) e->block = dpc_block_avx2;
     if (isa == DPC_ISA_AVX512) e->block = dpc_block_avx512;
+    if (isa != DPC_ISA_SCALAR) e->near = dpc_near_avx2; /* AVX-512 CPUs have AVX2 */
 #endif
     e->isa = isa;
     e->threads = dpc_threads_resolve(threads);

@@ -113,7 +113,9 @@ static inline float vreduce(vf v, int h) {
 
 /* The candidate run of a block of query points: its index ranges concatenated in order. A run
  * of one range is read in place; longer ones are copied into scratch in chunks of
- * DPC_GATHER_CAP candidates (a multiple of 8, so every candidate keeps its lane). */
+ * DPC_GATHER_CAP candidates (a multiple of 8, so every candidate keeps its lane), or without
+ * scratch read in place range by range, each from lane 0: the prefilter's ranges, all but the
+ * last a multiple of 8 long, so that too is the concatenation's lane (cpu_near.h). */
 typedef struct run {
     const uint32_t *ranges;
     unsigned n_ranges, r; /* the next range, and the position inside it */
@@ -123,11 +125,11 @@ typedef struct run {
 static inline uint32_t next_chunk(run *rn, const dpc_sub_job *job, unsigned k, float *scratch, const float **cols,
                                   uint32_t *first) {
     if (rn->r >= rn->n_ranges) return 0;
-    if (rn->n_ranges == 1) {
-        rn->r++;
+    if (rn->n_ranges == 1 || !scratch) {
         for (unsigned q = 0; q < k; q++) cols[q] = job->coord[q];
-        *first = rn->ranges[0];
-        return rn->ranges[1] - rn->ranges[0];
+        *first = rn->ranges[2 * rn->r];
+        rn->r++;
+        return rn->ranges[2 * rn->r - 1] - *first;
     }
     uint32_t got = 0; /* several ranges: the grid, which always passes scratch (k <= 4) */
     while (rn->r < rn->n_ranges && got < DPC_GATHER_CAP) {
@@ -256,8 +258,8 @@ SMALL_KERNEL(kernel_2, 2, DIMS_2)
 SMALL_KERNEL(kernel_3, 3, DIMS_3)
 SMALL_KERNEL(kernel_4, 4, DIMS_4)
 
-/* Any subspace size: per-dimension values in arrays. Large subspaces run all pairs (one range,
- * read in place), so there is nothing to concatenate. */
+/* Any subspace size: per-dimension values in arrays. Large subspaces run all pairs: one range,
+ * or the prefilter's ranges, read in place (no scratch). */
 static void kernel_n(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges, unsigned n_ranges,
                      float *accs, float *scratch) {
     SETUP

@@ -26,11 +26,13 @@ typedef struct dpc_sub_job {
 } dpc_sub_job;
 
 /* Sums for `count` query points that share the candidate ranges (the points of one cell, or a
- * block of points for all pairs): xs[p * k + q] is dimension q of query p, the sums go to
- * acc[p * k + q]. ranges[2r], ranges[2r+1]: half-open candidate index range r.
- * scratch (k <= 4 columns of DPC_GATHER_STRIDE floats, or NULL): SIMD kernels copy up to
- * DPC_GATHER_CAP candidates of several ranges into one run there, so vectors are full and the
- * loop has one predictable trip count; the sums are those of the ranges in order. */
+ * block of points for all pairs, or one point's prefiltered ranges): xs[p * k + q] is dimension
+ * q of query p, the sums go to acc[p * k + q]. ranges[2r], ranges[2r+1]: half-open candidate
+ * index range r. scratch (k <= 4 columns of DPC_GATHER_STRIDE floats, or NULL): SIMD kernels
+ * copy up to DPC_GATHER_CAP candidates of several ranges into one run there, so vectors are
+ * full and the loop has one predictable trip count; the sums are those of the ranges in order.
+ * Without scratch, several ranges are read in place and each but the last must be a multiple of
+ * 8 long (cpu_near.h), so candidates keep their lanes in the concatenation. */
 #define DPC_BLOCK_MAX 64u
 #define DPC_GATHER_CAP 4096u
 #define DPC_GATHER_STRIDE (DPC_GATHER_CAP + 32u)

@@ -1,0 +1,53 @@
+/* The neighbour prefilter (cpu_near.h) in AVX2: 16 candidates per vector, one dimension pair per
+ * byte-pair lane: byte differences (wrapping mod 256 is the torus), |d| - 1 saturated at 0, and
+ * maddubs sums the two squares of a pair into 16 bits (at most 2 * 127^2); pairs add with
+ * unsigned saturation. Four vectors (64 candidates) per step keep four independent sums in
+ * flight. Compiled with -mavx2 for this file only; the AVX2 and AVX-512 engines use it (the
+ * lists do not change any bits, cpu_near.h). */
+#include <immintrin.h>
+#include <string.h>
+
+#include "cpu/cpu_near.h"
+
+#define SUMS 4
+
+unsigned dpc_near_avx2(const dpc_near_job *job, uint32_t query, uint32_t *ranges, unsigned cap) {
+    const uint32_t m = job->m;
+    const unsigned pairs = job->pairs;
+    __m256i q[DPC_MAX_DIMS / 2];
+    const uint8_t *code[DPC_MAX_DIMS / 2];
+    for (unsigned p = 0; p < pairs; p++) {
+        uint16_t both;
+        memcpy(&both, job->code[p] + 2 * (size_t)query, 2);
+        q[p] = _mm256_set1_epi16((short)both);
+        code[p] = job->code[p];
+    }
+    const __m256i one = _mm256_set1_epi8(1), limit = _mm256_set1_epi16((short)job->limit);
+    unsigned n = 0;
+    for (uint32_t j = 0; j < m; j += 16 * SUMS) {
+        __m256i acc[SUMS];
+        for (unsigned v = 0; v < SUMS; v++) acc[v] = _mm256_setzero_si256();
+        for (unsigned p = 0; p < pairs; p++) {
+            const uint8_t *c = code[p] + 2 * (size_t)j;
+            for (unsigned v = 0; v < SUMS; v++) {
+                const __m256i x = _mm256_loadu_si256((const __m256i *)(c + 32 * v));
+                const __m256i lb = _mm256_subs_epu8(_mm256_abs_epi8(_mm256_sub_epi8(x, q[p])), one);
+                acc[v] = _mm256_adds_epu16(acc[v], _mm256_maddubs_epi16(lb, lb));
+            }
+        }
+        uint32_t pass[SUMS], any = 0;
+        for (unsigned v = 0; v < SUMS; v++) {
+            pass[v] = (uint32_t)_mm256_movemask_epi8(_mm256_cmpeq_epi16(_mm256_min_epu16(acc[v], limit), acc[v]));
+            const uint32_t left = m - j > 16 * v ? m - j - 16 * v : 0; /* the padding past m never passes */
+            if (left < 16) pass[v] &= (1u << (2 * left)) - 1u;
+            any |= pass[v];
+        }
+        if (!any) continue;
+        for (unsigned v = 0; v < SUMS; v++) {
+            const uint32_t b = j / 8 + 2 * v;
+            if ((pass[v] & 0xFFFFu) && !dpc_near_add_block(ranges, &n, cap, b, m)) return cap + 1;
+            if ((pass[v] >> 16) && !dpc_near_add_block(ranges, &n, cap, b + 1, m)) return cap + 1;
+        }
+    }
+    return n;
+}
