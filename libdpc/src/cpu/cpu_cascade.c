@@ -25,8 +25,9 @@
 #define PARALLEL_MIN_POINTS 8192 /* below this, threads cost more than they save */
 
 /* All pairs in subspaces of at least this many dimensions and sets of at least this many points
- * go through the prefilter: in fewer dimensions the grid serves (or the radius covers most of the
- * torus), and small sets scan all pairs in no time. */
+ * go through the prefilter, when the ball of radius r is expected to hold at most m / 16 points
+ * (else most 8-candidate blocks pass anyway): in fewer dimensions the grid serves (or the radius
+ * covers most of the torus), and small sets scan all pairs in no time. */
 #define PREFILTER_MIN_DIMS 5
 #define PREFILTER_MIN_POINTS 256
 /* Neighbour lists kept across layers (below): radius (1 + LIST_SKIN) r, at most LIST_RANGES
@@ -339,6 +340,11 @@ static void reorder_points(workspace *ws) {
  * that was farther than list_r from a query at the build is now farther than
  * list_r - 2 max_i |x_i - list_x_i| (torus), which must exceed r by a margin for the kernel's
  * float32 distances. Otherwise the lists are rebuilt here for radius (1 + LIST_SKIN) r. */
+/* The points expected within rho mean spacings of a point in k dimensions: V_k rho^k. */
+static double in_reach(unsigned k, double rho) {
+    return pow(3.14159265358979323846, 0.5 * k) / tgamma(0.5 * k + 1.0) * pow(rho, k);
+}
+
 static void plan_lists(sub_pass *p, uint64_t mask, float rho) {
     workspace *ws = p->ws;
     const size_t m = ws->m;
@@ -346,8 +352,7 @@ static void plan_lists(sub_pass *p, uint64_t mask, float rho) {
     const float r = p->job.radius;
     double list_r = (1.0 + LIST_SKIN) * r;
     if (list_r > 0.5) list_r = 0.5;
-    const double ball = pow(3.14159265358979323846, 0.5 * k) / tgamma(0.5 * k + 1.0);
-    if (list_r <= r || ball * pow((1.0 + LIST_SKIN) * rho, k) > LIST_MAX_EXPECTED) return;
+    if (list_r <= r || in_reach(k, (1.0 + LIST_SKIN) * rho) > LIST_MAX_EXPECTED) return;
     if (!ws->list) {
         ws->list = (uint32_t *)malloc(m * 2 * LIST_RANGES * sizeof(uint32_t));
         ws->list_n = (uint16_t *)malloc(m * sizeof(uint16_t));
@@ -411,7 +416,8 @@ static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws
         p.grid = plan.grid;
         p.G = plan.G;
         p.R = plan.R;
-        p.near = e->prefilter && !plan.grid && plan.k >= PREFILTER_MIN_DIMS && m >= PREFILTER_MIN_POINTS;
+        p.near = e->prefilter && !plan.grid && plan.k >= PREFILTER_MIN_DIMS && m >= PREFILTER_MIN_POINTS &&
+                 in_reach(plan.k, L->radius[t]) <= (double)m / 16.0;
         sort_cells(&p, ws->x);
         if (p.grid && !accumulated) reorder_points(ws);
         fill_soa(&p, ws->x);

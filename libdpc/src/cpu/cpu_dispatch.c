@@ -92,7 +92,8 @@ dpc_status dpc_cpu_engine_init(dpc_cpu_engine *e, dpc_isa isa, unsigned threads)
     if (isa == DPC_ISA_SCALAR && cpu_has_fma()) e->block = dpc_block_scalar_fma;
     if (isa == DPC_ISA_AVX2) e->block = dpc_block_avx2;
     if (isa == DPC_ISA_AVX512) e->block = dpc_block_avx512;
-    if (isa != DPC_ISA_SCALAR) e->near = dpc_near_avx2; /* AVX-512 CPUs have AVX2 */
+    /* the lists change no bits (cpu_near.h): every ISA path takes the AVX2 filter where the CPU has it */
+    if (cpu_has_avx2_fma()) e->near = dpc_near_avx2;
 #endif
     e->isa = isa;
     e->threads = dpc_threads_resolve(threads);
