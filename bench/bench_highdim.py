@@ -5,8 +5,8 @@
 bnot-10d is 40 layers over one 10-D subspace of radius one mean spacing: at m = 8,192 that is
 0.41 of the torus on every axis, yet only about 3 points lie within it of each point. The
 all-pairs scan visited all m; the neighbour prefilter (libdpc/src/cpu/cpu_near.h) drops the
-candidate blocks with no point in reach, with lists kept across layers while they stay exact,
-and gives the same bits. Measured with bench/bench_generate.c (Release, fastest ISA):
+candidate blocks with no point in reach, with neighbour lists kept across layers while they stay
+exact (libdpc/src/cpu/cpu_lists.h), and gives the same bits. Measured with bench/bench_generate.c (Release, fastest ISA):
 1. this tree at m = 1,024 ... --max-m (default 65,536) on one and two threads: wall medians;
 2. revision REV (default 1e40f0e, the all-pairs scan) and this tree alternately, one thread,
    three rounds, m up to 8,192 (thread CPU time, which a busy machine disturbs less);

@@ -1,6 +1,7 @@
 // The neighbour prefilter of large all-pairs subspaces (libdpc/src/cpu/cpu_near*.c and its use
-// in cpu_cascade.c, with the lists kept across layers), below the public API: its ranges are
-// aligned blocks that hold every point within the radius, the scalar and AVX2 filters agree,
+// in cpu_cascade.c, with the lists kept across layers, cpu_lists.c), below the public API: its
+// ranges are aligned blocks that hold every point within the radius, its point lists hold every
+// such point, the scalar and AVX2 filters agree,
 // and a cascade run through it gives bit for bit the points of the all-pairs scan (every ISA,
 // one and two threads, point counts that are not multiples of 8).
 #include <cmath>
@@ -83,6 +84,22 @@ TEST(Prefilter, RangesAreAlignedBlocksHoldingEveryPointInReach) {
                         ASSERT_EQ(na, nb) << "k " << k << " m " << m << " query " << i;
                         if (na <= 512) ASSERT_TRUE(std::equal(a.begin(), a.begin() + 2 * na, b.begin()));
                     }
+                    // the passing points themselves, from a point on (the lists' builds and hot scans)
+                    const uint32_t from = (i * 13) % m;
+                    std::vector<uint32_t> pa(m), pb(m);
+                    const unsigned npa = dpc_near_points_scalar(&c.job, i, from, pa.data(), m);
+                    if (has_avx2()) {
+                        ASSERT_EQ(dpc_near_points_avx2(&c.job, i, from, pb.data(), m), npa);
+                        ASSERT_TRUE(std::equal(pa.begin(), pa.begin() + npa, pb.begin()));
+                    }
+                    std::vector<char> pass(m, 0);
+                    for (unsigned g = 0; g < npa; g++) {
+                        ASSERT_GE(pa[g], from);
+                        if (g) ASSERT_LT(pa[g - 1], pa[g]);
+                        pass[pa[g]] = 1;
+                    }
+                    for (uint32_t j = from; j < m; j++)
+                        if (torus_distance(x, k, i, j) < r) ASSERT_TRUE(pass[j]) << "point " << j << " near " << i;
                     if (na > 512) continue; // r = 1/2 in 5-D: most blocks pass
                     std::vector<char> in(m, 0);
                     for (unsigned g = 0; g < na; g++) {

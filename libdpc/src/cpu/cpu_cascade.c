@@ -17,6 +17,7 @@
 #include "common/error.h"
 #include "common/threads.h"
 #include "cpu/cpu_grid.h"
+#include "cpu/cpu_lists.h"
 #include "model/input.h"
 #include "model/plan.h"
 
@@ -30,11 +31,8 @@
  * covers most of the torus), and small sets scan all pairs in no time. */
 #define PREFILTER_MIN_DIMS 5
 #define PREFILTER_MIN_POINTS 256
-/* Neighbour lists kept across layers (below): radius (1 + LIST_SKIN) r, at most LIST_RANGES
- * ranges per point, and only where a list's ball is expected to hold at most LIST_MAX_EXPECTED
- * points (denser subspaces filter every layer). */
-#define LIST_SKIN 0.2
-#define LIST_RANGES 32u
+/* Neighbour lists kept across layers (cpu_lists.h) where the ball of their radius list_r is
+ * expected to hold at most this many points; denser subspaces filter every query every layer. */
 #define LIST_MAX_EXPECTED 24.0
 
 /* The engine's loops over points: one range per worker (dpc_parallel_ranges), or the whole
@@ -57,18 +55,10 @@ typedef struct workspace {
      * the caller's index of working point i; x_tmp / order_tmp are the reorder targets. */
     float *x, *x_tmp;
     uint32_t *order, *order_tmp, *cell_tmp;
-    float *gather; /* per worker: 4 columns of DPC_GATHER_STRIDE floats (kernel scratch) */
-    uint8_t *code; /* prefilter codes: DPC_MAX_DIMS / 2 columns of 2 * stride + 128 bytes (allocated on first use) */
-    /* The prefilter's lists, kept across layers while they stay exact (Verlet lists): built for
-     * radius list_r around the subspace positions list_x (working order), they hold every point
-     * within r of a query as long as every point has moved at most (list_r - r) / 2 since, less a
-     * margin. Dropped when the working order changes (reorder_points). */
-    uint32_t *list;     /* m x 2 LIST_RANGES: each point's ranges */
-    uint16_t *list_n;   /* ranges per point; LIST_RANGES + 1: more than fit */
-    float *list_x;      /* m x k */
-    uint64_t list_mask; /* the subspace the lists are for; 0: none */
-    float list_r;
-    size_t frozen;     /* points whose caller index is below this never move (progressive levels) */
+    float *gather;   /* per worker: 4 columns of DPC_GATHER_STRIDE floats (kernel scratch) */
+    uint8_t *code;   /* prefilter codes: DPC_MAX_DIMS / 2 columns of 2 * stride + 128 bytes (allocated on first use) */
+    dpc_lists lists; /* the prefilter's neighbour lists, kept across layers (dropped when the working order changes) */
+    size_t frozen;   /* points whose caller index is below this never move (progressive levels) */
     dpc_cpu_hook hook; /* NULL: never stopped */
     void *hook_ctx;
     _Atomic int stop; /* the status a hook returned (DPC_OK: go on); read by every worker */
@@ -100,9 +90,7 @@ static void workspace_free(workspace *w) {
     free(w->cell_tmp);
     free(w->gather);
     free(w->code);
-    free(w->list);
-    free(w->list_n);
-    free(w->list_x);
+    dpc_lists_free(&w->lists);
 }
 
 static dpc_status workspace_init(workspace *w, size_t m, size_t n, unsigned threads) {
@@ -110,6 +98,7 @@ static dpc_status workspace_init(workspace *w, size_t m, size_t n, unsigned thre
     w->m = m;
     w->n = n;
     w->cell_cap = 2 * m + DPC_PLAN_CELL_SLACK; /* the most cells a plan's grid has */
+    dpc_lists_init(&w->lists, m);
     w->stride = (m + 15) / 16 * 16 + 16;
     w->delta = (float *)malloc(m * n * sizeof(float));
     w->soa = (float *)calloc(w->stride * n, sizeof(float));
@@ -142,9 +131,7 @@ typedef struct sub_pass {
     uint32_t G, R;       /* cells per axis, cell offsets searched per axis */
     int near;            /* all pairs through the prefilter */
     dpc_near_job near_job;
-    int lists;             /* near, with the workspace's lists */
-    int build;             /* lists: (re)build them in this pass, else read them */
-    dpc_near_job list_job; /* near_job with list_r's limit */
+    int lists; /* near, through the workspace's lists */
 } sub_pass;
 
 /* Sort points by cell (stable counting sort): cell_of, cell_start and perm. */
@@ -220,15 +207,8 @@ static void sub_pass_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
             if (ws->frozen && ws->order[ws->perm[s]] < ws->frozen) continue;
             const uint32_t *rg = ranges;
             unsigned n_ranges;
-            if (p->lists) {
-                uint32_t *mine = ws->list + s * 2 * LIST_RANGES;
-                if (p->build) ws->list_n[s] = (uint16_t)p->engine->near(&p->list_job, (uint32_t)s, mine, LIST_RANGES);
-                n_ranges = ws->list_n[s];
-                if (n_ranges <= LIST_RANGES) rg = mine;
-                else n_ranges = p->engine->near(&p->near_job, (uint32_t)s, ranges, MAX_RANGES); /* a crowded point */
-            } else {
-                n_ranges = p->engine->near(&p->near_job, (uint32_t)s, ranges, MAX_RANGES);
-            }
+            if (p->lists) n_ranges = dpc_lists_ranges(&ws->lists, (uint32_t)s, ranges, MAX_RANGES);
+            else n_ranges = p->engine->near(&p->near_job, (uint32_t)s, ranges, MAX_RANGES);
             if (n_ranges > MAX_RANGES) { /* too many blocks pass: all of them */
                 ranges[0] = 0;
                 ranges[1] = (uint32_t)m;
@@ -324,7 +304,7 @@ static void reorder_points(workspace *ws) {
         ws->cell_tmp[s] = ws->cell_of[i];
     }
     for (size_t s = 0; s < m; s++) ws->perm[s] = (uint32_t)s;
-    ws->list_mask = 0; /* the lists hold working indices */
+    ws->lists.mask = 0; /* the lists hold working indices */
     float *xt = ws->x;
     ws->x = ws->x_tmp;
     ws->x_tmp = xt;
@@ -336,54 +316,9 @@ static void reorder_points(workspace *ws) {
     ws->cell_tmp = t;
 }
 
-/* Whether the prefilter keeps lists for this pass, and whether they are still exact: every point
- * that was farther than list_r from a query at the build is now farther than
- * list_r - 2 max_i |x_i - list_x_i| (torus), which must exceed r by a margin for the kernel's
- * float32 distances. Otherwise the lists are rebuilt here for radius (1 + LIST_SKIN) r. */
 /* The points expected within rho mean spacings of a point in k dimensions: V_k rho^k. */
 static double in_reach(unsigned k, double rho) {
     return pow(3.14159265358979323846, 0.5 * k) / tgamma(0.5 * k + 1.0) * pow(rho, k);
-}
-
-static void plan_lists(sub_pass *p, uint64_t mask, float rho) {
-    workspace *ws = p->ws;
-    const size_t m = ws->m;
-    const unsigned k = p->job.k;
-    const float r = p->job.radius;
-    double list_r = (1.0 + LIST_SKIN) * r;
-    if (list_r > 0.5) list_r = 0.5;
-    if (list_r <= r || in_reach(k, (1.0 + LIST_SKIN) * rho) > LIST_MAX_EXPECTED) return;
-    if (!ws->list) {
-        ws->list = (uint32_t *)malloc(m * 2 * LIST_RANGES * sizeof(uint32_t));
-        ws->list_n = (uint16_t *)malloc(m * sizeof(uint16_t));
-        ws->list_x = (float *)malloc(m * DPC_MAX_DIMS * sizeof(float));
-        if (!ws->list || !ws->list_n || !ws->list_x) { /* no memory: filter every layer */
-            free(ws->list), free(ws->list_n), free(ws->list_x);
-            ws->list = NULL, ws->list_n = NULL, ws->list_x = NULL;
-            return;
-        }
-    }
-    p->lists = 1;
-    if (ws->list_mask == mask && (double)r < ws->list_r) {
-        double most = 0.0; /* the largest move since the build */
-        for (size_t s = 0; s < m; s++) {
-            double d2 = 0.0;
-            for (unsigned q = 0; q < k; q++) {
-                double t = (double)p->job.coord[q][s] - (double)ws->list_x[s * k + q];
-                t -= nearbyint(t);
-                d2 += t * t;
-            }
-            if (d2 > most) most = d2;
-        }
-        if (2.0 * sqrt(most) <= (double)ws->list_r - (double)r * (1.0 + 1e-4)) return; /* still exact */
-    }
-    p->build = 1;
-    ws->list_mask = mask;
-    ws->list_r = (float)list_r;
-    p->list_job = p->near_job;
-    p->list_job.limit = dpc_near_limit(ws->list_r);
-    for (size_t s = 0; s < m; s++)
-        for (unsigned q = 0; q < k; q++) ws->list_x[s * k + q] = p->job.coord[q][s];
 }
 
 static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws) {
@@ -422,7 +357,9 @@ static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws
         if (p.grid && !accumulated) reorder_points(ws);
         fill_soa(&p, ws->x);
         if (p.near && !fill_codes(&p)) p.near = 0; /* no memory for it: all pairs, the same bits */
-        if (p.near) plan_lists(&p, L->masks[t], L->radius[t]);
+        if (p.near && in_reach(plan.k, (1.0 + DPC_LISTS_SKIN) * L->radius[t]) <= LIST_MAX_EXPECTED)
+            p.lists = dpc_lists_update(&ws->lists, L->masks[t], &p.job, &p.near_job, e->near_points,
+                                       m < PARALLEL_MIN_POINTS ? 1u : e->threads);
         parallel_for(e->threads, m, sub_pass_range, &p);
         accumulated = 1;
         if (ws->hook && atomic_load(&ws->stop) != DPC_OK) return;

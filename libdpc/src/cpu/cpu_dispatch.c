@@ -86,6 +86,7 @@ dpc_status dpc_cpu_engine_init(dpc_cpu_engine *e, dpc_isa isa, unsigned threads)
     if (st != DPC_OK) return st;
     e->block = dpc_block_scalar;
     e->near = dpc_near_scalar;
+    e->near_points = dpc_near_points_scalar;
     e->prefilter = 1;
 #if defined(DPC_HAVE_AVX2)
     /* the scalar path's source compiled with -mfma: fmaf is an instruction, the bits the same */
@@ -93,7 +94,7 @@ dpc_status dpc_cpu_engine_init(dpc_cpu_engine *e, dpc_isa isa, unsigned threads)
     if (isa == DPC_ISA_AVX2) e->block = dpc_block_avx2;
     if (isa == DPC_ISA_AVX512) e->block = dpc_block_avx512;
     /* the lists change no bits (cpu_near.h): every ISA path takes the AVX2 filter where the CPU has it */
-    if (cpu_has_avx2_fma()) e->near = dpc_near_avx2;
+    if (cpu_has_avx2_fma()) e->near = dpc_near_avx2, e->near_points = dpc_near_points_avx2;
 #endif
     e->isa = isa;
     e->threads = dpc_threads_resolve(threads);

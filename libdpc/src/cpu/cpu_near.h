@@ -33,6 +33,15 @@ unsigned dpc_near_scalar(const dpc_near_job *job, uint32_t query, uint32_t *rang
 unsigned dpc_near_avx2(const dpc_near_job *job, uint32_t query, uint32_t *ranges, unsigned cap);
 #endif
 
+/* The same test, the passing points themselves: the indices j >= from (query included when it
+ * is among them), ascending, into out; returns their count, or cap + 1 if more than cap pass. */
+typedef unsigned (*dpc_near_points_fn)(const dpc_near_job *job, uint32_t query, uint32_t from, uint32_t *out,
+                                       unsigned cap);
+unsigned dpc_near_points_scalar(const dpc_near_job *job, uint32_t query, uint32_t from, uint32_t *out, unsigned cap);
+#if defined(DPC_HAVE_AVX2)
+unsigned dpc_near_points_avx2(const dpc_near_job *job, uint32_t query, uint32_t from, uint32_t *out, unsigned cap);
+#endif
+
 /* Append block b (cut at m) to the ranges, merged with the last one when adjacent; returns 0 when
  * a new range would exceed cap. */
 static inline int dpc_near_add_block(uint32_t *ranges, unsigned *n, unsigned cap, uint32_t b, uint32_t m) {

@@ -11,38 +11,68 @@
 
 #define SUMS 4
 
-unsigned dpc_near_avx2(const dpc_near_job *job, uint32_t query, uint32_t *ranges, unsigned cap) {
-    const uint32_t m = job->m;
-    const unsigned pairs = job->pairs;
-    __m256i q[DPC_MAX_DIMS / 2];
-    const uint8_t *code[DPC_MAX_DIMS / 2];
+/* The pass bits of the 64 candidates from j (2 bits per candidate, 32 per vector), the padding
+ * past m and the candidates before `from` cleared; whether any is set. */
+static inline int chunk(const __m256i *q, const uint8_t *const *code, unsigned pairs, uint32_t limit16, uint32_t j,
+                        uint32_t from, uint32_t m, uint32_t pass[SUMS]) {
+    const __m256i one = _mm256_set1_epi8(1), limit = _mm256_set1_epi16((short)limit16);
+    __m256i acc[SUMS];
+    for (unsigned v = 0; v < SUMS; v++) acc[v] = _mm256_setzero_si256();
     for (unsigned p = 0; p < pairs; p++) {
+        const uint8_t *c = code[p] + 2 * (size_t)j;
+        for (unsigned v = 0; v < SUMS; v++) {
+            const __m256i x = _mm256_loadu_si256((const __m256i *)(c + 32 * v));
+            const __m256i lb = _mm256_subs_epu8(_mm256_abs_epi8(_mm256_sub_epi8(x, q[p])), one);
+            acc[v] = _mm256_adds_epu16(acc[v], _mm256_maddubs_epi16(lb, lb));
+        }
+    }
+    uint32_t any = 0;
+    for (unsigned v = 0; v < SUMS; v++) {
+        pass[v] = (uint32_t)_mm256_movemask_epi8(_mm256_cmpeq_epi16(_mm256_min_epu16(acc[v], limit), acc[v]));
+        const uint32_t at = j + 16 * v;
+        const uint32_t left = m > at ? m - at : 0; /* the padding past m never passes */
+        if (left < 16) pass[v] &= (1u << (2 * left)) - 1u;
+        if (from > at) pass[v] &= from - at >= 16 ? 0u : ~((1u << (2 * (from - at))) - 1u);
+        any |= pass[v];
+    }
+    return any != 0;
+}
+
+static inline void query_codes(const dpc_near_job *job, uint32_t query, __m256i *q, const uint8_t **code) {
+    for (unsigned p = 0; p < job->pairs; p++) {
         uint16_t both;
         memcpy(&both, job->code[p] + 2 * (size_t)query, 2);
         q[p] = _mm256_set1_epi16((short)both);
         code[p] = job->code[p];
     }
-    const __m256i one = _mm256_set1_epi8(1), limit = _mm256_set1_epi16((short)job->limit);
+}
+
+unsigned dpc_near_points_avx2(const dpc_near_job *job, uint32_t query, uint32_t from, uint32_t *out, unsigned cap) {
+    __m256i q[DPC_MAX_DIMS / 2];
+    const uint8_t *code[DPC_MAX_DIMS / 2];
+    query_codes(job, query, q, code);
+    unsigned n = 0;
+    for (uint32_t j = from / (16 * SUMS) * (16 * SUMS); j < job->m; j += 16 * SUMS) {
+        uint32_t pass[SUMS];
+        if (!chunk(q, code, job->pairs, job->limit, j, from, job->m, pass)) continue;
+        for (unsigned v = 0; v < SUMS; v++)
+            for (uint32_t bits = pass[v] & 0x55555555u; bits; bits &= bits - 1) {
+                if (n == cap) return cap + 1;
+                out[n++] = j + 16 * v + (uint32_t)__builtin_ctz(bits) / 2;
+            }
+    }
+    return n;
+}
+
+unsigned dpc_near_avx2(const dpc_near_job *job, uint32_t query, uint32_t *ranges, unsigned cap) {
+    const uint32_t m = job->m;
+    __m256i q[DPC_MAX_DIMS / 2];
+    const uint8_t *code[DPC_MAX_DIMS / 2];
+    query_codes(job, query, q, code);
     unsigned n = 0;
     for (uint32_t j = 0; j < m; j += 16 * SUMS) {
-        __m256i acc[SUMS];
-        for (unsigned v = 0; v < SUMS; v++) acc[v] = _mm256_setzero_si256();
-        for (unsigned p = 0; p < pairs; p++) {
-            const uint8_t *c = code[p] + 2 * (size_t)j;
-            for (unsigned v = 0; v < SUMS; v++) {
-                const __m256i x = _mm256_loadu_si256((const __m256i *)(c + 32 * v));
-                const __m256i lb = _mm256_subs_epu8(_mm256_abs_epi8(_mm256_sub_epi8(x, q[p])), one);
-                acc[v] = _mm256_adds_epu16(acc[v], _mm256_maddubs_epi16(lb, lb));
-            }
-        }
-        uint32_t pass[SUMS], any = 0;
-        for (unsigned v = 0; v < SUMS; v++) {
-            pass[v] = (uint32_t)_mm256_movemask_epi8(_mm256_cmpeq_epi16(_mm256_min_epu16(acc[v], limit), acc[v]));
-            const uint32_t left = m - j > 16 * v ? m - j - 16 * v : 0; /* the padding past m never passes */
-            if (left < 16) pass[v] &= (1u << (2 * left)) - 1u;
-            any |= pass[v];
-        }
-        if (!any) continue;
+        uint32_t pass[SUMS];
+        if (!chunk(q, code, job->pairs, job->limit, j, 0, m, pass)) continue;
         for (unsigned v = 0; v < SUMS; v++) {
             const uint32_t b = j / 8 + 2 * v;
             if ((pass[v] & 0xFFFFu) && !dpc_near_add_block(ranges, &n, cap, b, m)) return cap + 1;
