@@ -9,9 +9,9 @@
 typedef struct dpc_cpu_engine {
     dpc_isa isa;        /* resolved: never DPC_ISA_AUTO */
     dpc_block_fn block; /* that ISA's kernel */
-    dpc_near_fn near;   /* that ISA's neighbour prefilter */
+    dpc_near_fn near;   /* the neighbour prefilter (AVX2 where the CPU has it) */
     dpc_near_points_fn near_points;
-    int prefilter;    /* 1 (default): prefilter large all-pairs subspaces; 0: scan every pair (the same bits) */
+    int prefilter;    /* 1 on CPUs with AVX2: prefilter large all-pairs subspaces; 0: scan every pair (the same bits) */
     unsigned threads; /* 1 .. DPC_MAX_THREADS */
 } dpc_cpu_engine;
 

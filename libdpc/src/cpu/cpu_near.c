@@ -1,6 +1,8 @@
 /* The neighbour prefilter (cpu_near.h), portable: one candidate at a time, stopping at the first
  * dimension pair that passes the limit. The lists are the AVX2 path's (the sums are exact in
- * both: each pair's term is at most 2 * 127^2, and a sum past the limit fails either way). */
+ * both: each pair's term is at most 2 * 127^2, and a sum past the limit fails either way). The
+ * engine does not use it (cpu_dispatch.c: it is about as slow as the scan it would spare); it is
+ * the tests' reference for the AVX2 filter. */
 #include "cpu/cpu_near.h"
 
 static int passes(const dpc_near_job *job, uint32_t query, uint32_t j) {
