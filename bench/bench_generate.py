@@ -77,17 +77,24 @@ def against(rev: str, exe: Path, isas: list[str]) -> list[str]:
     for name in ("repulsion-2d", "bnot-2d"):
         model = ROOT / "models" / f"{name}.onnx"
         for isa in isas:
-            a = {m: [] for m in counts}
-            b = {m: [] for m in counts}
-            for _ in range(3):
-                for r in run(old, model, isa, counts):
-                    a[r["m"]].append(r["cpu_median_s"])
-                for r in run(exe, model, isa, counts):
-                    b[r["m"]].append(r["cpu_median_s"])
+            a, b = alternate(old, exe, model, isa, counts)
             for m in counts:
-                ta, tb = float(np.median(a[m])), float(np.median(b[m]))
+                ta, tb = a[m], b[m]
                 lines.append(f"| `{name}` | {isa} | {m:,} | {ta * 1e3:.2f} ms | {tb * 1e3:.2f} ms | {tb / ta:.2f}x |")
     return lines
+
+
+def alternate(old: Path, exe: Path, model: Path, isa: str, counts: list[int]) -> tuple[dict, dict]:
+    """Thread CPU time per count of two builds run alternately, three rounds: the median of each
+    build's per-round medians."""
+    a = {m: [] for m in counts}
+    b = {m: [] for m in counts}
+    for _ in range(3):
+        for r in run(old, model, isa, counts):
+            a[r["m"]].append(r["cpu_median_s"])
+        for r in run(exe, model, isa, counts):
+            b[r["m"]].append(r["cpu_median_s"])
+    return {m: float(np.median(a[m])) for m in counts}, {m: float(np.median(b[m])) for m in counts}
 
 
 def all_pairs_model() -> Path:

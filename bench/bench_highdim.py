@@ -6,7 +6,8 @@ bnot-10d is 40 layers over one 10-D subspace of radius one mean spacing: at m = 
 0.41 of the torus on every axis, yet only about 3 points lie within it of each point. The
 all-pairs scan visited all m; the neighbour prefilter (libdpc/src/cpu/cpu_near.h) drops the
 candidate blocks with no point in reach, with neighbour lists kept across layers while they stay
-exact (libdpc/src/cpu/cpu_lists.h), and gives the same bits. Measured with bench/bench_generate.c (Release, fastest ISA):
+exact (libdpc/src/cpu/cpu_lists.h), and gives the same bits. Measured with
+bench/bench_generate.c (Release, fastest ISA):
 1. this tree at m = 1,024 ... --max-m (default 65,536) on one and two threads: wall medians;
 2. revision REV (default 1e40f0e, the all-pairs scan) and this tree alternately, one thread,
    three rounds, m up to 8,192 (thread CPU time, which a busy machine disturbs less);
@@ -20,7 +21,7 @@ import argparse
 from pathlib import Path
 
 import numpy as np
-from bench_generate import build, build_revision, cpu_name, run
+from bench_generate import alternate, build, build_revision, cpu_name, run
 from doc_sections import replace_section
 
 import dpc
@@ -68,19 +69,10 @@ def main() -> None:
         f"| model | points | {args.against} | this tree | speed-up |",
         "|---|---:|---:|---:|---:|",
     ]
-    summary = {}
     for name, ms_ in (("bnot-10d", small), ("bnot-5d", [1024, 8192])):
-        path = ROOT / "models" / f"{name}.onnx"
-        a = {m: [] for m in ms_}
-        b = {m: [] for m in ms_}
-        for _ in range(3):
-            for r in run(old, path, isa, ms_):
-                a[r["m"]].append(r["cpu_median_s"])
-            for r in run(exe, path, isa, ms_):
-                b[r["m"]].append(r["cpu_median_s"])
+        a, b = alternate(old, exe, ROOT / "models" / f"{name}.onnx", isa, ms_)
         for m in ms_:
-            ta, tb = float(np.median(a[m])), float(np.median(b[m]))
-            summary[(name, m)] = ta / tb
+            ta, tb = a[m], b[m]
             lines.append(f"| `{name}` | {m:,} | {ta * 1e3:,.1f} ms | {tb * 1e3:,.1f} ms | {ta / tb:.1f}x |")
     goal = scaling[2].get(8192)
     if goal is not None:

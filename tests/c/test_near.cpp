@@ -22,14 +22,7 @@ extern "C" {
 
 namespace {
 
-bool has_avx2() {
-#if defined(__x86_64__)
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-#else
-    return false;
-#endif
-}
+bool has_avx2() { return dpc_cpu_isa_available(DPC_ISA_AVX2) != 0; }
 
 struct Codes {
     std::vector<std::vector<uint8_t>> cols;

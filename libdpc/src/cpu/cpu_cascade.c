@@ -316,11 +316,6 @@ static void reorder_points(workspace *ws) {
     ws->cell_tmp = t;
 }
 
-/* The points expected within rho mean spacings of a point in k dimensions: V_k rho^k. */
-static double in_reach(unsigned k, double rho) {
-    return pow(3.14159265358979323846, 0.5 * k) / tgamma(0.5 * k + 1.0) * pow(rho, k);
-}
-
 static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws) {
     const size_t m = ws->m, n = ws->n;
     int accumulated = 0; /* the reorder must come before any displacement is summed */
@@ -352,12 +347,12 @@ static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws
         p.G = plan.G;
         p.R = plan.R;
         p.near = e->prefilter && !plan.grid && plan.k >= PREFILTER_MIN_DIMS && m >= PREFILTER_MIN_POINTS &&
-                 in_reach(plan.k, L->radius[t]) <= (double)m / 16.0;
+                 dpc_plan_in_reach(plan.k, L->radius[t]) <= (double)m / 16.0;
         sort_cells(&p, ws->x);
         if (p.grid && !accumulated) reorder_points(ws);
         fill_soa(&p, ws->x);
         if (p.near && !fill_codes(&p)) p.near = 0; /* no memory for it: all pairs, the same bits */
-        if (p.near && in_reach(plan.k, (1.0 + DPC_LISTS_SKIN) * L->radius[t]) <= LIST_MAX_EXPECTED)
+        if (p.near && dpc_plan_in_reach(plan.k, (1.0 + DPC_LISTS_SKIN) * L->radius[t]) <= LIST_MAX_EXPECTED)
             p.lists = dpc_lists_update(&ws->lists, L->masks[t], &p.job, &p.near_job, e->near_points,
                                        m < PARALLEL_MIN_POINTS ? 1u : e->threads);
         parallel_for(e->threads, m, sub_pass_range, &p);

@@ -39,7 +39,6 @@ typedef struct scan {
     const dpc_near_job *codes;
     dpc_near_points_fn points;
     size_t limit; /* pairs per worker */
-    unsigned threads;
 } scan;
 
 /* Pairs of query i with the points from `from` on (skipping i itself). */
@@ -128,7 +127,7 @@ int dpc_lists_update(dpc_lists *L, uint64_t mask, const dpc_sub_job *job, const 
     const double r = job->radius;
     if (threads < 1) threads = 1;
     if (!ensure(L, threads)) return L->mask = 0, 0;
-    scan sc = {L, codes, points, PAIRS_PER_POINT * m / threads + 1024, threads};
+    scan sc = {L, codes, points, PAIRS_PER_POINT * m / threads + 1024};
     if (L->mask == mask && L->k == k && r < L->list_r) {
         const double reach = 0.5 * ((double)L->list_r - r * (1.0 + 1e-4)); /* the move that keeps a pair out */
         size_t n_hot = 0;

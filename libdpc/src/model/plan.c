@@ -68,6 +68,10 @@ void dpc_plan_counts(unsigned n, unsigned n_sub, const uint64_t *masks, uint64_t
     }
 }
 
+double dpc_plan_in_reach(unsigned k, double rho) {
+    return pow(PI_VALUE, 0.5 * k) / tgamma(0.5 * k + 1.0) * pow(rho, (double)k);
+}
+
 double dpc_plan_neighbours(const dpc_cascade *c) {
     double most = 0.0;
     for (uint32_t l = 0; l < c->n_layers; l++) {
@@ -76,8 +80,7 @@ double dpc_plan_neighbours(const dpc_cascade *c) {
             if (!(L->masks[t] & ~L->fixed)) continue; /* moves nothing: every backend skips it */
             unsigned k = 0;
             for (uint64_t bits = L->masks[t]; bits; bits &= bits - 1) k++;
-            const double ball = pow(PI_VALUE, 0.5 * k) / tgamma(0.5 * k + 1.0);
-            const double n = ball * pow((double)L->radius[t], (double)k);
+            const double n = dpc_plan_in_reach(k, (double)L->radius[t]);
             if (!(n <= most)) most = n; /* inf stays inf */
         }
     }

@@ -59,6 +59,10 @@ int dpc_plan_search(unsigned k, double r, size_t m, uint32_t *G_out, uint32_t *R
  * 0 for fixed dimensions (they never move). */
 void dpc_plan_counts(unsigned n, unsigned n_sub, const uint64_t *masks, uint64_t fixed, unsigned *count);
 
+/* The points expected within rho mean spacings of a point in k dimensions: V_k rho^k (V_k the
+ * volume of the unit k-ball). */
+double dpc_plan_in_reach(unsigned k, double rho);
+
 /* The largest expected neighbour count per point of any moving subspace of the cascade, V_k rho^k
  * (V_k = pi^(k/2) / Gamma(k/2 + 1), the unit k-ball); dpc_load_options.max_neighbours bounds it. */
 double dpc_plan_neighbours(const dpc_cascade *c);
