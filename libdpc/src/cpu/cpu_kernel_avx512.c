@@ -38,6 +38,9 @@ static inline vf lookup16(const table_regs *T, vi b) {
 #define KERNEL dpc_block_avx512
 #define LOAD_TABLE(T, src, n) load_table(T, src, n)
 #define LOOKUP(T, b) lookup16(T, b)
+/* vbroadcastf64x4: the 8 floats at p into both halves (AVX-512F; the f32x8 form needs DQ). */
+#define VLOAD8(p) ((vf)_mm512_castpd_ps(_mm512_broadcast_f64x4(_mm256_loadu_pd((const double *)(p)))))
+#define VPAIR(a, b) ((vf)_mm512_mask_blend_ps(0xff00, _mm512_set1_ps(a), _mm512_set1_ps(b)))
 #define VANY(m) (_mm512_test_epi32_mask((__m512i)(m), (__m512i)(m)) != 0)
 #define VRINT(t) ((vf)_mm512_roundscale_ps((__m512)(t), _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC))
 #define VMIN(a, b) ((vf)_mm512_min_ps((__m512)(a), (__m512)(b))) /* b when a is NaN: never here */

@@ -16,7 +16,8 @@
  *   table_regs          a kernel table prepared for LOOKUP
  *   LOAD_TABLE(T, w, n) prepare the n-entry table w into T
  *   LOOKUP(T, b)        the entries w[b[l]] (vf); every b[l] is in [0, n - 1]
- * and optionally VANY(m) (whether any lane of a mask is set). */
+ * and optionally VANY(m) (whether any lane of a mask is set), VLOAD8(p) (8 floats at p in each
+ * 8-lane half), VPAIR(a, b), VRINT, VMIN and VIMIN (one instruction for the generic code below). */
 #ifndef KERNEL
 #error "define KERNEL, VW, vf, vi, FMA, table_regs, LOAD_TABLE and LOOKUP before including cpu_kernel_body.h"
 #endif
@@ -29,7 +30,12 @@ static inline vf vsplat(float a) { return (vf){0} + a; }
 static inline vi visplat(int32_t a) { return (vi){0} + a; }
 static inline vf vselect(vi mask, vf a, vf b) { return (vf)(((vi)a & mask) | ((vi)b & ~mask)); }
 
-/* The 8 candidates at p, in each query half. */
+/* The 8 candidates at p, in each query half; an ISA may give one instruction (VLOAD8: two 32-byte
+ * copies read back as one 64-byte vector stall on store forwarding, 2.5x the AVX-512 layer time
+ * on AMD Zen 4). */
+#ifdef VLOAD8
+#define vload8(p) VLOAD8(p)
+#else
 static inline vf vload8(const float *p) {
     vf v;
 #if VW == 8
@@ -40,7 +46,11 @@ static inline vf vload8(const float *p) {
 #endif
     return v;
 }
+#endif
 /* Query A's value in lanes 0-7 (and query B's in lanes 8-15). */
+#ifdef VPAIR
+#define vpair(a, b) VPAIR(a, b)
+#else
 static inline vf vpair(float a, float b) {
     vf v = vsplat(a);
 #if VW == 16
@@ -50,6 +60,7 @@ static inline vf vpair(float a, float b) {
 #endif
     return v;
 }
+#endif
 /* Lanes whose candidate exists: lane mod 8 < left. */
 static inline vi vlanes_below(uint32_t left) {
 #if VW == 8
