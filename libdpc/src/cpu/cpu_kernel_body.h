@@ -83,6 +83,18 @@ static inline int vany(vi m) {
 #define VANY(m) vany(m)
 #endif
 
+/* Lane masks: which lanes hold a candidate (load) and which are in the window (in). By default
+ * vectors of 0 / -1 in GCC vector arithmetic; an ISA with mask registers defines vmask and these
+ * (AVX-512: __mmask16, compares and a zero-masked multiply straight into and out of them). */
+#ifndef VMASK_ALL
+typedef vi vmask;
+#define VMASK_ALL visplat(-1)
+#define VMASK_BELOW(left) vlanes_below(left)
+#define VMASK_ANY(m) VANY(m)
+#define VWINDOW(load, d2) ((load) & ((d2) > cut2) & ((d2) < rad2))
+#define VCOEF(in, g, y) vselect(in, (g) * (y), vsplat(0.0f)) /* g * y where in, +0 elsewhere */
+#endif
+
 /* Minimum-image difference: t - rint(t) for |t| < 2^22, rint rounding half to even; by default
  * as two float additions (which the compiler may not fold without -ffast-math), or an ISA's
  * round-to-nearest-even instruction, the same value. */
@@ -113,13 +125,18 @@ static inline vf vsqrt(vf x, vf y) {
     return FMA(vsplat(0.5f) * y, FMA(-d, d, x), d);
 }
 
-/* The 8 lane sums of query half h added in the canonical tree: (l, l + 4), (l, l + 2), (0, 1). */
-static inline float vreduce(vf v, int h) {
-    float a[CANON];
-    for (int l = 0; l < CANON; l++) a[l] = v[h * CANON + l];
-    for (int w = 4; w >= 1; w /= 2)
-        for (int l = 0; l < w; l++) a[l] = a[l] + a[l + w];
-    return a[0];
+/* The 8 lane sums of each query half added in the canonical tree (l, l + 4), (l, l + 2), (0, 1),
+ * in-register: the sum of half h ends in lane 8 h (the other lanes hold partial sums). */
+static inline vf vtree(vf v) {
+#if VW == 8
+    v = v + __builtin_shufflevector(v, v, 4, 5, 6, 7, 0, 1, 2, 3);
+    v = v + __builtin_shufflevector(v, v, 2, 3, 0, 1, 6, 7, 4, 5);
+    return v + __builtin_shufflevector(v, v, 1, 0, 3, 2, 5, 4, 7, 6);
+#else
+    v = v + __builtin_shufflevector(v, v, 4, 5, 6, 7, 0, 1, 2, 3, 12, 13, 14, 15, 8, 9, 10, 11);
+    v = v + __builtin_shufflevector(v, v, 2, 3, 0, 1, 6, 7, 4, 5, 10, 11, 8, 9, 14, 15, 12, 13);
+    return v + __builtin_shufflevector(v, v, 1, 0, 3, 2, 5, 4, 7, 6, 9, 8, 11, 10, 13, 12, 15, 14);
+#endif
 }
 
 /* The candidate run of a block of query points: its index ranges concatenated in order. A run
@@ -179,14 +196,14 @@ static inline uint32_t next_chunk(run *rn, const dpc_sub_job *job, unsigned k, f
  * window is skipped: it would add +0 to every sum, which leaves the sums' bits as they are. */
 #define TERM_ACC(S, ACC)                                                        \
     {                                                                           \
-        const vi in##S = load & (d2##S > cut2) & (d2##S < rad2);                \
-        if (VANY(in##S)) {                                                      \
+        const vmask in##S = VWINDOW(load, d2##S);                               \
+        if (VMASK_ANY(in##S)) {                                                 \
             const vf y##S = vrsqrt(d2##S);                                      \
             const vf u##S = VMIN(vsqrt(d2##S, y##S) * scale, umax);             \
             const vi b##S = VIMIN(__builtin_convertvector(u##S, vi), qmax);     \
             const vf f##S = u##S - __builtin_convertvector(b##S, vf);           \
             const vf g##S = FMA(f##S, LOOKUP(&dw_t, b##S), LOOKUP(&w_t, b##S)); \
-            const vf coef##S = vselect(in##S, g##S * y##S, vsplat(0.0f));       \
+            const vf coef##S = VCOEF(in##S, g##S, y##S);                        \
             ACC                                                                 \
         }                                                                       \
     }
@@ -213,15 +230,24 @@ static inline uint32_t next_chunk(run *rn, const dpc_sub_job *job, unsigned k, f
         DIMS(DIFF_##S)             \
         TERM_ACC(S, DIMS(ACC_##S)) \
     }
+/* Full vectors first (every lane loads: the mask is a constant the compiler folds away), then
+ * the last, partial one: the same operations on every lane as one loop would do. */
 #define LOOP(DIMS, STEPS)                                                        \
     {                                                                            \
         run rn = {ranges, n_ranges, 0, 0};                                       \
         const float *cols[4];                                                    \
         uint32_t first, len;                                                     \
         while ((len = next_chunk(&rn, job, kdim, scratch, cols, &first)) != 0) { \
-            for (uint32_t o = 0; o < len; o += CANON) {                          \
+            uint32_t o = 0;                                                      \
+            for (; o + CANON <= len; o += CANON) {                               \
                 const uint32_t j = first + o;                                    \
-                const vi load = vlanes_below(len - o);                           \
+                const vmask load = VMASK_ALL;                                    \
+                DIMS(LOADC)                                                      \
+                STEPS                                                            \
+            }                                                                    \
+            if (o < len) {                                                       \
+                const uint32_t j = first + o;                                    \
+                const vmask load = VMASK_BELOW(len - o);                         \
                 DIMS(LOADC)                                                      \
                 STEPS                                                            \
             }                                                                    \
@@ -237,8 +263,11 @@ static inline uint32_t next_chunk(run *rn, const dpc_sub_job *job, unsigned k, f
 #define DECL_A2(q) DECL(A, q, p)
 #define DECL_B2(q) DECL(B, q, p + QPV)
 #define DECL_A1(q) DECL(A, q, p)
-#define FIN(S, q, P, HALVES) \
-    for (int h = 0; h < (HALVES); h++) accs[((P) + h) * kdim + q] = vreduce(a##S##q, h);
+#define FIN(S, q, P, HALVES)                                                            \
+    {                                                                                   \
+        const vf sum = vtree(a##S##q);                                                  \
+        for (int h = 0; h < (HALVES); h++) accs[((P) + h) * kdim + q] = sum[h * CANON]; \
+    }
 #define FIN_A2(q) FIN(A, q, p, QPV)
 #define FIN_B2(q) FIN(B, q, p + QPV, QPV)
 
@@ -261,8 +290,11 @@ static inline uint32_t next_chunk(run *rn, const dpc_sub_job *job, unsigned k, f
 #define DECL_LAST(q)                                                         \
     const vf xA##q = vpair(xs[p * kdim + q], xs[(p + here - 1) * kdim + q]); \
     vf aA##q = vsplat(0.0f);
-#define FIN_LAST(q) \
-    for (unsigned h = 0; h < here; h++) accs[(p + h) * kdim + q] = vreduce(aA##q, (int)h);
+#define FIN_LAST(q)                                                                    \
+    {                                                                                  \
+        const vf sum = vtree(aA##q);                                                   \
+        for (unsigned h = 0; h < here; h++) accs[(p + h) * kdim + q] = sum[h * CANON]; \
+    }
 
 SMALL_KERNEL(kernel_1, 1, DIMS_1)
 SMALL_KERNEL(kernel_2, 2, DIMS_2)
@@ -287,7 +319,7 @@ static void kernel_n(const dpc_sub_job *job, const float *xs, unsigned count, co
         uint32_t first, len;
         while ((len = next_chunk(&rn, job, k, scratch, cols, &first)) != 0) {
             for (uint32_t o = 0; o < len; o += CANON) {
-                const vi load = vlanes_below(len - o);
+                const vmask load = VMASK_BELOW(len - o);
                 vf d2A = vsplat(0.0f);
                 for (unsigned q = 0; q < k; q++) {
                     t[q] = vwrap(vload8(cols[q] + first + o) - x[q]);
@@ -296,8 +328,10 @@ static void kernel_n(const dpc_sub_job *job, const float *xs, unsigned count, co
                 TERM_ACC(A, for (unsigned q = 0; q < k; q++) a[q] = FMA(coefA, t[q], a[q]);)
             }
         }
-        for (unsigned q = 0; q < k; q++)
-            for (unsigned h = 0; h < here; h++) accs[(p + h) * k + q] = vreduce(a[q], (int)h);
+        for (unsigned q = 0; q < k; q++) {
+            const vf sum = vtree(a[q]);
+            for (unsigned h = 0; h < here; h++) accs[(p + h) * k + q] = sum[h * CANON];
+        }
     }
 }
 
