@@ -123,6 +123,7 @@ CARDS = {
     "bnot-2d": Card("plane", {"xy": "bnot"}, scales=True),
     "bnot-2d-wide": Card("plane", {"xy": "bnot"}, scales=True),
     "bnot-2d-stratified": Card("plane", {"xy": "bnot"}, scales=True),
+    "blue-2d": Card("plane", {"xy": "bnot"}, scales=True),  # aims below BNOT: docs/beyond-bnot.md
     "progressive-2d": Card("plane", {"xy": "bnot"}, scales=True),  # prefixes: docs/progressive.md
     "repulsion-2d": Card("plane", {"xy": "bnot"}),
     "jitter-2d": Card("plane", {"xy": "jitter"}),

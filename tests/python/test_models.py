@@ -70,6 +70,23 @@ def test_headline_quality_of_the_2d_blue_noise_models():
     assert p_wide < 0.01 and p_wide < p_narrow / 10, (p_narrow, p_wide)
 
 
+def test_blue_2d_is_below_bnot():
+    """docs/beyond-bnot.md on 16 sets (the page uses 100): blue-2d's low band a fraction of
+    bnot-2d-stratified's (which matches the authors' BNOT sets), with BNOT's peak height and
+    minimum distance; its tables end at 0 at the radius (continuous = true)."""
+    from dpc import analysis
+    from dpc.model_file import read_model
+
+    blue = dpc.load("blue-2d").generate_batch(16, seed=0)
+    bnot = dpc.load("bnot-2d-stratified").generate_batch(16, seed=0)
+    r, rb = (analysis.radial_spectrum(s, nu_max=4.0) for s in (blue, bnot))
+    assert r.low_frequency_energy(0.5) <= 0.0006 and r.low_frequency_energy(0.5) < rb.low_frequency_energy(0.5) / 3
+    assert r.low_frequency_energy(0.75) <= 0.015 and r.low_frequency_energy(0.75) < rb.low_frequency_energy(0.75) / 2
+    assert r.peak()[0] <= 3.2
+    assert analysis.min_distance(blue).mean_ratio >= 0.74
+    assert all(np.all(L.kernels[:, -1] == 0) for L in read_model(dpc.model_path("blue-2d")).layers)
+
+
 def test_dither_mask_beats_white_noise():
     from dpc.analysis import dither as D
 

@@ -58,6 +58,10 @@ class CascadeSpec:
     input: str = "uniform"  # training inputs: "uniform" or "stratified" (format §5)
     order: str = "set"  # "set", or "progressive": generated level by level (format §6)
     progressive_base: int = 16  # progressive: the first level's point count
+    # every table ends at 0 at the radius (its last bin held at 0): the filter is continuous at
+    # r, so a pair crossing r moves its points by a little, not a jump that float32 rounding of
+    # d can switch on or off (docs/training.md, "Kernels continuous at r")
+    continuous: bool = False
 
     def __post_init__(self):
         if not 1 <= self.dims <= 64:
@@ -181,7 +185,10 @@ class Cascade(torch.nn.Module):
         """Per-layer kernel tables [l, s, b] (the values a model file stores)."""
         lo, hi, frac = self.layer_weights()
         f = frac.to(self.theta)[:, None, None]
-        return (1 - f) * self.theta[lo] + f * self.theta[hi]
+        tabs = (1 - f) * self.theta[lo] + f * self.theta[hi]
+        if self.spec.continuous:
+            tabs = torch.cat([tabs[..., :-1], torch.zeros_like(tabs[..., -1:])], dim=-1)
+        return tabs
 
     def forward(self, x: torch.Tensor, impl: str = "torch", return_all: bool = False, skin: float | None = 1.0):
         """Run all layers. skin (in spacings): reuse neighbour lists across layers while points

@@ -4,7 +4,8 @@
     [model]    layers, unique_kernels, bins, subspaces, radius, eps, init ("zero", "repulsion" or
                "model"), init_sigma, init_amplitude, init_model (init = "model": a bundled
                model's name or a model file, whose kernels the run starts from), input
-               ("uniform" or "stratified": the training inputs), order ("set" or "progressive"), progressive_base
+               ("uniform" or "stratified": the training inputs), order ("set" or "progressive"), progressive_base,
+               continuous (true: every kernel table ends at 0 at the radius)
     [loss]     name + params (registered) | source (Python code) | file (Python file)
     [train]    steps, batch, lr, lr_final, seed, device, threads, impl, checkpoint_every,
                log_every, eval_sets, run_dir, diverge_factor, diverge_patience
@@ -56,6 +57,7 @@ class ModelConfig:
     input: str = "uniform"
     order: str = "set"  # "progressive": generated level by level, every prefix a set (format §6)
     progressive_base: int = 16
+    continuous: bool = False  # kernel tables end at 0 at the radius (CascadeSpec.continuous)
 
 
 @dataclass
@@ -110,6 +112,7 @@ class Config:
             input=m.input,
             order=m.order,
             progressive_base=m.progressive_base,
+            continuous=m.continuous,
         )
 
     def to_dict(self) -> dict:
@@ -142,6 +145,7 @@ def _section(cls, data: dict, name: str):
             "int": isinstance(v, int) and not isinstance(v, bool),
             "float": isinstance(v, (int, float)) and not isinstance(v, bool),
             "str": isinstance(v, str),
+            "bool": isinstance(v, bool),
             "list": isinstance(v, list),
         }.get(want, True)
         if not ok:

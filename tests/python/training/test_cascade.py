@@ -53,6 +53,19 @@ def test_inits():
     assert dmin(c(x)) > 2 * dmin(x)
 
 
+def test_continuous_tables_end_at_zero_at_the_radius():
+    """continuous = true: every layer's table ends at 0 (d = r), so a pair crossing r moves its
+    points by nothing at r; the other bins train as before, the last gets no gradient."""
+    sp = CascadeSpec(dims=2, n_points=64, layers=5, unique_kernels=2, bins=8, init="repulsion", continuous=True)
+    c = Cascade(sp)
+    tab = c.tables()
+    assert torch.count_nonzero(tab[..., -1]) == 0 and (tab[..., :-1] < 0).all()
+    open_tab = Cascade(CascadeSpec(dims=2, n_points=64, layers=5, unique_kernels=2, bins=8, init="repulsion")).tables()
+    assert torch.equal(tab[..., :-1], open_tab[..., :-1]) and (open_tab[..., -1] < 0).all()
+    tab.sum().backward()
+    assert torch.count_nonzero(c.theta.grad[..., -1]) == 0 and (c.theta.grad[..., :-1] > 0).all()
+
+
 def test_cascade_chains_filter_layers_and_grid_inputs():
     sp = CascadeSpec(
         dims=3,
