@@ -242,7 +242,7 @@ def fig11() -> None:
 
 def fig12() -> None:
     cases = [(2, ["white", "jitter", "sobol", "halton", "rank1", "bnot-2d", "bnot-2d" + STRATIFIED, "bnot-2d-wide",
-                  "bnot-2d-stratified", "step-2d"], [64, 256, 1024, 4096]),
+                  "bnot-2d-stratified", "blue-2d", "step-2d"], [64, 256, 1024, 4096]),
              (3, ["white", "jitter", "sobol", "halton", "rank1", "bnot-3d", "projective-3d"], [64, 512, 4096])]
     fams = ("gaussian", "heaviside")
     fig, axs = plt.subplots(2, 2, figsize=(10, 7.2))
