@@ -87,6 +87,26 @@ def test_blue_2d_is_below_bnot():
     assert all(np.all(L.kernels[:, -1] == 0) for L in read_model(dpc.model_path("blue-2d")).layers)
 
 
+def test_bnot_10d_keeps_no_coincident_pair():
+    """Issue 14 item 3: the seeds whose sets kept a pair about 1e-5 spacings apart before
+    max_attraction (docs/training.md §2; python models/close_pairs.py bnot-10d counts 10,000
+    seeds) keep every pair apart, and every table respects the cap of its config (0.4 d)."""
+    from dpc.model_file import read_model
+
+    sys.path.insert(0, str(REPO / "models"))
+    try:
+        from close_pairs import closest_in_spacings
+    finally:
+        sys.path.pop(0)
+    model = dpc.load("bnot-10d")
+    for seed in (1050, 3890, 9487):
+        assert closest_in_spacings(model.generate(seed=seed)) > 0.5, seed
+    for layer in read_model(dpc.model_path("bnot-10d")).layers:
+        b = layer.kernels.shape[1]
+        d = np.arange(b) * (layer.radius[0] / (b - 1))
+        assert np.all(layer.kernels[0] <= 0.4 * d + 1e-6)
+
+
 def test_dither_mask_beats_white_noise():
     from dpc.analysis import dither as D
 

@@ -62,6 +62,11 @@ class CascadeSpec:
     # r, so a pair crossing r moves its points by a little, not a jump that float32 rounding of
     # d can switch on or off (docs/training.md, "Kernels continuous at r")
     continuous: bool = False
+    # > 0: every table value at distance d (in spacings) is at most max_attraction * d, so an
+    # isolated pair closes at most 2 * max_attraction of its gap in a layer. Without it a kernel
+    # with g(d) = d / 2 makes a pair at that distance meet exactly, inside eps * h, where no later
+    # layer sees it (bnot-10d: 1 set in ~3,000; docs/training.md §2). 0: no limit.
+    max_attraction: float = 0.0
 
     def __post_init__(self):
         if not 1 <= self.dims <= 64:
@@ -95,6 +100,8 @@ class CascadeSpec:
             raise FilterConfigError(f"input must be 'uniform' or 'stratified', got {self.input!r}")
         if self.input == "stratified" and self.grid_axes:
             raise FilterConfigError("stratified input is for patterns without grid axes")
+        if not (self.max_attraction >= 0 and math.isfinite(self.max_attraction)):
+            raise FilterConfigError(f"max_attraction must be finite and >= 0, got {self.max_attraction}")
         if self.order not in ("set", "progressive"):
             raise FilterConfigError(f"order must be 'set' or 'progressive', got {self.order!r}")
         if self.order == "progressive" and (self.grid_axes or not 1 <= self.progressive_base <= self.n_points):
@@ -188,6 +195,10 @@ class Cascade(torch.nn.Module):
         tabs = (1 - f) * self.theta[lo] + f * self.theta[hi]
         if self.spec.continuous:
             tabs = torch.cat([tabs[..., :-1], torch.zeros_like(tabs[..., -1:])], dim=-1)
+        if self.spec.max_attraction > 0:
+            b = self.spec.bins
+            d = torch.stack([torch.arange(b, dtype=torch.float64) * (rho / (b - 1)) for rho in self.spec.radius])
+            tabs = torch.minimum(tabs, (self.spec.max_attraction * d).to(tabs))
         return tabs
 
     def forward(self, x: torch.Tensor, impl: str = "torch", return_all: bool = False, skin: float | None = 1.0):

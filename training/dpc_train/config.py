@@ -5,7 +5,8 @@
                "model"), init_sigma, init_amplitude, init_model (init = "model": a bundled
                model's name or a model file, whose kernels the run starts from), input
                ("uniform" or "stratified": the training inputs), order ("set" or "progressive"), progressive_base,
-               continuous (true: every kernel table ends at 0 at the radius)
+               continuous (true: every kernel table ends at 0 at the radius), max_attraction (> 0:
+               table values at most max_attraction x the distance in spacings)
     [loss]     name + params (registered) | source (Python code) | file (Python file)
     [train]    steps, batch, lr, lr_final, seed, device, threads, impl, checkpoint_every,
                log_every, eval_sets, run_dir, diverge_factor, diverge_patience
@@ -58,6 +59,7 @@ class ModelConfig:
     order: str = "set"  # "progressive": generated level by level, every prefix a set (format §6)
     progressive_base: int = 16
     continuous: bool = False  # kernel tables end at 0 at the radius (CascadeSpec.continuous)
+    max_attraction: float = 0.0  # > 0: table values at most this times d (CascadeSpec.max_attraction)
 
 
 @dataclass
@@ -113,6 +115,7 @@ class Config:
             order=m.order,
             progressive_base=m.progressive_base,
             continuous=m.continuous,
+            max_attraction=float(m.max_attraction),
         )
 
     def to_dict(self) -> dict:

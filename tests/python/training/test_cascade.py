@@ -66,6 +66,29 @@ def test_continuous_tables_end_at_zero_at_the_radius():
     assert torch.count_nonzero(c.theta.grad[..., -1]) == 0 and (c.theta.grad[..., :-1] > 0).all()
 
 
+def test_max_attraction_keeps_an_isolated_pair_apart():
+    """max_attraction = a: table values at distance d (spacings) are at most a * d, so two points
+    alone in each other's radius close at most 2a of their gap per layer; without the limit a
+    kernel with g(d) = d / 2 makes them meet (the bnot-10d close pairs)."""
+    b, rho = 9, 0.6  # two points: h = 2^-1/2 and r = rho h < 1/2 (the table's distances unclipped)
+    d = torch.arange(b, dtype=torch.float64) * (rho / (b - 1))
+    for limit, want in ((0.0, 0.0), (0.25, 0.5)):
+        sp = CascadeSpec(dims=2, n_points=2, layers=2, unique_kernels=1, bins=b, radius=[rho], max_attraction=limit)
+        c = Cascade(sp)
+        with torch.no_grad():
+            c.theta.copy_((d / 2).float()[None, None])  # g(d) = d / 2: an isolated pair meets
+        tab = c.tables().detach()
+        if limit:
+            assert torch.all(tab <= limit * d.float() + 1e-7)
+        h = 2**-0.5
+        x = torch.tensor([[[0.5, 0.5], [0.5 + 0.4 * h, 0.5]]], dtype=torch.float64)  # 0.4 spacings apart
+        y = filter_layer(x, tab[0].double(), sp.masks, sp.radius, sp.eps)
+        gap = float((y[0, 1, 0] - y[0, 0, 0]) / h)
+        assert gap == pytest.approx(want * 0.4, abs=1e-6), (limit, gap)
+    with pytest.raises(FilterConfigError, match="max_attraction"):
+        CascadeSpec(dims=2, n_points=64, max_attraction=-1.0)
+
+
 def test_cascade_chains_filter_layers_and_grid_inputs():
     sp = CascadeSpec(
         dims=3,
