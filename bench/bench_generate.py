@@ -114,13 +114,18 @@ def run(exe: Path, model: Path, isa: str, counts: list[int]) -> list[dict]:
 
 
 def cpu_name() -> str:
+    """The CPU's model name, with family/model and whether it has AVX-512: cloud CPUs often name
+    only the brand ("AMD EPYC"), and which generation it is decides the ISA paths measured."""
     try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
+        info = dict(
+            (k.strip(), v.strip())
+            for k, v in (line.split(":", 1) for line in Path("/proc/cpuinfo").read_text().splitlines() if ":" in line)
+        )
     except OSError:
-        pass
-    return platform.processor() or "unknown CPU"
+        return platform.processor() or "unknown CPU"
+    simd = "AVX-512" if "avx512f" in info.get("flags", "").split() else "no AVX-512"
+    family, model = info.get("cpu family", "?"), info.get("model", "?")
+    return f"{info.get('model name', 'unknown CPU')} (family {family} model {model}, {simd})"
 
 
 def main() -> None:
