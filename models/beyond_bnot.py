@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import platform
 import sys
 import time
 from pathlib import Path
@@ -33,19 +32,15 @@ from dpc import analysis, baselines  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import model_cards as MC  # noqa: E402  (the cards' metrics and targets)
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
+from bench_generate import cpu_name  # noqa: E402  (one CPU description for every measured page)
+
 ROOT = Path(__file__).resolve().parents[1]
 PAGE = ROOT / "docs" / "beyond-bnot.md"
 FIG = ROOT / "docs" / "figures" / "beyond-bnot.png"
 M = 1024
 SCALES = [(0.25, 100), (1, 100), (4, 40), (16, 10), (64, 4)]  # (m / 1,024, sets)
 COUNTS = (1024, 4096)  # integration study
-
-
-def cpu_name() -> str:
-    for line in Path("/proc/cpuinfo").read_text().splitlines() if Path("/proc/cpuinfo").exists() else []:
-        if line.startswith("model name"):
-            return line.split(":", 1)[1].strip()
-    return platform.processor() or platform.machine()
 
 
 def bnot_shifted(count: int, m: int, seed: int) -> np.ndarray:

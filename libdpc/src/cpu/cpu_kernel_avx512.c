@@ -50,7 +50,6 @@ typedef __mmask16 vmask;
     _mm512_mask_cmp_ps_mask(_mm512_mask_cmp_ps_mask(load, (__m512)(d2), (__m512)cut2, _CMP_GT_OQ), (__m512)(d2), \
                             (__m512)rad2, _CMP_LT_OQ)
 #define VCOEF(in, g, y) ((vf)_mm512_maskz_mul_ps(in, (__m512)(g), (__m512)(y)))
-#define VANY(m) (_mm512_test_epi32_mask((__m512i)(m), (__m512i)(m)) != 0)
 #define VRINT(t) ((vf)_mm512_roundscale_ps((__m512)(t), _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC))
 #define VMIN(a, b) ((vf)_mm512_min_ps((__m512)(a), (__m512)(b))) /* b when a is NaN: never here */
 #define VIMIN(a, b) ((vi)_mm512_min_epi32((__m512i)(a), (__m512i)(b)))

@@ -17,7 +17,8 @@
  *   LOAD_TABLE(T, w, n) prepare the n-entry table w into T
  *   LOOKUP(T, b)        the entries w[b[l]] (vf); every b[l] is in [0, n - 1]
  * and optionally VANY(m) (whether any lane of a mask is set), VLOAD8(p) (8 floats at p in each
- * 8-lane half), VPAIR(a, b), VRINT, VMIN and VIMIN (one instruction for the generic code below). */
+ * 8-lane half), VPAIR(a, b), VRINT, VMIN and VIMIN (one instruction for the generic code below),
+ * and with mask registers vmask, VMASK_ALL, VMASK_BELOW, VMASK_ANY, VWINDOW and VCOEF (below). */
 #ifndef KERNEL
 #error "define KERNEL, VW, vf, vi, FMA, table_regs, LOAD_TABLE and LOOKUP before including cpu_kernel_body.h"
 #endif
@@ -137,6 +138,11 @@ static inline vf vtree(vf v) {
     v = v + __builtin_shufflevector(v, v, 2, 3, 0, 1, 6, 7, 4, 5, 10, 11, 8, 9, 14, 15, 12, 13);
     return v + __builtin_shufflevector(v, v, 1, 0, 3, 2, 5, 4, 7, 6, 9, 8, 11, 10, 13, 12, 15, 14);
 #endif
+}
+/* The canonical sums of the first `halves` query halves of a, to out[0], out[stride], ... */
+static inline void vstore_sums(vf a, unsigned halves, float *out, unsigned stride) {
+    const vf sum = vtree(a);
+    for (unsigned h = 0; h < halves; h++) out[h * stride] = sum[h * CANON];
 }
 
 /* The candidate run of a block of query points: its index ranges concatenated in order. A run
@@ -263,11 +269,7 @@ static inline uint32_t next_chunk(run *rn, const dpc_sub_job *job, unsigned k, f
 #define DECL_A2(q) DECL(A, q, p)
 #define DECL_B2(q) DECL(B, q, p + QPV)
 #define DECL_A1(q) DECL(A, q, p)
-#define FIN(S, q, P, HALVES)                                                            \
-    {                                                                                   \
-        const vf sum = vtree(a##S##q);                                                  \
-        for (int h = 0; h < (HALVES); h++) accs[((P) + h) * kdim + q] = sum[h * CANON]; \
-    }
+#define FIN(S, q, P, HALVES) vstore_sums(a##S##q, HALVES, accs + (P)*kdim + q, kdim);
 #define FIN_A2(q) FIN(A, q, p, QPV)
 #define FIN_B2(q) FIN(B, q, p + QPV, QPV)
 
@@ -290,11 +292,7 @@ static inline uint32_t next_chunk(run *rn, const dpc_sub_job *job, unsigned k, f
 #define DECL_LAST(q)                                                         \
     const vf xA##q = vpair(xs[p * kdim + q], xs[(p + here - 1) * kdim + q]); \
     vf aA##q = vsplat(0.0f);
-#define FIN_LAST(q)                                                                    \
-    {                                                                                  \
-        const vf sum = vtree(aA##q);                                                   \
-        for (unsigned h = 0; h < here; h++) accs[(p + h) * kdim + q] = sum[h * CANON]; \
-    }
+#define FIN_LAST(q) vstore_sums(aA##q, here, accs + p * kdim + q, kdim);
 
 SMALL_KERNEL(kernel_1, 1, DIMS_1)
 SMALL_KERNEL(kernel_2, 2, DIMS_2)
@@ -328,10 +326,7 @@ static void kernel_n(const dpc_sub_job *job, const float *xs, unsigned count, co
                 TERM_ACC(A, for (unsigned q = 0; q < k; q++) a[q] = FMA(coefA, t[q], a[q]);)
             }
         }
-        for (unsigned q = 0; q < k; q++) {
-            const vf sum = vtree(a[q]);
-            for (unsigned h = 0; h < here; h++) accs[(p + h) * k + q] = sum[h * CANON];
-        }
+        for (unsigned q = 0; q < k; q++) vstore_sums(a[q], here, accs + p * k + q, k);
     }
 }
 
