@@ -117,6 +117,7 @@ class Card:
     nu_range: tuple = (0.25, 3.0)
     scales: bool = False                          # the point-count study (issue #5 item 3)
     integrand: str = ""
+    full: str = ""                                # subspaces: target key of the full space, if trained
 
 
 CARDS = {
@@ -136,7 +137,8 @@ CARDS = {
     "bnot-4d": Card("nd", {"xyzw": "bnot"}),
     "bnot-5d": Card("nd", {"all": "bnot"}),
     "bnot-10d": Card("nd", {"all": "bnot"}),
-    "projective-3d": Card("subspaces", {"xy": "bnot", "xz": "bnot", "yz": "bnot"}),
+    "projective-3d": Card("subspaces", {"xy": "bnot", "xz": "bnot", "yz": "bnot"}, full="bnot"),
+    "projective-4d": Card("subspaces", {p: "bnot" for p in ("xy", "xz", "xw", "yz", "yw", "zw")}),
     "mixed-3d": Card("subspaces", {"xy": "step", "xz": "jitter", "yz": "bnot"}),
     "dither-32": Card("dither"),
     "mask-64": Card("mask"),
@@ -310,6 +312,8 @@ def card_nd(name: str, card: Card, model) -> list[str]:
             "|---|---:|---:|---:|---|---|---:|"]
     curves = []
     others = [("white noise", classic_sets("white", m, n))]
+    if n <= 5:  # toroidal dart throwing: the delta_min to reach (issue #14 item 3); slow beyond 5-D
+        others.insert(0, ("relaxed dart throwing", classic_sets("dart-throwing", m, n)))
     if round(m ** (1.0 / n)) ** n == m:  # jitter needs m = k^n strata
         others.insert(0, ("jitter", classic_sets("jitter", m, n)))
     for label, s in [(f"**{name}**", sets)] + others:
@@ -336,8 +340,10 @@ def card_subspaces(name: str, card: Card, model) -> list[str]:
     sets = model.generate_batch(SETS, seed=0)
     rows = ["| subspace | target | E_low ν<0.5 | E_low ν<0.75 | peak | anisotropy (dB) | δ_min mean / worst | rel. L1 to target |",
             "|---|---|---:|---:|---|---:|---|---:|"]
-    fig, axs = plt.subplots(1, len(card.targets), figsize=(4.2 * len(card.targets), 3.3))
-    for ax, (axes, key) in zip(axs, card.targets.items()):
+    cols = min(3, len(card.targets))
+    rows_ = -(-len(card.targets) // cols)
+    fig, axs = plt.subplots(rows_, cols, figsize=(4.2 * cols, 3.3 * rows_), squeeze=False)
+    for ax, (axes, key) in zip(axs.ravel(), card.targets.items()):
         d = axes_of(axes, n)
         t = target(key, m, 2)
         mm = plane_metrics(sets, t, card.nu_range, dims=d)
@@ -350,17 +356,47 @@ def card_subspaces(name: str, card: Card, model) -> list[str]:
         ax.plot(r.nu[ok], r.mean[ok], lw=1.1, label=f"{name} ({SETS} sets)")
         ax.set(xlim=(0, 4), ylim=(0, 3.6), title=f"{axes}: {key}", xlabel="ν")
         ax.legend(fontsize=7)
-    full = analysis.radial_spectrum(sets, nu_max=4.0)
-    rows.append(f"| xyz (3-D, not trained) | — | {full.low_frequency_energy(0.5):.4f} | "
-                f"{full.low_frequency_energy(0.75):.4f} | — | — | — | — |")
+    space = AXES[:n]
+    full = analysis.radial_spectrum(sets, nu_max=4.0, directions=128)
+    if card.full:
+        t = target(card.full, m, n)
+        rows.append(f"| {space} ({n}-D) | {t.label} | {elow_text(full, 0.5)} | {elow_text(full, 0.75)} | "
+                    f"{full.peak()[0]:.2f} (ν = {full.peak()[1]:.2f}) | — | "
+                    f"{analysis.min_distance(sets).mean_ratio:.3f} / {analysis.min_distance(sets).min_ratio:.3f} | "
+                    f"{rel_l1(full, t, (0.25, 3.0)):.3f} |")
+    else:
+        rows.append(f"| {space} ({n}-D, not trained) | — | {elow_text(full, 0.5)} | {elow_text(full, 0.75)} | "
+                    "— | — | — | — |")
     fig.tight_layout()
     path = FIGURES / f"{name}-subspaces.png"
     fig.savefig(path, dpi=110)
     plt.close(fig)
     print("\n".join(rows))
-    return ["", "Each trained 2-D projection against its target (rel. L1 over 0.25 ≤ ν ≤ 3), and "
-            "the full 3-D spectrum, which no loss term constrains.", "", *rows, "",
-            f"![subspace spectra of {name}](figures/models/{path.name})", ""]
+    out = ["", "Each trained 2-D projection against its target (rel. L1 over 0.25 ≤ ν ≤ 3), and "
+           f"the full {n}-D spectrum (Monte Carlo, 128 frequencies per ring"
+           + (f", against the {n}-D target)." if card.full else "; no loss term constrains it)."),
+           "", *rows, "", f"![subspace spectra of {name}](figures/models/{path.name})", ""]
+    if len(set(card.targets.values())) == 1:  # one target in every projection: compare with the classics
+        out += subspace_comparison(name, sets, [axes_of(a, n) for a in card.targets], n)
+    return out
+
+
+def subspace_comparison(name: str, sets: np.ndarray, planes: list, n: int) -> list[str]:
+    """E_low ν<0.5 of the projections (mean, worst) and of the full space, against classic sets."""
+    m = sets.shape[1]
+    rows = ["| point sets | sets | projections: E_low ν<0.5 mean | worst projection | "
+            f"{n}-D: E_low ν<0.5 |", "|---|---:|---:|---:|---:|"]
+    others = [(b, classic_sets(b, m, n)) for b in ("sobol", "halton", "white")]
+    iso = f"bnot-{n}d"  # dpc's isotropic model of that dimension: blue in n-D, not in projections
+    if iso in dpc.available_models():
+        others.insert(0, (iso, dpc.load(iso, threads=0, backend="cpu").generate_batch(len(sets), seed=0)))
+    for label, s in [(f"**{name}**", sets)] + others:
+        e = [analysis.radial_spectrum(s, dims=d, nu_max=1.0).low_frequency_energy(0.5) for d in planes]
+        full = analysis.radial_spectrum(s, nu_max=1.0, directions=128)
+        rows.append(f"| {label} | {len(s)} | {np.mean(e):.4f} | {np.max(e):.4f} | {elow_text(full, 0.5)} |")
+    print("\n".join(rows))
+    return [f"The same measures for dpc's isotropic {n}-D model and classic point sets (Owen-scrambled "
+            "Sobol', scrambled Halton, white noise; `dpc.baselines`):", "", *rows, ""]
 
 
 def card_integrand(name: str, card: Card, model) -> list[str]:

@@ -352,9 +352,10 @@ typedef struct dpc_sampler dpc_sampler;
 typedef struct dpc_sampler_options {
     uint32_t struct_size; /* sizeof(dpc_sampler_options), set by dpc_sampler_options_init */
     /* Point models the tables come from, without grid axes, dims >= 2 each. A model of n dims
-     * fills n / 2 consecutive slots from one set (its dimensions 0-1, 2-3, ...: an n-D model's
-     * joint structure carries over to those slots); the models are used in turn, starting over
-     * after the last, until D slots are filled. */
+     * fills n / 2 consecutive slots from one set (its dimensions 0-1, 2-3, ...: each slot keeps
+     * that pair's 2-D structure; the pixel's index rotation differs per slot, so structure
+     * across pairs, e.g. dimensions 0-2, is not kept unless the models are progressive); the
+     * models are used in turn, starting over after the last, until D slots are filled. */
     const dpc_model *const *models;
     uint32_t n_models;          /* >= 1 */
     uint32_t samples_per_pixel; /* spp: points per table, 1 .. DPC_SAMPLER_MAX_SPP (default 16) */

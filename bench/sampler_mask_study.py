@@ -1,0 +1,170 @@
+"""Can a better mask make the sampler's error blue at 4 spp? A synthetic study, no renderer.
+
+    python bench/sampler_mask_study.py            # about 10 minutes on one core
+
+The sampler shifts one n-point table per dimension pair by a per-pixel mask vector
+(docs/rendering.md). Its shipped mask is optimised for 1 spp, where a pixel's error is the
+integrand at the mask value. At n spp the error is e(s) = mean_i f(T_i + s) - I, a function of
+the shift s with only high frequencies, and the 1-spp mask does not cancel it across pixels.
+This study measures, on random toroidal half-plane integrands (the kind the mask optimiser uses)
+over a 64 x 64 screen, the error image's low-frequency energy (mean power at
+0 < |q| <= 3/16 cycles per pixel over the mean at all q != 0, white noise = 1: bench_rendering's
+measure) and the per-pixel MSE, for:
+- the shipped mask at n = 1, 2, 4, 8, 16 spp (bnot-2d-stratified tables, stratified projections);
+- a mask optimised for 4 spp by the same swap optimiser (libdpc/src/sampler/make_sampler_mask.py)
+  with the test errors of 4-point tables drawn from the model;
+- 2 x 2 blocks of a 64 x 64 mask optimised for 1 spp: pixel p's 4 samples are the 4 values of its
+  block (no table), the screen-space ordering of Ahmed and Wonka 2020 in its simplest form;
+- white-noise shifts.
+Writes the section `mask_study` of docs/rendering.md.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from doc_sections import replace_section
+
+import dpc
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "libdpc" / "src" / "sampler"))
+import make_sampler_mask as M  # noqa: E402  (the shipped mask's optimiser)
+
+TILE = 32
+SCREEN = 64
+SEEDS = 48
+MODEL = dpc.load("bnot-2d-stratified", isa="scalar")
+
+
+def table(n: int, seed: int) -> np.ndarray:
+    """The sampler's table: a model set with both projections replaced by stratum centres."""
+    p = MODEL.generate(seed=seed, n_points=n).astype(np.float64)
+    out = np.empty_like(p)
+    for c in range(2):
+        out[np.argsort(p[:, c], kind="stable"), c] = (np.arange(n) + 0.5) / n
+    return out
+
+
+def half_planes(rng: np.random.Generator, k: int):
+    return rng.random(k) * 2 * np.pi, rng.random((k, 2))
+
+
+def half_plane(points: np.ndarray, angle: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    """(k, ...) indicator of k toroidal half-planes (integral 1/2) at points (..., 2)."""
+    shape = (-1,) + (1,) * (points.ndim - 1)
+    d = points[None] - origin.reshape(shape + (2,))
+    d -= np.rint(d)
+    a = angle.reshape(shape)
+    return (np.cos(a) * d[..., 0] + np.sin(a) * d[..., 1] > 0).astype(np.float64)
+
+
+def low_band(e: np.ndarray) -> float:
+    e = e - e.mean()
+    q = np.fft.fftfreq(e.shape[0])
+    qq = np.hypot(q[:, None], q[None, :])
+    p = np.abs(np.fft.fft2(e)) ** 2
+    return float(p[(qq > 0) & (qq <= 3 / 16)].mean() / p[qq > 0].mean())
+
+
+def screen_shifted(mask: np.ndarray, n: int, rng: np.random.Generator, s: int) -> np.ndarray:
+    """(SCREEN, SCREEN, n, 2) sample points: the table of seed s shifted by each pixel's mask
+    vector, the mask at a random tile offset, plus a random global rotation (as the sampler)."""
+    t = table(n, 10_000 + s)
+    ox, oy = rng.integers(0, TILE, 2)
+    c = rng.random(2)
+    yy, xx = np.mgrid[0:SCREEN, 0:SCREEN]
+    shift = (mask[(yy + oy) % TILE, (xx + ox) % TILE] + c) % 1.0
+    return (t[None, None] + shift[:, :, None, :]) % 1.0
+
+
+def screen_blocks(mask: np.ndarray, b: int, rng: np.random.Generator) -> np.ndarray:
+    """Pixel p's b*b samples: the values of its b x b block of a (b * TILE)-wide mask."""
+    size = mask.shape[0]
+    ox, oy = rng.integers(0, size, 2)
+    c = rng.random(2)
+    yy, xx = np.mgrid[0 : SCREEN * b, 0 : SCREEN * b]
+    v = (mask[(yy + oy) % size, (xx + ox) % size] + c) % 1.0
+    return v.reshape(SCREEN, b, SCREEN, b, 2).transpose(0, 2, 1, 3, 4).reshape(SCREEN, SCREEN, b * b, 2)
+
+
+def measure(make) -> tuple[float, float]:
+    rng = np.random.default_rng(123)
+    lows, mses = [], []
+    for s in range(SEEDS):
+        pts = make(rng, s)
+        angle, origin = half_planes(rng, 1)
+        e = half_plane(pts, angle, origin)[0].mean(-1) - 0.5
+        lows.append(low_band(e))
+        mses.append(float((e**2).mean()))
+    return float(np.mean(lows)), float(np.mean(mses))
+
+
+def optimise_for_tables(values: np.ndarray, n: int) -> np.ndarray:
+    """make_sampler_mask's swap optimiser, its test errors those of n-point tables (one drawn
+    from the model per test integrand) shifted by each candidate value."""
+    rng = np.random.default_rng(0)
+    angle, origin = half_planes(rng, M.TESTS)
+    tables = [table(n, s) for s in range(64)]
+    e = np.empty((M.TESTS, len(values)))
+    for k in range(M.TESTS):
+        pts = (tables[k % len(tables)][None] + values[:, None, :]) % 1.0
+        e[k] = half_plane(pts, angle[k : k + 1], origin[k : k + 1])[0].mean(-1) - 0.5
+    M.N, M.ITERATIONS, M.BATCH = TILE, 3000, 256
+    original, M.test_errors = M.test_errors, lambda v, r: e
+    try:
+        return M.assign_shifts(values, log=None)
+    finally:
+        M.test_errors = original
+
+
+def optimise_wide(size: int) -> np.ndarray:
+    """A size x size mask for 1 spp by the shipped optimiser (values: a bnot-2d-stratified set)."""
+    values = MODEL.generate(seed=7, n_points=size * size).astype(np.float64)
+    M.N, M.ITERATIONS, M.BATCH = size, 1200, 1024
+    try:
+        return M.assign_shifts(values, log=None)
+    finally:
+        M.N, M.ITERATIONS, M.BATCH = TILE, 8000, 256
+
+
+def main() -> None:
+    t0 = time.time()
+    shipped = dpc.Sampler.mask()[:, :, :2].astype(np.float64)
+    white = np.random.default_rng(5).random((TILE, TILE, 2))
+    rows = []
+
+    def row(name, n, make):
+        low, mse = measure(make)
+        rows.append(f"| {name} | {n} | {low:.3f} | {mse:.2e} |")
+        print(rows[-1], f"({time.time() - t0:.0f} s)", flush=True)
+
+    for n in (1, 2, 4, 8, 16):
+        row("shipped mask (optimised for 1 spp)", n, lambda r, s, n=n: screen_shifted(shipped, n, r, s))
+    for n in (1, 4):
+        row("white-noise shifts", n, lambda r, s, n=n: screen_shifted(white, n, r, s))
+    opt4 = optimise_for_tables(shipped.reshape(-1, 2), 4)
+    for n in (1, 4, 8):
+        row("mask optimised for 4-spp tables", n, lambda r, s, n=n: screen_shifted(opt4, n, r, s))
+    wide = optimise_wide(2 * TILE)
+    row("2 x 2 blocks of a 64 x 64 mask for 1 spp (no table)", 4, lambda r, s: screen_blocks(wide, 2, r))
+    body = "\n".join(
+        [
+            f"Measured by `python bench/sampler_mask_study.py` ({SEEDS} screens of {SCREEN} x {SCREEN} "
+            "pixels, one random toroidal half-plane integrand each, tables from bnot-2d-stratified; "
+            f"{time.time() - t0:.0f} s):",
+            "",
+            "| per-pixel samples | spp | low-frequency error energy (white = 1) | per-pixel MSE |",
+            "|---|---:|---:|---:|",
+            *rows,
+        ]
+    )
+    replace_section(ROOT / "docs" / "rendering.md", "mask_study", body)
+    print("wrote docs/rendering.md (mask_study)")
+
+
+if __name__ == "__main__":
+    main()
