@@ -165,6 +165,8 @@ class Trainer:
                 self._restore(load_checkpoint(self.ckpt_path))
             elif not force:
                 raise RunExistsError(f"{self.ckpt_path} exists: pass --resume to continue it or --force to start over")
+        if not resume:  # a new run: the old run's quality.json would make it look finished
+            (self.run_dir / "quality.json").unlink(missing_ok=True)
 
     # -- checkpoints ------------------------------------------------------------------
     def state(self) -> dict:

@@ -136,7 +136,10 @@ def test_existing_run_needs_resume_or_force(tmp_path):
     TR.Trainer(tiny(steps=2, checkpoint_every=1), tmp_path / "r", progress=False).run()
     with pytest.raises(TR.RunExistsError, match="--resume"):
         TR.Trainer(tiny(steps=2), tmp_path / "r", progress=False)
+    assert (tmp_path / "r" / "quality.json").exists()  # the refused run touched nothing
     TR.Trainer(tiny(steps=2), tmp_path / "r", force=True, progress=False)
+    # Started over: no quality.json of the old run to make the new one look finished.
+    assert not (tmp_path / "r" / "quality.json").exists()
 
 
 @pytest.mark.parametrize(
