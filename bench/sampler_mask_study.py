@@ -21,11 +21,13 @@ Writes the section `mask_study` of docs/rendering.md.
 
 from __future__ import annotations
 
+import contextlib
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
+from bench_rendering import low_band_energy  # the renderer bench's measure, the same band
 from doc_sections import replace_section
 
 import dpc
@@ -37,16 +39,12 @@ import make_sampler_mask as M  # noqa: E402  (the shipped mask's optimiser)
 TILE = 32
 SCREEN = 64
 SEEDS = 48
-MODEL = dpc.load("bnot-2d-stratified", isa="scalar")
+MODEL = "bnot-2d-stratified"
 
 
 def table(n: int, seed: int) -> np.ndarray:
-    """The sampler's table: a model set with both projections replaced by stratum centres."""
-    p = MODEL.generate(seed=seed, n_points=n).astype(np.float64)
-    out = np.empty_like(p)
-    for c in range(2):
-        out[np.argsort(p[:, c], kind="stable"), c] = (np.arange(n) + 0.5) / n
-    return out
+    """The sampler's own table of n points (its first slot) for that seed."""
+    return dpc.Sampler(MODEL, samples_per_pixel=n, dimensions=1, seed=seed).table(0).astype(np.float64)
 
 
 def half_planes(rng: np.random.Generator, k: int):
@@ -60,14 +58,6 @@ def half_plane(points: np.ndarray, angle: np.ndarray, origin: np.ndarray) -> np.
     d -= np.rint(d)
     a = angle.reshape(shape)
     return (np.cos(a) * d[..., 0] + np.sin(a) * d[..., 1] > 0).astype(np.float64)
-
-
-def low_band(e: np.ndarray) -> float:
-    e = e - e.mean()
-    q = np.fft.fftfreq(e.shape[0])
-    qq = np.hypot(q[:, None], q[None, :])
-    p = np.abs(np.fft.fft2(e)) ** 2
-    return float(p[(qq > 0) & (qq <= 3 / 16)].mean() / p[qq > 0].mean())
 
 
 def screen_shifted(mask: np.ndarray, n: int, rng: np.random.Generator, s: int) -> np.ndarray:
@@ -98,7 +88,7 @@ def measure(make) -> tuple[float, float]:
         pts = make(rng, s)
         angle, origin = half_planes(rng, 1)
         e = half_plane(pts, angle, origin)[0].mean(-1) - 0.5
-        lows.append(low_band(e))
+        lows.append(low_band_energy(e))
         mses.append(float((e**2).mean()))
     return float(np.mean(lows)), float(np.mean(mses))
 
@@ -113,22 +103,26 @@ def optimise_for_tables(values: np.ndarray, n: int) -> np.ndarray:
     for k in range(M.TESTS):
         pts = (tables[k % len(tables)][None] + values[:, None, :]) % 1.0
         e[k] = half_plane(pts, angle[k : k + 1], origin[k : k + 1])[0].mean(-1) - 0.5
-    M.N, M.ITERATIONS, M.BATCH = TILE, 3000, 256
-    original, M.test_errors = M.test_errors, lambda v, r: e
-    try:
+    with optimiser(N=TILE, ITERATIONS=3000, BATCH=256, test_errors=lambda v, r: e):
         return M.assign_shifts(values, log=None)
-    finally:
-        M.test_errors = original
 
 
 def optimise_wide(size: int) -> np.ndarray:
     """A size x size mask for 1 spp by the shipped optimiser (values: a bnot-2d-stratified set)."""
-    values = MODEL.generate(seed=7, n_points=size * size).astype(np.float64)
-    M.N, M.ITERATIONS, M.BATCH = size, 1200, 1024
-    try:
+    values = dpc.load(MODEL, isa="scalar").generate(seed=7, n_points=size * size).astype(np.float64)
+    with optimiser(N=size, ITERATIONS=1200, BATCH=1024):
         return M.assign_shifts(values, log=None)
+
+
+@contextlib.contextmanager
+def optimiser(**settings):
+    """make_sampler_mask with other module settings (it reads them as globals), restored after."""
+    saved = {k: getattr(M, k) for k in settings}
+    vars(M).update(settings)
+    try:
+        yield
     finally:
-        M.N, M.ITERATIONS, M.BATCH = TILE, 8000, 256
+        vars(M).update(saved)
 
 
 def main() -> None:

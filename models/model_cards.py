@@ -341,12 +341,14 @@ def card_subspaces(name: str, card: Card, model) -> list[str]:
     rows = ["| subspace | target | E_low ν<0.5 | E_low ν<0.75 | peak | anisotropy (dB) | δ_min mean / worst | rel. L1 to target |",
             "|---|---|---:|---:|---|---:|---|---:|"]
     cols = min(3, len(card.targets))
-    rows_ = -(-len(card.targets) // cols)
-    fig, axs = plt.subplots(rows_, cols, figsize=(4.2 * cols, 3.3 * rows_), squeeze=False)
+    lines = -(-len(card.targets) // cols)
+    fig, axs = plt.subplots(lines, cols, figsize=(4.2 * cols, 3.3 * lines), squeeze=False)
+    plane_elow = []  # E_low nu<0.5 of each projection, for the comparison table
     for ax, (axes, key) in zip(axs.ravel(), card.targets.items()):
         d = axes_of(axes, n)
         t = target(key, m, 2)
         mm = plane_metrics(sets, t, card.nu_range, dims=d)
+        plane_elow.append(mm["elow50"])
         rows.append(f"| {axes} | {t.label} | {mm['elow50']:.4f} | {mm['elow75']:.4f} | "
                     f"{mm['peak']:.2f} (ν = {mm['peak_nu']:.2f}) | {mm['aniso']:.2f} | "
                     f"{mm['dmin_mean']:.3f} / {mm['dmin_min']:.3f} | {mm['l1']:.3f} |")
@@ -360,9 +362,9 @@ def card_subspaces(name: str, card: Card, model) -> list[str]:
     full = analysis.radial_spectrum(sets, nu_max=4.0, directions=128)
     if card.full:
         t = target(card.full, m, n)
+        (peak, peak_nu), md = full.peak(), analysis.min_distance(sets)
         rows.append(f"| {space} ({n}-D) | {t.label} | {elow_text(full, 0.5)} | {elow_text(full, 0.75)} | "
-                    f"{full.peak()[0]:.2f} (ν = {full.peak()[1]:.2f}) | — | "
-                    f"{analysis.min_distance(sets).mean_ratio:.3f} / {analysis.min_distance(sets).min_ratio:.3f} | "
+                    f"{peak:.2f} (ν = {peak_nu:.2f}) | — | {md.mean_ratio:.3f} / {md.min_ratio:.3f} | "
                     f"{rel_l1(full, t, (0.25, 3.0)):.3f} |")
     else:
         rows.append(f"| {space} ({n}-D, not trained) | — | {elow_text(full, 0.5)} | {elow_text(full, 0.75)} | "
@@ -377,23 +379,29 @@ def card_subspaces(name: str, card: Card, model) -> list[str]:
            + (f", against the {n}-D target)." if card.full else "; no loss term constrains it)."),
            "", *rows, "", f"![subspace spectra of {name}](figures/models/{path.name})", ""]
     if len(set(card.targets.values())) == 1:  # one target in every projection: compare with the classics
-        out += subspace_comparison(name, sets, [axes_of(a, n) for a in card.targets], n)
+        planes = [axes_of(a, n) for a in card.targets]
+        out += subspace_comparison(name, sets, planes, n, (plane_elow, elow_text(full, 0.5)))
     return out
 
 
-def subspace_comparison(name: str, sets: np.ndarray, planes: list, n: int) -> list[str]:
-    """E_low ν<0.5 of the projections (mean, worst) and of the full space, against classic sets."""
+def subspace_comparison(name: str, sets: np.ndarray, planes: list, n: int, measured: tuple) -> list[str]:
+    """E_low ν<0.5 of the projections (mean, worst) and of the full space, against classic sets;
+    `measured` = (the model's per-projection E_low, its full-space E_low text), already computed."""
     m = sets.shape[1]
     rows = ["| point sets | sets | projections: E_low ν<0.5 mean | worst projection | "
             f"{n}-D: E_low ν<0.5 |", "|---|---:|---:|---:|---:|"]
+
+    def row(label: str, count: int, e: list, full_text: str) -> str:
+        return f"| {label} | {count} | {np.mean(e):.4f} | {np.max(e):.4f} | {full_text} |"
+
+    rows.append(row(f"**{name}**", len(sets), *measured))
     others = [(b, classic_sets(b, m, n)) for b in ("sobol", "halton", "white")]
     iso = f"bnot-{n}d"  # dpc's isotropic model of that dimension: blue in n-D, not in projections
     if iso in dpc.available_models():
         others.insert(0, (iso, dpc.load(iso, threads=0, backend="cpu").generate_batch(len(sets), seed=0)))
-    for label, s in [(f"**{name}**", sets)] + others:
+    for label, s in others:
         e = [analysis.radial_spectrum(s, dims=d, nu_max=1.0).low_frequency_energy(0.5) for d in planes]
-        full = analysis.radial_spectrum(s, nu_max=1.0, directions=128)
-        rows.append(f"| {label} | {len(s)} | {np.mean(e):.4f} | {np.max(e):.4f} | {elow_text(full, 0.5)} |")
+        rows.append(row(label, len(s), e, elow_text(analysis.radial_spectrum(s, nu_max=1.0, directions=128), 0.5)))
     print("\n".join(rows))
     return [f"The same measures for dpc's isotropic {n}-D model and classic point sets (Owen-scrambled "
             "Sobol', scrambled Halton, white noise; `dpc.baselines`):", "", *rows, ""]

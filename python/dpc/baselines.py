@@ -124,9 +124,9 @@ def _dart_throwing(m: int, n: int, rng: np.random.Generator) -> np.ndarray:
         for c in ok:  # candidates of one round against each other, in order
             if len(kept) + len(added) == m:
                 break
-            e = cand[c] - cand[added] if added else np.empty((0, n))
+            e = cand[c] - cand[added]
             e -= np.rint(e)
-            if not added or np.min(np.einsum("pk,pk->p", e, e)) >= r * r:
+            if np.all(np.einsum("pk,pk->p", e, e) >= r * r):  # none added yet: all of nothing
                 added.append(c)
         kept = np.concatenate([kept, cand[added]])
         if len(added) < max(1, m // 100) and len(kept) < m:
