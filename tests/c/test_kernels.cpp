@@ -2,8 +2,11 @@
 // ISA path and the 16-lane arrangement of the AVX-512 path (dpc_block_packed16, portable, so it
 // runs here even without AVX-512) give the same bits as the scalar path on random jobs: subspace
 // sizes 1-6, small (register) and large (gathered) tables, one range or many (concatenated in
-// chunks past DPC_GATHER_CAP), odd and even numbers of query points. And the sums match a
-// float64 evaluation of the formula to float rounding.
+// chunks past DPC_GATHER_CAP), odd and even numbers of query points. The list kernels (one query
+// over an explicit candidate list, the neighbour lists' path) give the all-pairs bits for any
+// candidate list that holds the points in the window. And the sums match a float64 evaluation of
+// the formula to float rounding.
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -145,6 +148,74 @@ TEST(Kernels, EveryArrangementGivesTheScalarBits) {
                     cases++;
                 }
     EXPECT_GT(cases, 200);
+}
+
+TEST(Kernels, ListKernelsGiveTheBitsOfAllPairs) {
+    std::mt19937 rng(99);
+    std::vector<std::pair<const char *, dpc_list_fn>> paths = {{"scalar", dpc_list_scalar},
+                                                               {"packed16", dpc_list_packed16}};
+#if defined(DPC_HAVE_AVX2)
+    if (has_avx2()) paths.push_back({"scalar with fma", dpc_list_scalar_fma});
+    if (has_avx2()) paths.push_back({"avx2", dpc_list_avx2});
+    if (has_avx512()) paths.push_back({"avx512", dpc_list_avx512});
+#endif
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    int cases = 0, in_window = 0;
+    for (unsigned k : {1u, 3u, 5u, 8u, 10u, 16u, 17u, 33u, 64u})
+        for (unsigned bins : {4u, 32u, 200u})
+            for (unsigned extra : {0u, 3u, 10u}) { // other candidates per 10 points: 0, 30%, all
+                const unsigned n_cand = 400;
+                Job j = make_job(rng, k, bins, n_cand, 1, 1);
+                j.ranges = {0, n_cand}; // all pairs
+                // a radius that holds about 20 points, so the window is never empty
+                std::vector<double> dist(n_cand);
+                for (unsigned c = 0; c < n_cand; c++) {
+                    double d2 = 0.0;
+                    for (unsigned q = 0; q < k; q++) {
+                        double v = (double)j.cols[q][c] - j.xs[q];
+                        v -= std::nearbyint(v);
+                        d2 += v * v;
+                    }
+                    dist[c] = std::sqrt(d2);
+                }
+                std::vector<double> sorted = dist;
+                std::sort(sorted.begin(), sorted.end());
+                j.job.radius = (float)sorted[20];
+                j.job.cutoff = 1e-4f * j.job.radius;
+                j.job.scale = (float)(bins - 1) / j.job.radius;
+                if (cases % 7 == 0) j.cols[0][5] = j.xs[0] + 0.0f; // a candidate at the query's own coordinate
+                const std::vector<float> want = run(dpc_block_scalar, j);
+                // rows, and a candidate list: every point within 1.001 r, plus `extra` in 10 of the others
+                const unsigned stride = (k + 15) / 16 * 16;
+                std::vector<float> rows((size_t)n_cand * stride, 0.0f);
+                for (unsigned c = 0; c < n_cand; c++)
+                    for (unsigned q = 0; q < k; q++) rows[(size_t)c * stride + q] = j.cols[q][c];
+                j.job.row = rows.data();
+                j.job.row_stride = stride;
+                std::vector<uint32_t> cand;
+                for (unsigned c = 0; c < n_cand; c++)
+                    if (dist[c] < 1.001 * j.job.radius || std::uniform_int_distribution<unsigned>(0, 9)(rng) < extra)
+                        cand.push_back(c);
+                in_window += (int)std::count_if(dist.begin(), dist.end(), [&](double d) { return d < j.job.radius; });
+                for (auto &p : paths) {
+                    std::vector<float> got(k, -7.0f);
+                    p.second(&j.job, j.xs.data(), cand.data(), (unsigned)cand.size(), got.data());
+                    ASSERT_EQ(std::memcmp(got.data(), want.data(), k * sizeof(float)), 0)
+                        << p.first << ": k " << k << ", bins " << bins << ", candidates " << cand.size();
+                }
+                cases++;
+            }
+    EXPECT_EQ(cases, 81);
+    EXPECT_GT(in_window, 81 * 15);
+    // no candidates: zero sums
+    Job j = make_job(rng, 10, 32, 16, 1, 1);
+    std::vector<float> rows(16 * 16, 0.0f), got(10, -7.0f);
+    j.job.row = rows.data();
+    j.job.row_stride = 16;
+    for (auto &p : paths) {
+        p.second(&j.job, j.xs.data(), nullptr, 0, got.data());
+        for (float v : got) EXPECT_EQ(v, 0.0f) << p.first;
+    }
 }
 
 TEST(Kernels, SumsMatchTheFormulaInDoublePrecision) {

@@ -1,7 +1,8 @@
 // The neighbour prefilter of large all-pairs subspaces (libdpc/src/cpu/cpu_near*.c and its use
 // in cpu_cascade.c, with the lists kept across layers, cpu_lists.c), below the public API: its
 // ranges are aligned blocks that hold every point within the radius, its point lists hold every
-// such point, the scalar and AVX2 filters agree,
+// such point, the scalar and AVX2 filters agree (columns and rows), the two-tier lists give every
+// point its points in reach through builds, refreshes, warm and far moves,
 // and a cascade run through it gives bit for bit the points of the all-pairs scan (every ISA,
 // one and two threads, point counts that are not multiples of 8).
 #include <cmath>
@@ -16,6 +17,7 @@
 
 extern "C" {
 #include "cpu/cpu_cascade.h"
+#include "cpu/cpu_lists.h"
 #include "cpu/cpu_near.h"
 #include "model/model.h"
 }
@@ -131,6 +133,158 @@ TEST(Prefilter, SaysWhenTheRangesDoNotFit) {
     std::vector<uint32_t> a(2 * 4);
     EXPECT_EQ(dpc_near_scalar(&c.job, 3, a.data(), 4), 5u);
     if (has_avx2()) EXPECT_EQ(dpc_near_avx2(&c.job, 3, a.data(), 4), 5u);
+}
+
+TEST(Prefilter, RowFilterIsTheColumnFilter) {
+    std::mt19937 rng(8);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    for (unsigned k : {5u, 10u, 16u, 17u, 33u}) {
+        const uint32_t m = 600;
+        std::vector<float> x((size_t)m * k);
+        for (auto &v : x) v = u(rng);
+        const double ball = std::pow(M_PI, 0.5 * k) / std::tgamma(0.5 * k + 1.0);
+        const float r = (float)std::min(0.9, std::pow(20.0 / (ball * m), 1.0 / k));
+        Codes c = make_codes(x, k, m, r);
+        const unsigned row_bytes = (k + 15) / 16 * 16;
+        std::vector<uint8_t> rows((size_t)m * row_bytes, 0);
+        for (uint32_t j = 0; j < m; j++)
+            for (unsigned q = 0; q < k; q++) rows[(size_t)j * row_bytes + q] = c.cols[q / 2][2 * j + q % 2];
+        std::vector<uint32_t> all(m);
+        for (uint32_t j = 0; j < m; j++) all[j] = j;
+        long passed = 0;
+        for (uint32_t i = 0; i < m; i += 5) {
+            std::vector<uint32_t> want(m), got(m);
+            const unsigned n = dpc_near_points_scalar(&c.job, i, 0, want.data(), m);
+            const unsigned ns = dpc_near_list_scalar(rows.data(), row_bytes, i, all.data(), m, c.job.limit, got.data());
+            ASSERT_EQ(ns, n) << "k " << k << " query " << i;
+            ASSERT_TRUE(std::equal(want.begin(), want.begin() + n, got.begin()));
+#if defined(DPC_HAVE_AVX2)
+            if (has_avx2()) {
+                for (unsigned len : {m, m - 1, 1u}) { // odd and even counts
+                    std::vector<uint32_t> g2(m);
+                    const unsigned na =
+                        dpc_near_list_avx2(rows.data(), row_bytes, i, all.data(), len, c.job.limit, g2.data());
+                    const unsigned nw =
+                        (unsigned)std::count_if(want.begin(), want.begin() + n, [&](uint32_t j) { return j < len; });
+                    ASSERT_EQ(na, nw) << "k " << k << " query " << i << " count " << len;
+                    ASSERT_TRUE(std::equal(want.begin(), want.begin() + nw, g2.begin()));
+                }
+            }
+#endif
+            passed += n;
+        }
+        if (k <= 17) EXPECT_GT(passed, 120 * 5) << "k " << k; // about 20 in reach per query (33-D: r capped)
+    }
+}
+
+// A subspace for the lists: m points in k dimensions, as columns (the kernel's) and codes.
+struct Moving {
+    unsigned k;
+    uint32_t m;
+    float r;
+    std::vector<float> x; // m x k
+    std::vector<std::vector<float>> cols;
+    Codes codes;
+    dpc_sub_job job;
+    void sync() {
+        cols.assign(k, std::vector<float>(m + 16, 0.0f));
+        for (uint32_t j = 0; j < m; j++)
+            for (unsigned q = 0; q < k; q++) cols[q][j] = x[(size_t)j * k + q];
+        codes = make_codes(x, k, m, r);
+        std::memset(&job, 0, sizeof job);
+        job.k = k;
+        job.radius = r;
+        for (unsigned q = 0; q < k; q++) job.coord[q] = cols[q].data();
+    }
+    // move `share` of the points (every point when 1) by `dist` in a random direction
+    void move(std::mt19937 &rng, double share, double dist) {
+        std::normal_distribution<double> g(0.0, 1.0);
+        std::uniform_real_distribution<double> u(0.0, 1.0);
+        for (uint32_t j = 0; j < m; j++) {
+            if (u(rng) >= share) continue;
+            std::vector<double> v(k);
+            double len = 0.0;
+            for (auto &c : v) c = g(rng), len += c * c;
+            len = std::sqrt(len);
+            for (unsigned q = 0; q < k; q++) {
+                double y = x[(size_t)j * k + q] + dist * v[q] / len;
+                y -= std::floor(y);
+                x[(size_t)j * k + q] = y < 1.0 ? (float)y : 0.0f;
+            }
+        }
+        sync();
+    }
+};
+
+TEST(Lists, EveryPointKeepsItsPointsInReachThroughEveryKindOfMove) {
+    struct Fns {
+        const char *name;
+        dpc_near_points_fn points;
+        dpc_near_list_fn list;
+    };
+    std::vector<Fns> fns = {{"scalar", dpc_near_points_scalar, dpc_near_list_scalar}};
+#if defined(DPC_HAVE_AVX2)
+    if (has_avx2()) fns.push_back({"avx2", dpc_near_points_avx2, dpc_near_list_avx2});
+#endif
+    for (const Fns &f : fns)
+        for (unsigned threads : {1u, 2u}) {
+            std::mt19937 rng(21);
+            std::uniform_real_distribution<float> u(0.0f, 1.0f);
+            Moving mv;
+            mv.k = 10;
+            mv.m = 3001;
+            mv.r = 0.45f; // about 3 points in reach
+            mv.x.resize((size_t)mv.m * mv.k);
+            for (auto &v : mv.x) v = u(rng);
+            mv.sync();
+            dpc_lists L;
+            dpc_lists_init(&L, mv.m);
+            // each step: a move (share of points, distance in r), and which path the lists take
+            struct Step {
+                double share, dist;
+                int build, refresh, hot;
+            };
+            const double r = mv.r;
+            const std::vector<Step> steps = {
+                {0.0, 0.0, 1, 1, 0},       // the first pass builds (and fills the near lists)
+                {1.0, 0.01 * r, 0, 0, 0},  // every point barely moves: nothing to do
+                {0.04, 0.08 * r, 0, 0, 1}, // a few warm points: their wide lists
+                {0.3, 0.08 * r, 0, 1, 1},  // many warm points: the near lists are refreshed (and the
+                                           // few moved in both steps are far: scanned)
+                {0.02, 0.4 * r, 0, 0, 1},  // a few far points: scanned against all
+                {0.03, 0.08 * r, 0, 0, 1}, // warm and far together
+                {0.5, 0.4 * r, 1, 1, 0},   // many far points: a build
+            };
+            long in_reach = 0;
+            for (size_t st = 0; st < steps.size(); st++) {
+                const Step &s = steps[st];
+                if (s.share > 0.0) mv.move(rng, s.share, s.dist);
+                const size_t b0 = L.builds, r0 = L.refreshes, h0 = L.hot_passes;
+                ASSERT_EQ(dpc_lists_update(&L, 0x3FF, &mv.job, &mv.codes.job, f.points, f.list, threads), 1);
+                EXPECT_EQ((int)(L.builds - b0), s.build) << f.name << " step " << st;
+                EXPECT_EQ((int)(L.refreshes - r0), s.refresh) << f.name << " step " << st;
+                EXPECT_EQ((int)(L.hot_passes - h0), s.hot) << f.name << " step " << st;
+                std::vector<uint32_t> cand(mv.m);
+                for (uint32_t i = 0; i < mv.m; i++) {
+                    const unsigned n = dpc_lists_candidates(&L, i, cand.data(), mv.m);
+                    ASSERT_LE(n, mv.m);
+                    std::vector<char> in(mv.m, 0);
+                    for (unsigned c = 0; c < n; c++) {
+                        ASSERT_NE(cand[c], i);
+                        if (c) ASSERT_LT(cand[c - 1], cand[c]) << "ascending, no repeats";
+                        in[cand[c]] = 1;
+                    }
+                    for (uint32_t j = 0; j < mv.m; j++)
+                        if (j != i && torus_distance(mv.x, mv.k, i, j) < r * (1.0 + 1e-5)) {
+                            ASSERT_TRUE(in[j])
+                                << f.name << " threads " << threads << " step " << st << ": " << j << " near " << i;
+                            in_reach++;
+                        }
+                }
+            }
+            EXPECT_GT(in_reach, 7 * 3001); // about 3 per point and step
+            dpc_lists_free(&L);
+        }
 }
 
 std::vector<uint8_t> read_file(const std::string &path) {

@@ -31,9 +31,12 @@
  * covers most of the torus), and small sets scan all pairs in no time. */
 #define PREFILTER_MIN_DIMS 5
 #define PREFILTER_MIN_POINTS 256
-/* Neighbour lists kept across layers (cpu_lists.h) where the ball of their radius list_r is
- * expected to hold at most this many points; denser subspaces filter every query every layer. */
+/* Neighbour lists kept across layers (cpu_lists.h) where the ball of the near lists' radius r1 is
+ * expected to hold at most this many points, and that of the wide lists' r2 at most
+ * WIDE_MAX_EXPECTED; denser subspaces filter every query every layer. */
 #define LIST_MAX_EXPECTED 24.0
+#define WIDE_MAX_EXPECTED 160.0
+#define MAX_CANDIDATES 1024 /* a point's list candidates on the stack; more: all pairs (the same bits) */
 
 /* The engine's loops over points: one range per worker (dpc_parallel_ranges), or the whole
  * range on the calling thread for small sets. */
@@ -57,6 +60,8 @@ typedef struct workspace {
     uint32_t *order, *order_tmp, *cell_tmp;
     float *gather;   /* per worker: 4 columns of DPC_GATHER_STRIDE floats (kernel scratch) */
     uint8_t *code;   /* prefilter codes: DPC_MAX_DIMS / 2 columns of 2 * stride + 128 bytes (allocated on first use) */
+    float *rows;     /* the list kernel's rows (dpc_sub_job.row), allocated on first use */
+    size_t rows_cap; /* floats */
     dpc_lists lists; /* the prefilter's neighbour lists, kept across layers (dropped when the working order changes) */
     size_t frozen;   /* points whose caller index is below this never move (progressive levels) */
     dpc_cpu_hook hook; /* NULL: never stopped */
@@ -90,6 +95,7 @@ static void workspace_free(workspace *w) {
     free(w->cell_tmp);
     free(w->gather);
     free(w->code);
+    free(w->rows);
     dpc_lists_free(&w->lists);
 }
 
@@ -194,6 +200,28 @@ static int fill_codes(sub_pass *p) {
     return 1;
 }
 
+/* The subspace's coordinates as rows for the list kernel (dpc_sub_job.row); 0 when there is no
+ * memory for them. */
+static int fill_rows(sub_pass *p) {
+    workspace *ws = p->ws;
+    const unsigned k = p->job.k, stride = (k + 15) / 16 * 16;
+    const size_t need = ws->m * stride;
+    if (need > ws->rows_cap) {
+        free(ws->rows);
+        ws->rows = (float *)calloc(need, sizeof(float));
+        ws->rows_cap = ws->rows ? need : 0;
+        if (!ws->rows) return 0;
+    }
+    for (size_t s = 0; s < ws->m; s++) {
+        float *row = ws->rows + s * stride;
+        for (unsigned q = 0; q < k; q++) row[q] = p->job.coord[q][s];
+        for (unsigned q = k; q < stride; q++) row[q] = 0.0f;
+    }
+    p->job.row = ws->rows;
+    p->job.row_stride = stride;
+    return 1;
+}
+
 static void sub_pass_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
     const sub_pass *p = (const sub_pass *)ctx;
     workspace *ws = p->ws;
@@ -202,21 +230,25 @@ static void sub_pass_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
     uint32_t ranges[2 * MAX_RANGES];
     if (p->near) { /* one point at a time, each with its own ranges */
         float xs[DPC_MAX_DIMS], acc[DPC_MAX_DIMS];
+        uint32_t cand[MAX_CANDIDATES];
         for (size_t s = lo; s < hi; s++) {
             if (((s - lo) & (DPC_CPU_POLL_POINTS - 1)) == DPC_CPU_POLL_POINTS - 1 && poll_stop(ws, 0)) return;
             if (ws->frozen && ws->order[ws->perm[s]] < ws->frozen) continue;
-            const uint32_t *rg = ranges;
-            unsigned n_ranges;
-            if (p->lists) n_ranges = dpc_lists_ranges(&ws->lists, (uint32_t)s, ranges, MAX_RANGES);
-            else n_ranges = p->engine->near(&p->near_job, (uint32_t)s, ranges, MAX_RANGES);
-            if (n_ranges > MAX_RANGES) { /* too many blocks pass: all of them */
-                ranges[0] = 0;
-                ranges[1] = (uint32_t)m;
-                n_ranges = 1;
-                rg = ranges;
-            }
             for (unsigned q = 0; q < k; q++) xs[q] = p->job.coord[q][s];
-            p->engine->block(&p->job, xs, 1, rg, n_ranges, acc, NULL);
+            unsigned n_cand = MAX_CANDIDATES + 1;
+            if (p->lists) n_cand = dpc_lists_candidates(&ws->lists, (uint32_t)s, cand, MAX_CANDIDATES);
+            if (n_cand <= MAX_CANDIDATES) {
+                p->engine->list(&p->job, xs, cand, n_cand, acc);
+            } else {
+                unsigned n_ranges =
+                    p->lists ? MAX_RANGES + 1 : p->engine->near(&p->near_job, (uint32_t)s, ranges, MAX_RANGES);
+                if (n_ranges > MAX_RANGES) { /* too many blocks pass: all of them */
+                    ranges[0] = 0;
+                    ranges[1] = (uint32_t)m;
+                    n_ranges = 1;
+                }
+                p->engine->block(&p->job, xs, 1, ranges, n_ranges, acc, NULL);
+            }
             float *d = ws->delta + (size_t)ws->perm[s] * n;
             for (unsigned q = 0; q < k; q++) d[p->dim[q]] += p->h * acc[q];
         }
@@ -352,9 +384,11 @@ static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws
         if (p.grid && !accumulated) reorder_points(ws);
         fill_soa(&p, ws->x);
         if (p.near && !fill_codes(&p)) p.near = 0; /* no memory for it: all pairs, the same bits */
-        if (p.near && dpc_plan_in_reach(plan.k, (1.0 + DPC_LISTS_SKIN) * L->radius[t]) <= LIST_MAX_EXPECTED)
-            p.lists = dpc_lists_update(&ws->lists, L->masks[t], &p.job, &p.near_job, e->near_points,
+        if (p.near && dpc_plan_in_reach(plan.k, (1.0 + DPC_LISTS_SKIN) * L->radius[t]) <= LIST_MAX_EXPECTED &&
+            dpc_plan_in_reach(plan.k, (1.0 + DPC_LISTS_WIDE) * L->radius[t]) <= WIDE_MAX_EXPECTED)
+            p.lists = dpc_lists_update(&ws->lists, L->masks[t], &p.job, &p.near_job, e->near_points, e->near_list,
                                        m < PARALLEL_MIN_POINTS ? 1u : e->threads);
+        if (p.lists && !fill_rows(&p)) p.lists = 0; /* no memory for the rows: the ranges, the same bits */
         parallel_for(e->threads, m, sub_pass_range, &p);
         accumulated = 1;
         if (ws->hook && atomic_load(&ws->stop) != DPC_OK) return;

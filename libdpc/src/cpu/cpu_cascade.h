@@ -9,8 +9,10 @@
 typedef struct dpc_cpu_engine {
     dpc_isa isa;        /* resolved: never DPC_ISA_AUTO */
     dpc_block_fn block; /* that ISA's kernel */
+    dpc_list_fn list;   /* its form for explicit candidate lists (the neighbour lists) */
     dpc_near_fn near;   /* the neighbour prefilter (AVX2 where the CPU has it) */
     dpc_near_points_fn near_points;
+    dpc_near_list_fn near_list;
     int prefilter;    /* 1 on CPUs with AVX2: prefilter large all-pairs subspaces; 0: scan every pair (the same bits) */
     unsigned threads; /* 1 .. DPC_MAX_THREADS */
 } dpc_cpu_engine;

@@ -85,19 +85,23 @@ dpc_status dpc_cpu_engine_init(dpc_cpu_engine *e, dpc_isa isa, unsigned threads)
     const dpc_status st = dpc_cpu_resolve_isa(isa, &isa);
     if (st != DPC_OK) return st;
     e->block = dpc_block_scalar;
+    e->list = dpc_list_scalar;
     /* The prefilter only where its AVX2 form runs: the portable one (the tests' reference) costs
      * about what the all-pairs scan it would spare does (bnot-10d, 2,048 points: 0.67 s against
      * 0.57 s on a Zen 3 core). The lists change no bits (cpu_near.h), so every ISA path of an
      * AVX2 CPU takes them. */
     e->near = dpc_near_scalar;
     e->near_points = dpc_near_points_scalar;
+    e->near_list = dpc_near_list_scalar;
     e->prefilter = 0;
 #if defined(DPC_HAVE_AVX2)
     /* the scalar path's source compiled with -mfma: fmaf is an instruction, the bits the same */
-    if (isa == DPC_ISA_SCALAR && cpu_has_fma()) e->block = dpc_block_scalar_fma;
-    if (isa == DPC_ISA_AVX2) e->block = dpc_block_avx2;
-    if (isa == DPC_ISA_AVX512) e->block = dpc_block_avx512;
-    if (cpu_has_avx2_fma()) e->near = dpc_near_avx2, e->near_points = dpc_near_points_avx2, e->prefilter = 1;
+    if (isa == DPC_ISA_SCALAR && cpu_has_fma()) e->block = dpc_block_scalar_fma, e->list = dpc_list_scalar_fma;
+    if (isa == DPC_ISA_AVX2) e->block = dpc_block_avx2, e->list = dpc_list_avx2;
+    if (isa == DPC_ISA_AVX512) e->block = dpc_block_avx512, e->list = dpc_list_avx512;
+    if (cpu_has_avx2_fma())
+        e->near = dpc_near_avx2, e->near_points = dpc_near_points_avx2, e->near_list = dpc_near_list_avx2,
+        e->prefilter = 1;
 #endif
     e->isa = isa;
     e->threads = dpc_threads_resolve(threads);

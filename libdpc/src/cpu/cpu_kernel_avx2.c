@@ -43,6 +43,7 @@ static inline vf lookup8(const table_regs *T, vi bv) {
 }
 
 #define KERNEL dpc_block_avx2
+#define LIST_KERNEL dpc_list_avx2
 #define LOAD_TABLE(T, src, n) load_table(T, src, n)
 #define LOOKUP(T, b) lookup8(T, b)
 #define VANY(m) (!_mm256_testz_si256((__m256i)(m), (__m256i)(m)))

@@ -36,6 +36,7 @@ static inline vf lookup16(const table_regs *T, vi b) {
 }
 
 #define KERNEL dpc_block_avx512
+#define LIST_KERNEL dpc_list_avx512
 #define LOAD_TABLE(T, src, n) load_table(T, src, n)
 #define LOOKUP(T, b) lookup16(T, b)
 /* vbroadcastf64x4: the 8 floats at p into both halves (AVX-512F; the f32x8 form needs DQ). */

@@ -11,6 +11,7 @@
  *
  * Included by cpu_kernel_scalar.c, cpu_kernel_avx2.c and cpu_kernel_avx512.c, which first define:
  *   KERNEL              the name of the entry point to define (a dpc_block_fn)
+ *   LIST_KERNEL         the name of the list kernel to define (a dpc_list_fn)
  *   VW                  8 or 16, and the types vf (VW floats) and vi (VW int32s)
  *   FMA(a, b, c)        a * b + c rounded once, lane by lane
  *   table_regs          a kernel table prepared for LOOKUP
@@ -327,6 +328,77 @@ static void kernel_n(const dpc_sub_job *job, const float *xs, unsigned count, co
             }
         }
         for (unsigned q = 0; q < k; q++) vstore_sums(a[q], here, accs + p * k + q, k);
+    }
+}
+
+/* ---- one query point over an explicit candidate list (dpc_list_fn, cpu_kernels.h) ---------- */
+
+/* The list kernel works on rows (job->row: each point's k coordinates, zero-padded to
+ * job->row_stride, a multiple of 16): one vector holds VW dimensions of one candidate. Its term
+ * is the block kernel's lane operations done once, in scalar float arithmetic (the same IEEE
+ * operations in the same order, so the same bits); it is then added to the candidate's canonical
+ * lane (index mod 8) as one vector FMA over the dimensions. */
+static inline float s_fma(float a, float b, float c) { return __builtin_fmaf(a, b, c); }
+
+/* vrsqrt and vsqrt of one value. */
+static inline float s_rsqrt(float x) {
+    int32_t xi;
+    memcpy(&xi, &x, sizeof xi);
+    const int32_t yi = 0x5F1FFFF9 - (xi >> 1);
+    float y;
+    memcpy(&y, &yi, sizeof y);
+    float e = s_fma(-(x * y), y, 2.38924456f);
+    y = (0.703952253f * y) * e;
+    e = s_fma(-(0.5f * x * y), y, 1.5f);
+    return y * e;
+}
+
+#define LIST_GROUP 8 /* candidates whose distances are summed side by side (independent FMA chains) */
+
+static inline vf vload_row(const float *p) {
+    vf v;
+    memcpy(&v, p, sizeof v);
+    return v;
+}
+
+void LIST_KERNEL(const dpc_sub_job *job, const float *xs, const uint32_t *cand, unsigned n, float *accs) {
+    const unsigned k = job->k, stride = job->row_stride, chunks = (k + VW - 1) / VW;
+    const float cut2 = job->cutoff * job->cutoff, rad2 = job->radius * job->radius;
+    float xrow[DPC_MAX_DIMS + 16] = {0};
+    memcpy(xrow, xs, k * sizeof(float));
+    vf x[DPC_MAX_DIMS / 8], lane[CANON][DPC_MAX_DIMS / 8];
+    for (unsigned c = 0; c < chunks; c++) {
+        x[c] = vload_row(xrow + c * VW);
+        for (unsigned l = 0; l < CANON; l++) lane[l][c] = vsplat(0.0f);
+    }
+    for (unsigned i0 = 0; i0 < n; i0 += LIST_GROUP) { /* a group's squared distances side by side */
+        const unsigned g_n = n - i0 < LIST_GROUP ? n - i0 : LIST_GROUP;
+        vf t[LIST_GROUP][DPC_MAX_DIMS / 8];
+        float d2[LIST_GROUP];
+        for (unsigned g = 0; g < g_n; g++) {
+            const float *row = job->row + (size_t)cand[i0 + g] * stride;
+            for (unsigned c = 0; c < chunks; c++) t[g][c] = vwrap(vload_row(row + c * VW) - x[c]);
+            d2[g] = 0.0f;
+        }
+        for (unsigned q = 0; q < k; q++)
+            for (unsigned g = 0; g < g_n; g++) d2[g] = s_fma(t[g][q / VW][q % VW], t[g][q / VW][q % VW], d2[g]);
+        for (unsigned g = 0; g < g_n; g++) {
+            if (!(d2[g] > cut2 && d2[g] < rad2)) continue; /* outside the window: +0 to every sum */
+            const float y = s_rsqrt(d2[g]), d = d2[g] * y;
+            const float dist = s_fma(0.5f * y, s_fma(-d, d, d2[g]), d);
+            const float u0 = dist * job->scale, u = u0 < job->umax ? u0 : job->umax;
+            const int32_t b0 = (int32_t)u, b = b0 < job->qmax ? b0 : job->qmax;
+            const float f = u - (float)b;
+            const vf cv = vsplat(s_fma(f, job->dw[b], job->w[b]) * y);
+            vf *a = lane[cand[i0 + g] % CANON];
+            for (unsigned c = 0; c < chunks; c++) a[c] = FMA(cv, t[g][c], a[c]);
+        }
+    }
+    for (unsigned c = 0; c < chunks; c++) { /* the canonical tree (vtree), all dimensions at once */
+        const vf sum = ((lane[0][c] + lane[4][c]) + (lane[2][c] + lane[6][c])) +
+                       ((lane[1][c] + lane[5][c]) + (lane[3][c] + lane[7][c]));
+        const unsigned here = k - c * VW < VW ? k - c * VW : VW;
+        for (unsigned l = 0; l < here; l++) accs[c * VW + l] = sum[l];
     }
 }
 

@@ -4,4 +4,5 @@
  * machines that cannot run AVX-512. */
 #define VW 16
 #define KERNEL dpc_block_packed16
+#define LIST_KERNEL dpc_list_packed16
 #include "cpu/cpu_kernel_portable.h"

@@ -7,5 +7,6 @@
 #define VW 8
 #ifndef KERNEL
 #define KERNEL dpc_block_scalar
+#define LIST_KERNEL dpc_list_scalar
 #endif
 #include "cpu/cpu_kernel_portable.h"

@@ -23,6 +23,10 @@ typedef struct dpc_sub_job {
     int32_t qmax;    /* b - 2 */
     const float *w;  /* kernel table, b values */
     const float *dw; /* w[q+1] - w[q] */
+    /* The list kernel's rows (dpc_list_fn): row[j * row_stride + q] is coordinate q of point j,
+     * zero for q >= k; row_stride a multiple of 16. NULL where no list kernel runs. */
+    const float *row;
+    unsigned row_stride;
 } dpc_sub_job;
 
 /* Sums for `count` query points that share the candidate ranges (the points of one cell, or a
@@ -44,6 +48,21 @@ void dpc_block_scalar(const dpc_sub_job *job, const float *xs, unsigned count, c
 /* The AVX-512 path's 16-lane arrangement with portable primitives: for the kernel tests only. */
 void dpc_block_packed16(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
                         unsigned n_ranges, float *acc, float *scratch);
+/* Sums for one query point x (k floats) over an explicit candidate list: cand[0 .. n), ascending
+ * indices without repeats, holding every point in the window eps < d < r (the neighbour lists of
+ * cpu_lists.h), read from job->row. Each candidate's term is computed with the block kernel's
+ * operations (the same bits) and added to its canonical lane (index mod 8) in ascending index
+ * order: the sums of all pairs [0, m) bit for bit, since every candidate left out is outside the
+ * window and would add +0 (and a sum that starts at +0 never becomes -0, so adding +0 or -0
+ * changes no bit either). */
+typedef void (*dpc_list_fn)(const dpc_sub_job *job, const float *x, const uint32_t *cand, unsigned n, float *acc);
+void dpc_list_scalar(const dpc_sub_job *job, const float *x, const uint32_t *cand, unsigned n, float *acc);
+void dpc_list_packed16(const dpc_sub_job *job, const float *x, const uint32_t *cand, unsigned n, float *acc);
+#if defined(DPC_HAVE_AVX2)
+void dpc_list_scalar_fma(const dpc_sub_job *job, const float *x, const uint32_t *cand, unsigned n, float *acc);
+void dpc_list_avx2(const dpc_sub_job *job, const float *x, const uint32_t *cand, unsigned n, float *acc);
+void dpc_list_avx512(const dpc_sub_job *job, const float *x, const uint32_t *cand, unsigned n, float *acc);
+#endif
 #if defined(DPC_HAVE_AVX2)
 void dpc_block_scalar_fma(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
                           unsigned n_ranges, float *acc, float *scratch);

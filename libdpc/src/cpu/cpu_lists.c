@@ -1,12 +1,14 @@
-/* Verlet neighbour lists (cpu_lists.h). */
+/* Verlet neighbour lists in two tiers (cpu_lists.h). */
 #include "cpu/cpu_lists.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#define HOT_SHARE 8          /* rebuild when more than m / HOT_SHARE points are hot */
+#define FAR_SHARE 16         /* rebuild when more than m / FAR_SHARE points are far */
+#define WARM_SHARE 8         /* refresh the near lists when more than m / WARM_SHARE points are warm */
 #define PAIRS_PER_POINT 256u /* a worker holding more pairs than this per point gives up (crowded) */
+#define MAX_LIST_RADIUS 0.98 /* the filter's 16-bit sums hold (256 r)^2 below this (cpu_near.h) */
 
 void dpc_lists_init(dpc_lists *L, size_t m) {
     memset(L, 0, sizeof *L);
@@ -14,8 +16,9 @@ void dpc_lists_init(dpc_lists *L, size_t m) {
 }
 
 void dpc_lists_free(dpc_lists *L) {
-    free(L->near_off), free(L->near), free(L->hot_off), free(L->hot), free(L->at), free(L->hot_pts);
-    free(L->scratch);
+    free(L->wide_off), free(L->wide), free(L->near_len), free(L->near), free(L->hot_off), free(L->hot);
+    free(L->at_build), free(L->at_refresh), free(L->heat), free(L->hot_pts), free(L->far_pts), free(L->scratch);
+    free(L->rows);
     for (unsigned t = 0; t < DPC_MAX_THREADS; t++) free(L->buf[t].pair);
     memset(L, 0, sizeof *L);
 }
@@ -36,12 +39,14 @@ static int add_pair(dpc_pair_buffer *b, uint32_t i, uint32_t j, size_t limit) {
 
 typedef struct scan {
     dpc_lists *L;
-    const dpc_near_job *codes;
+    const dpc_near_job *codes; /* its limit: the radius of this scan */
     dpc_near_points_fn points;
+    dpc_near_list_fn list;
     size_t limit; /* pairs per worker */
+    unsigned threads;
 } scan;
 
-/* Pairs of query i with the points from `from` on (skipping i itself). */
+/* Pairs of point i with the points from `from` on (i itself left out), by the vector filter. */
 static void scan_one(const scan *sc, unsigned slot, uint32_t i, uint32_t from) {
     dpc_lists *L = sc->L;
     dpc_pair_buffer *b = &L->buf[slot];
@@ -51,18 +56,49 @@ static void scan_one(const scan *sc, unsigned slot, uint32_t i, uint32_t from) {
         if (out[c] != i) add_pair(b, i, out[c], sc->limit);
 }
 
+/* A build: each pair from its lower index, the queries in ascending order, cut into one
+ * consecutive range per worker with about the same number of pairs (query u has m - 1 - u), so
+ * that the workers' pairs in slot order are in query order and every list comes out ascending. */
 static void build_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
     const scan *sc = (const scan *)ctx;
-    const size_t m = sc->L->m;
-    for (size_t u = lo; u < hi && !sc->L->buf[slot].failed; u++) {
-        scan_one(sc, slot, (uint32_t)u, (uint32_t)u + 1);
-        if (m - 1 - u != u) scan_one(sc, slot, (uint32_t)(m - 1 - u), (uint32_t)(m - u));
+    const double m = (double)sc->L->m, T = (double)sc->threads;
+    const size_t a = (size_t)(m * (1.0 - sqrt(1.0 - (double)lo / T)));
+    const size_t b = hi >= sc->threads ? sc->L->m : (size_t)(m * (1.0 - sqrt(1.0 - (double)hi / T)));
+    for (size_t u = a; u < b && !sc->L->buf[slot].failed; u++) scan_one(sc, slot, (uint32_t)u, (uint32_t)u + 1);
+}
+
+/* The pairs of this pass's warm and far points at radius r: far ones against all points, warm
+ * ones against their wide list and the far points. */
+static void hot_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
+    const scan *sc = (const scan *)ctx;
+    dpc_lists *L = sc->L;
+    dpc_pair_buffer *b = &L->buf[slot];
+    const uint32_t limit = sc->codes->limit;
+    for (size_t h = lo; h < hi && !b->failed; h++) {
+        const uint32_t i = L->hot_pts[h];
+        if (L->heat[i] == 2) {
+            scan_one(sc, slot, i, 0);
+            continue;
+        }
+        uint32_t *out = L->scratch + (size_t)slot * L->m;
+        unsigned n = sc->list(L->rows, L->row_bytes, i, L->wide + L->wide_off[i], L->wide_off[i + 1] - L->wide_off[i],
+                              limit, out);
+        for (unsigned c = 0; c < n; c++) add_pair(b, i, out[c], sc->limit);
+        n = sc->list(L->rows, L->row_bytes, i, L->far_pts, (unsigned)L->n_far, limit, out);
+        for (unsigned c = 0; c < n; c++)
+            if (out[c] != i) add_pair(b, i, out[c], sc->limit);
     }
 }
 
-static void hot_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
+/* A refresh: of each wide list, the points within r1 now (codes at limit(r1)). */
+static void refresh_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
+    (void)slot;
     const scan *sc = (const scan *)ctx;
-    for (size_t h = lo; h < hi && !sc->L->buf[slot].failed; h++) scan_one(sc, slot, sc->L->hot_pts[h], 0);
+    dpc_lists *L = sc->L;
+    const uint32_t limit = sc->codes->limit;
+    for (size_t i = lo; i < hi; i++)
+        L->near_len[i] = sc->list(L->rows, L->row_bytes, (uint32_t)i, L->wide + L->wide_off[i],
+                                  L->wide_off[i + 1] - L->wide_off[i], limit, L->near + L->wide_off[i]);
 }
 
 static int cmp_u32(const void *a, const void *b) {
@@ -70,8 +106,9 @@ static int cmp_u32(const void *a, const void *b) {
     return (x > y) - (x < y);
 }
 
-/* The workers' pairs as CSR lists (both directions, each list ascending). */
-static int assemble(dpc_lists *L, unsigned threads, uint32_t **off, uint32_t **list, size_t *cap) {
+/* The workers' pairs as CSR lists (both directions), placed in slot and pair order; each list is
+ * sorted afterwards unless `sorted` (a build's pairs come in order, build_range). */
+static int assemble(dpc_lists *L, unsigned threads, uint32_t **off, uint32_t **list, size_t *cap, int sorted) {
     const size_t m = L->m;
     size_t total = 0;
     for (unsigned t = 0; t < threads; t++) {
@@ -79,7 +116,7 @@ static int assemble(dpc_lists *L, unsigned threads, uint32_t **off, uint32_t **l
         total += 2 * L->buf[t].n;
     }
     if (!*off && !(*off = (uint32_t *)malloc((m + 1) * sizeof(uint32_t)))) return 0;
-    if (total > *cap) {
+    if (total > *cap || !*list) {
         uint32_t *p = (uint32_t *)realloc(*list, (total ? total : 1) * sizeof(uint32_t));
         if (!p) return 0;
         *list = p;
@@ -98,90 +135,156 @@ static int assemble(dpc_lists *L, unsigned threads, uint32_t **off, uint32_t **l
         }
     for (size_t i = m; i > 0; i--) o[i] = o[i - 1];
     o[0] = 0;
-    for (size_t i = 0; i < m; i++)
-        if (o[i + 1] - o[i] > 1) qsort(*list + o[i], o[i + 1] - o[i], sizeof(uint32_t), cmp_u32);
+    if (!sorted)
+        for (size_t i = 0; i < m; i++)
+            if (o[i + 1] - o[i] > 1) qsort(*list + o[i], o[i + 1] - o[i], sizeof(uint32_t), cmp_u32);
     return 1;
 }
 
-static int ensure(dpc_lists *L, unsigned threads) {
+static int ensure(dpc_lists *L, unsigned threads, unsigned k) {
     const size_t m = L->m;
-    if (!L->at) L->at = (float *)malloc(m * DPC_MAX_DIMS * sizeof(float));
+    const unsigned row_bytes = (k + 15) / 16 * 16;
+    if (row_bytes > L->row_bytes) {
+        free(L->rows);
+        L->rows = (uint8_t *)calloc(m, row_bytes);
+        L->row_bytes = L->rows ? row_bytes : 0;
+    }
+    if (!L->at_build) L->at_build = (float *)malloc(m * DPC_MAX_DIMS * sizeof(float));
+    if (!L->at_refresh) L->at_refresh = (float *)malloc(m * DPC_MAX_DIMS * sizeof(float));
+    if (!L->heat) L->heat = (uint8_t *)malloc(m);
     if (!L->hot_pts) L->hot_pts = (uint32_t *)malloc(m * sizeof(uint32_t));
+    if (!L->far_pts) L->far_pts = (uint32_t *)malloc(m * sizeof(uint32_t));
+    if (!L->near_len) L->near_len = (uint32_t *)malloc(m * sizeof(uint32_t));
     if (!L->hot_off) L->hot_off = (uint32_t *)calloc(m + 1, sizeof(uint32_t));
     if (L->scratch_slots < threads) {
         free(L->scratch);
         L->scratch = (uint32_t *)malloc((size_t)threads * m * sizeof(uint32_t));
         L->scratch_slots = L->scratch ? threads : 0;
     }
-    return L->at && L->hot_pts && L->scratch && L->hot_off;
+    return L->rows && L->at_build && L->at_refresh && L->heat && L->hot_pts && L->far_pts && L->near_len &&
+           L->hot_off && L->scratch;
 }
 
 static void reset_buffers(dpc_lists *L) {
     for (unsigned t = 0; t < DPC_MAX_THREADS; t++) L->buf[t].n = 0, L->buf[t].failed = 0;
 }
 
-int dpc_lists_update(dpc_lists *L, uint64_t mask, const dpc_sub_job *job, const dpc_near_job *codes,
-                     dpc_near_points_fn points, unsigned threads) {
-    const size_t m = L->m;
-    const unsigned k = job->k;
-    const double r = job->radius;
-    if (threads < 1) threads = 1;
-    if (!ensure(L, threads)) return L->mask = 0, 0;
-    scan sc = {L, codes, points, PAIRS_PER_POINT * m / threads + 1024};
-    if (L->mask == mask && L->k == k && r < L->list_r) {
-        const double reach = 0.5 * ((double)L->list_r - r * (1.0 + 1e-4)); /* the move that keeps a pair out */
-        size_t n_hot = 0;
-        for (size_t s = 0; s < m; s++) {
-            double d2 = 0.0;
-            for (unsigned q = 0; q < k; q++) {
-                double t = (double)job->coord[q][s] - (double)L->at[s * k + q];
-                t -= nearbyint(t);
-                d2 += t * t;
-            }
-            if (d2 > reach * reach) L->hot_pts[n_hot++] = (uint32_t)s;
-        }
-        if (n_hot == 0) {
-            memset(L->hot_off, 0, (m + 1) * sizeof(uint32_t));
-            return 1;
-        }
-        if (n_hot <= m / HOT_SHARE) {
-            reset_buffers(L);
-            dpc_parallel_ranges(threads, n_hot, hot_range, &sc);
-            if (assemble(L, threads, &L->hot_off, &L->hot, &L->hot_cap)) return 1;
-            return L->mask = 0, 0;
-        }
+/* Squared distance of point s now from its position in `at` (torus, double: exact enough for
+ * the margins below). */
+static double moved2(const dpc_sub_job *job, const float *at, unsigned k, size_t s) {
+    double d2 = 0.0;
+    for (unsigned q = 0; q < k; q++) {
+        double t = (double)job->coord[q][s] - (double)at[s * k + q]; /* in (-1, 1) */
+        t = t > 0.5 ? t - 1.0 : t < -0.5 ? t + 1.0 : t;
+        d2 += t * t;
     }
-    /* build at list_r */
-    double list_r = (1.0 + DPC_LISTS_SKIN) * r;
-    if (list_r > 0.5) list_r = 0.5;
-    dpc_near_job wide = *codes;
-    wide.limit = dpc_near_limit((float)list_r);
-    sc.codes = &wide;
-    reset_buffers(L);
-    dpc_parallel_ranges(threads, (m + 1) / 2, build_range, &sc);
-    if (!assemble(L, threads, &L->near_off, &L->near, &L->near_cap)) return L->mask = 0, 0;
-    memset(L->hot_off, 0, (m + 1) * sizeof(uint32_t));
+    return d2;
+}
+
+static void snapshot(const dpc_sub_job *job, float *at, unsigned k, size_t m) {
     for (size_t s = 0; s < m; s++)
-        for (unsigned q = 0; q < k; q++) L->at[s * k + q] = job->coord[q][s];
-    L->mask = mask;
-    L->k = k;
-    L->list_r = (float)list_r;
+        for (unsigned q = 0; q < k; q++) at[s * k + q] = job->coord[q][s];
+}
+
+/* The codes as rows (cpu_near.h: dpc_near_list_fn), zero past k. */
+static void fill_rows(dpc_lists *L, const dpc_near_job *codes, unsigned k) {
+    for (size_t j = 0; j < L->m; j++) {
+        uint8_t *row = L->rows + j * L->row_bytes;
+        for (unsigned q = 0; q < k; q++) row[q] = codes->code[q / 2][2 * j + q % 2];
+    }
+}
+
+static int refresh(dpc_lists *L, const dpc_sub_job *job, const dpc_near_job *codes, dpc_near_list_fn list,
+                   unsigned threads) {
+    dpc_near_job at_r1 = *codes;
+    at_r1.limit = dpc_near_limit(L->r1);
+    scan sc = {L, &at_r1, NULL, list, 0, threads};
+    dpc_parallel_ranges(threads, L->m, refresh_range, &sc);
+    snapshot(job, L->at_refresh, L->k, L->m);
+    L->refreshes++;
     return 1;
 }
 
-static int add(uint32_t *ranges, unsigned *n, unsigned cap, uint32_t j, uint32_t m) {
-    if (*n && ranges[2 * *n - 1] > j) return 1; /* its block is in already */
-    return dpc_near_add_block(ranges, n, cap, j / 8, m);
+int dpc_lists_update(dpc_lists *L, uint64_t mask, const dpc_sub_job *job, const dpc_near_job *codes,
+                     dpc_near_points_fn points, dpc_near_list_fn list, unsigned threads) {
+    const size_t m = L->m;
+    const unsigned k = job->k;
+    const double r = job->radius * (1.0 + 1e-4); /* a margin for the kernel's float32 distances */
+    if (threads < 1) threads = 1;
+    if (!ensure(L, threads, k)) return L->mask = 0, 0;
+    fill_rows(L, codes, k);
+    scan sc = {L, codes, points, list, PAIRS_PER_POINT * m / threads + 1024, threads};
+    if (L->mask == mask && L->k == k && r < L->r1) {
+        const double t1 = 0.5 * ((double)L->r1 - r), t2 = 0.5 * ((double)L->r2 - r);
+        size_t n_warm = 0;
+        L->n_far = 0;
+        for (size_t s = 0; s < m; s++) {
+            const uint8_t heat = moved2(job, L->at_build, k, s) > t2 * t2     ? 2
+                                 : moved2(job, L->at_refresh, k, s) > t1 * t1 ? 1
+                                                                              : 0;
+            L->heat[s] = heat;
+            if (heat == 2) L->far_pts[L->n_far++] = (uint32_t)s;
+            n_warm += heat == 1;
+        }
+        /* Rent or buy: far points are scanned against all m each pass, which a build (m^2 / 2
+         * pairs) would end; warm ones cost their wide list, which a refresh (m lists) would end. */
+        L->far_work += (double)L->n_far * (double)m;
+        if (L->n_far <= m / FAR_SHARE && L->far_work <= 0.5 * (double)m * (double)m) {
+            L->warm_work += (double)n_warm;
+            if (n_warm > m / WARM_SHARE || L->warm_work > (double)m) {
+                L->warm_work = 0.0; /* the warm points' pairs with the others now come from the near lists */
+                refresh(L, job, codes, list, threads);
+                for (size_t s = 0; s < m; s++) L->heat[s] = L->heat[s] == 2 ? 2 : 0;
+                n_warm = 0;
+            }
+            size_t n_hot = 0;
+            for (size_t s = 0; s < m; s++)
+                if (L->heat[s]) L->hot_pts[n_hot++] = (uint32_t)s;
+            if (n_hot == 0) {
+                memset(L->hot_off, 0, (m + 1) * sizeof(uint32_t));
+                return 1;
+            }
+            reset_buffers(L);
+            dpc_parallel_ranges(threads, n_hot, hot_range, &sc);
+            L->hot_passes++;
+            if (assemble(L, threads, &L->hot_off, &L->hot, &L->hot_cap, 0)) return 1;
+            return L->mask = 0, 0;
+        }
+    }
+    /* build at r2, then the near lists at r1 */
+    double r2 = (1.0 + DPC_LISTS_WIDE) * job->radius, r1 = (1.0 + DPC_LISTS_SKIN) * job->radius;
+    if (r2 > MAX_LIST_RADIUS) r2 = MAX_LIST_RADIUS;
+    if (r1 > r2) r1 = r2;
+    dpc_near_job wide = *codes;
+    wide.limit = dpc_near_limit((float)r2);
+    sc.codes = &wide;
+    reset_buffers(L);
+    dpc_parallel_ranges(threads, threads, build_range, &sc);
+    if (!assemble(L, threads, &L->wide_off, &L->wide, &L->wide_cap, 1)) return L->mask = 0, 0;
+    free(L->near); /* the same offsets as the wide lists */
+    if (!(L->near = (uint32_t *)malloc((L->wide_cap ? L->wide_cap : 1) * sizeof(uint32_t)))) return L->mask = 0, 0;
+    L->k = k;
+    L->r1 = (float)r1;
+    L->r2 = (float)r2;
+    refresh(L, job, codes, list, threads);
+    snapshot(job, L->at_build, k, m);
+    memset(L->hot_off, 0, (m + 1) * sizeof(uint32_t));
+    L->far_work = L->warm_work = 0.0;
+    L->mask = mask;
+    L->builds++;
+    return 1;
 }
 
-unsigned dpc_lists_ranges(const dpc_lists *L, uint32_t s, uint32_t *ranges, unsigned cap) {
-    const uint32_t m = (uint32_t)L->m;
-    uint32_t a = L->near_off[s], b = L->hot_off[s];
-    const uint32_t ae = L->near_off[s + 1], be = L->hot_off[s + 1];
+unsigned dpc_lists_candidates(const dpc_lists *L, uint32_t s, uint32_t *cand, unsigned cap) {
+    const uint32_t *near = L->near + L->wide_off[s], *hot = L->hot ? L->hot + L->hot_off[s] : NULL;
+    const uint32_t ae = L->near_len[s], be = L->hot_off[s + 1] - L->hot_off[s];
+    uint32_t a = 0, b = 0;
     unsigned n = 0;
     while (a < ae || b < be) { /* the two ascending lists merged */
-        const uint32_t j = (b >= be || (a < ae && L->near[a] <= L->hot[b])) ? L->near[a++] : L->hot[b++];
-        if (!add(ranges, &n, cap, j, m)) return cap + 1;
+        const uint32_t j = (b >= be || (a < ae && near[a] <= hot[b])) ? near[a++] : hot[b++];
+        if (j == s || (n && cand[n - 1] == j)) continue;
+        if (n == cap) return cap + 1;
+        cand[n++] = j;
     }
     return n;
 }

@@ -5,16 +5,32 @@
  * the tests' reference for the AVX2 filter. */
 #include "cpu/cpu_near.h"
 
+static uint32_t lower_bound(int d) {
+    const int8_t w = (int8_t)(uint8_t)d;           /* the difference mod 256, in [-128, 127] */
+    const uint32_t a = (uint32_t)(w < 0 ? -w : w); /* 128 for -128 */
+    const uint32_t lb = a > 0 ? a - 1 : 0;
+    return lb * lb;
+}
+
 static int passes(const dpc_near_job *job, uint32_t query, uint32_t j) {
     uint32_t sum = 0;
     for (unsigned p = 0; p < job->pairs && sum <= job->limit; p++)
-        for (unsigned e = 0; e < 2; e++) {
-            const int8_t d = (int8_t)(uint8_t)(job->code[p][2 * j + e] - job->code[p][2 * query + e]);
-            const int a = d < 0 ? -d : d; /* 128 for -128 */
-            const uint32_t lb = a > 0 ? (uint32_t)a - 1 : 0;
-            sum += lb * lb;
-        }
+        for (unsigned e = 0; e < 2; e++)
+            sum += lower_bound(job->code[p][2 * (size_t)j + e] - job->code[p][2 * (size_t)query + e]);
     return sum <= job->limit;
+}
+
+unsigned dpc_near_list_scalar(const uint8_t *rows, unsigned row_bytes, uint32_t query, const uint32_t *cand, unsigned n,
+                              uint32_t limit, uint32_t *out) {
+    const uint8_t *q = rows + (size_t)query * row_bytes;
+    unsigned got = 0;
+    for (unsigned c = 0; c < n; c++) {
+        const uint8_t *r = rows + (size_t)cand[c] * row_bytes;
+        uint32_t sum = 0;
+        for (unsigned b = 0; b < row_bytes; b++) sum += lower_bound(r[b] - q[b]);
+        if (sum <= limit) out[got++] = cand[c];
+    }
+    return got;
 }
 
 unsigned dpc_near_points_scalar(const dpc_near_job *job, uint32_t query, uint32_t from, uint32_t *out, unsigned cap) {

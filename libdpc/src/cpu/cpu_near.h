@@ -58,7 +58,20 @@ static inline int dpc_near_add_block(uint32_t *ranges, unsigned *n, unsigned cap
     return 1;
 }
 
-/* The limit for radius r (absolute, at most 1/2): (256 r)^2 with a margin of 0.1% and 2 codes
+/* The same test for a few candidates of one query, on rows: rows[j * row_bytes + q] is the code
+ * of subspace dimension q of point j (0 past k; row_bytes a multiple of 16). The candidates
+ * cand[0 .. n) that pass, in order, into out; returns their count. (The lists' refreshes and
+ * their moved points' candidates: a few dozen per query, where a scan over all m would not pay.) */
+typedef unsigned (*dpc_near_list_fn)(const uint8_t *rows, unsigned row_bytes, uint32_t query, const uint32_t *cand,
+                                     unsigned n, uint32_t limit, uint32_t *out);
+unsigned dpc_near_list_scalar(const uint8_t *rows, unsigned row_bytes, uint32_t query, const uint32_t *cand, unsigned n,
+                              uint32_t limit, uint32_t *out);
+#if defined(DPC_HAVE_AVX2)
+unsigned dpc_near_list_avx2(const uint8_t *rows, unsigned row_bytes, uint32_t query, const uint32_t *cand, unsigned n,
+                            uint32_t limit, uint32_t *out);
+#endif
+
+/* The limit for radius r (absolute, below 0.99: the limit stays below 65535): (256 r)^2 with a margin of 0.1% and 2 codes
  * for the float32 rounding of the kernel's squared distances. */
 static inline uint32_t dpc_near_limit(float r) {
     const double u = 256.0 * (double)r;

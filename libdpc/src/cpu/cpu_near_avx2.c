@@ -81,3 +81,30 @@ unsigned dpc_near_avx2(const dpc_near_job *job, uint32_t query, uint32_t *ranges
     }
     return n;
 }
+
+/* Per candidate: its row's byte differences, |d| - 1 saturated, squares summed in pairs by
+ * maddubs and in 32 bits by madd (exact: at most 64 * 127^2); two candidates per vector. */
+unsigned dpc_near_list_avx2(const uint8_t *rows, unsigned row_bytes, uint32_t query, const uint32_t *cand, unsigned n,
+                            uint32_t limit, uint32_t *out) {
+    const uint8_t *qr = rows + (size_t)query * row_bytes;
+    unsigned got = 0;
+    for (unsigned c = 0; c < n; c += 2) {
+        const uint32_t j0 = cand[c], j1 = cand[c + 1 < n ? c + 1 : c];
+        const uint8_t *a = rows + (size_t)j0 * row_bytes, *b = rows + (size_t)j1 * row_bytes;
+        __m256i acc = _mm256_setzero_si256();
+        for (unsigned o = 0; o < row_bytes; o += 16) {
+            const __m128i q128 = _mm_loadu_si128((const __m128i *)(qr + o));
+            const __m256i q = _mm256_inserti128_si256(_mm256_castsi128_si256(q128), q128, 1);
+            const __m256i x = _mm256_inserti128_si256(_mm256_castsi128_si256(_mm_loadu_si128((const __m128i *)(a + o))),
+                                                      _mm_loadu_si128((const __m128i *)(b + o)), 1);
+            const __m256i lb = _mm256_subs_epu8(_mm256_abs_epi8(_mm256_sub_epi8(x, q)), _mm256_set1_epi8(1));
+            acc = _mm256_add_epi32(acc, _mm256_madd_epi16(_mm256_maddubs_epi16(lb, lb), _mm256_set1_epi16(1)));
+        }
+        /* the four 32-bit sums of each 128-bit half added: candidate 0 in lane 0, 1 in lane 4 */
+        acc = _mm256_add_epi32(acc, _mm256_shuffle_epi32(acc, 0x4E));
+        acc = _mm256_add_epi32(acc, _mm256_shuffle_epi32(acc, 0xB1));
+        if ((uint32_t)_mm256_extract_epi32(acc, 0) <= limit) out[got++] = j0;
+        if (c + 1 < n && (uint32_t)_mm256_extract_epi32(acc, 4) <= limit) out[got++] = j1;
+    }
+    return got;
+}
