@@ -177,24 +177,29 @@ TEST(Prefilter, RowFilterIsTheColumnFilter) {
     }
 }
 
-// A subspace for the lists: m points in k dimensions, as columns (the kernel's) and codes.
+// A subspace for the lists: m points in k dimensions, as columns and rows (the kernels') and codes.
 struct Moving {
     unsigned k;
     uint32_t m;
     float r;
     std::vector<float> x; // m x k
     std::vector<std::vector<float>> cols;
+    std::vector<float> rows; // the list kernel's rows (dpc_sub_job.row), which the lists also read
     Codes codes;
     dpc_sub_job job;
     void sync() {
+        const unsigned stride = (k + 15) / 16 * 16;
         cols.assign(k, std::vector<float>(m + 16, 0.0f));
+        rows.assign((size_t)m * stride, 0.0f);
         for (uint32_t j = 0; j < m; j++)
-            for (unsigned q = 0; q < k; q++) cols[q][j] = x[(size_t)j * k + q];
+            for (unsigned q = 0; q < k; q++) cols[q][j] = rows[(size_t)j * stride + q] = x[(size_t)j * k + q];
         codes = make_codes(x, k, m, r);
         std::memset(&job, 0, sizeof job);
         job.k = k;
         job.radius = r;
         for (unsigned q = 0; q < k; q++) job.coord[q] = cols[q].data();
+        job.row = rows.data();
+        job.row_stride = stride;
     }
     // move `share` of the points (every point when 1) by `dist` in a random direction
     void move(std::mt19937 &rng, double share, double dist) {

@@ -164,18 +164,42 @@ static void sort_cells(sub_pass *p, const float *x) {
 }
 
 /* Copy the subspace's coordinates, in sorted order, structure-of-arrays. */
-static void fill_soa(sub_pass *p, const float *x) {
-    workspace *ws = p->ws;
-    const size_t m = ws->m, n = ws->n;
+static void soa_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
+    (void)slot;
+    const sub_pass *p = (const sub_pass *)ctx;
+    const workspace *ws = p->ws;
     for (unsigned q = 0; q < p->job.k; q++) {
         float *col = ws->soa + q * ws->stride;
-        for (size_t s = 0; s < m; s++) col[s] = x[(size_t)ws->perm[s] * n + p->dim[q]];
-        p->job.coord[q] = col;
+        for (size_t s = lo; s < hi; s++) col[s] = ws->x[(size_t)ws->perm[s] * ws->n + p->dim[q]];
     }
+}
+
+static void fill_soa(sub_pass *p) {
+    workspace *ws = p->ws;
+    for (unsigned q = 0; q < p->job.k; q++) p->job.coord[q] = ws->soa + q * ws->stride;
+    parallel_for(p->engine->threads, ws->m, soa_range, p);
 }
 
 /* The prefilter's codes of the subspace's coordinates (sorted order), two dimensions per pair;
  * 0 when there is no memory for them. */
+static void codes_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
+    (void)slot;
+    const sub_pass *p = (const sub_pass *)ctx;
+    const dpc_near_job *nj = &p->near_job;
+    for (unsigned pr = 0; pr < nj->pairs; pr++) {
+        uint8_t *c = (uint8_t *)nj->code[pr];
+        for (unsigned e = 0; e < 2; e++) {
+            const unsigned q = 2 * pr + e;
+            if (q >= p->job.k) {
+                for (size_t s = lo; s < hi; s++) c[2 * s + e] = 0;
+                continue;
+            }
+            const float *col = p->job.coord[q];
+            for (size_t s = lo; s < hi; s++) c[2 * s + e] = (uint8_t)(col[s] * 256.0f); /* exact: x in [0, 1) */
+        }
+    }
+}
+
 static int fill_codes(sub_pass *p) {
     workspace *ws = p->ws;
     const size_t m = ws->m, column = 2 * ws->stride + 128;
@@ -184,27 +208,27 @@ static int fill_codes(sub_pass *p) {
     nj->pairs = (p->job.k + 1) / 2;
     nj->m = (uint32_t)m;
     nj->limit = dpc_near_limit(p->job.radius);
-    for (unsigned pr = 0; pr < nj->pairs; pr++) {
-        uint8_t *c = ws->code + pr * column;
-        for (unsigned e = 0; e < 2; e++) {
-            const unsigned q = 2 * pr + e;
-            if (q >= p->job.k) {
-                for (size_t s = 0; s < m; s++) c[2 * s + e] = 0;
-                continue;
-            }
-            const float *col = p->job.coord[q];
-            for (size_t s = 0; s < m; s++) c[2 * s + e] = (uint8_t)(col[s] * 256.0f); /* exact: x in [0, 1) */
-        }
-        nj->code[pr] = c;
-    }
+    for (unsigned pr = 0; pr < nj->pairs; pr++) nj->code[pr] = ws->code + pr * column;
+    parallel_for(p->engine->threads, m, codes_range, p);
     return 1;
 }
 
 /* The subspace's coordinates as rows for the list kernel (dpc_sub_job.row); 0 when there is no
  * memory for them. */
+static void rows_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
+    (void)slot;
+    const sub_pass *p = (const sub_pass *)ctx;
+    const unsigned k = p->job.k, stride = p->job.row_stride;
+    for (size_t s = lo; s < hi; s++) {
+        float *row = p->ws->rows + s * stride;
+        for (unsigned q = 0; q < k; q++) row[q] = p->job.coord[q][s];
+        for (unsigned q = k; q < stride; q++) row[q] = 0.0f;
+    }
+}
+
 static int fill_rows(sub_pass *p) {
     workspace *ws = p->ws;
-    const unsigned k = p->job.k, stride = (k + 15) / 16 * 16;
+    const unsigned stride = (p->job.k + 15) / 16 * 16;
     const size_t need = ws->m * stride;
     if (need > ws->rows_cap) {
         free(ws->rows);
@@ -212,13 +236,9 @@ static int fill_rows(sub_pass *p) {
         ws->rows_cap = ws->rows ? need : 0;
         if (!ws->rows) return 0;
     }
-    for (size_t s = 0; s < ws->m; s++) {
-        float *row = ws->rows + s * stride;
-        for (unsigned q = 0; q < k; q++) row[q] = p->job.coord[q][s];
-        for (unsigned q = k; q < stride; q++) row[q] = 0.0f;
-    }
     p->job.row = ws->rows;
     p->job.row_stride = stride;
+    parallel_for(p->engine->threads, ws->m, rows_range, p);
     return 1;
 }
 
@@ -382,13 +402,13 @@ static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws
                  dpc_plan_in_reach(plan.k, L->radius[t]) <= (double)m / 16.0;
         sort_cells(&p, ws->x);
         if (p.grid && !accumulated) reorder_points(ws);
-        fill_soa(&p, ws->x);
+        fill_soa(&p);
         if (p.near && !fill_codes(&p)) p.near = 0; /* no memory for it: all pairs, the same bits */
         if (p.near && dpc_plan_in_reach(plan.k, (1.0 + DPC_LISTS_SKIN) * L->radius[t]) <= LIST_MAX_EXPECTED &&
-            dpc_plan_in_reach(plan.k, (1.0 + DPC_LISTS_WIDE) * L->radius[t]) <= WIDE_MAX_EXPECTED)
+            dpc_plan_in_reach(plan.k, (1.0 + DPC_LISTS_WIDE) * L->radius[t]) <= WIDE_MAX_EXPECTED &&
+            fill_rows(&p)) /* no memory for the rows: the ranges, the same bits */
             p.lists = dpc_lists_update(&ws->lists, L->masks[t], &p.job, &p.near_job, e->near_points, e->near_list,
                                        m < PARALLEL_MIN_POINTS ? 1u : e->threads);
-        if (p.lists && !fill_rows(&p)) p.lists = 0; /* no memory for the rows: the ranges, the same bits */
         parallel_for(e->threads, m, sub_pass_range, &p);
         accumulated = 1;
         if (ws->hook && atomic_load(&ws->stop) != DPC_OK) return;

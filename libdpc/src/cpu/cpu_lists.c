@@ -44,6 +44,9 @@ typedef struct scan {
     dpc_near_list_fn list;
     size_t limit; /* pairs per worker */
     unsigned threads;
+    const dpc_sub_job *job; /* heat_range, rows_range: the positions now, the move thresholds */
+    unsigned k;
+    double t1, t2;
 } scan;
 
 /* Pairs of point i with the points from `from` on (i itself left out), by the vector filter. */
@@ -149,7 +152,7 @@ static int ensure(dpc_lists *L, unsigned threads, unsigned k) {
         L->rows = (uint8_t *)calloc(m, row_bytes);
         L->row_bytes = L->rows ? row_bytes : 0;
     }
-    if (!L->at_build) L->at_build = (float *)malloc(m * DPC_MAX_DIMS * sizeof(float));
+    if (!L->at_build) L->at_build = (float *)malloc(m * DPC_MAX_DIMS * sizeof(float)); /* rows of <= 64 floats */
     if (!L->at_refresh) L->at_refresh = (float *)malloc(m * DPC_MAX_DIMS * sizeof(float));
     if (!L->heat) L->heat = (uint8_t *)malloc(m);
     if (!L->hot_pts) L->hot_pts = (uint32_t *)malloc(m * sizeof(uint32_t));
@@ -169,28 +172,46 @@ static void reset_buffers(dpc_lists *L) {
     for (unsigned t = 0; t < DPC_MAX_THREADS; t++) L->buf[t].n = 0, L->buf[t].failed = 0;
 }
 
-/* Squared distance of point s now from its position in `at` (torus, double: exact enough for
- * the margins below). */
-static double moved2(const dpc_sub_job *job, const float *at, unsigned k, size_t s) {
-    double d2 = 0.0;
+/* Squared torus distance of a point now from its position at a snapshot (rows of
+ * job->row_stride floats), in float: the thresholds it is compared with carry a margin for its
+ * rounding (a relative 1e-6, where the margin is 1e-4). */
+static float moved2(const float *now, const float *at, unsigned k) {
+    float d2 = 0.0f;
     for (unsigned q = 0; q < k; q++) {
-        double t = (double)job->coord[q][s] - (double)at[s * k + q]; /* in (-1, 1) */
-        t = t > 0.5 ? t - 1.0 : t < -0.5 ? t + 1.0 : t;
+        float t = now[q] - at[q]; /* in (-1, 1) */
+        t = t > 0.5f ? t - 1.0f : t < -0.5f ? t + 1.0f : t;
         d2 += t * t;
     }
     return d2;
 }
 
-static void snapshot(const dpc_sub_job *job, float *at, unsigned k, size_t m) {
-    for (size_t s = 0; s < m; s++)
-        for (unsigned q = 0; q < k; q++) at[s * k + q] = job->coord[q][s];
+static void snapshot(const dpc_sub_job *job, float *at, size_t m) {
+    memcpy(at, job->row, m * job->row_stride * sizeof(float));
 }
 
 /* The codes as rows (cpu_near.h: dpc_near_list_fn), zero past k. */
-static void fill_rows(dpc_lists *L, const dpc_near_job *codes, unsigned k) {
-    for (size_t j = 0; j < L->m; j++) {
-        uint8_t *row = L->rows + j * L->row_bytes;
-        for (unsigned q = 0; q < k; q++) row[q] = codes->code[q / 2][2 * j + q % 2];
+static void rows_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
+    (void)slot;
+    const scan *sc = (const scan *)ctx;
+    const unsigned k = sc->k;
+    for (size_t j = lo; j < hi; j++) {
+        uint8_t *row = sc->L->rows + j * sc->L->row_bytes;
+        for (unsigned q = 0; q < k; q++) row[q] = sc->codes->code[q / 2][2 * j + q % 2];
+    }
+}
+
+/* Each point's heat (cpu_lists.h): far, warm or cold. */
+static void heat_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
+    (void)slot;
+    const scan *sc = (const scan *)ctx;
+    dpc_lists *L = sc->L;
+    const size_t stride = sc->job->row_stride;
+    const float far2 = (float)(sc->t2 * sc->t2 * (1.0 - 1e-4)), warm2 = (float)(sc->t1 * sc->t1 * (1.0 - 1e-4));
+    for (size_t s = lo; s < hi; s++) {
+        const float *now = sc->job->row + s * stride;
+        L->heat[s] = moved2(now, L->at_build + s * stride, sc->k) > far2      ? 2
+                     : moved2(now, L->at_refresh + s * stride, sc->k) > warm2 ? 1
+                                                                              : 0;
     }
 }
 
@@ -198,9 +219,9 @@ static int refresh(dpc_lists *L, const dpc_sub_job *job, const dpc_near_job *cod
                    unsigned threads) {
     dpc_near_job at_r1 = *codes;
     at_r1.limit = dpc_near_limit(L->r1);
-    scan sc = {L, &at_r1, NULL, list, 0, threads};
+    scan sc = {L, &at_r1, NULL, list, 0, threads, job, L->k, 0.0, 0.0};
     dpc_parallel_ranges(threads, L->m, refresh_range, &sc);
-    snapshot(job, L->at_refresh, L->k, L->m);
+    snapshot(job, L->at_refresh, L->m);
     L->refreshes++;
     return 1;
 }
@@ -212,19 +233,17 @@ int dpc_lists_update(dpc_lists *L, uint64_t mask, const dpc_sub_job *job, const 
     const double r = job->radius * (1.0 + 1e-4); /* a margin for the kernel's float32 distances */
     if (threads < 1) threads = 1;
     if (!ensure(L, threads, k)) return L->mask = 0, 0;
-    fill_rows(L, codes, k);
-    scan sc = {L, codes, points, list, PAIRS_PER_POINT * m / threads + 1024, threads};
+    scan sc = {L, codes, points, list, PAIRS_PER_POINT * m / threads + 1024, threads, job, k, 0.0, 0.0};
+    dpc_parallel_ranges(threads, m, rows_range, &sc);
     if (L->mask == mask && L->k == k && r < L->r1) {
-        const double t1 = 0.5 * ((double)L->r1 - r), t2 = 0.5 * ((double)L->r2 - r);
+        sc.t1 = 0.5 * ((double)L->r1 - r);
+        sc.t2 = 0.5 * ((double)L->r2 - r);
+        dpc_parallel_ranges(threads, m, heat_range, &sc);
         size_t n_warm = 0;
         L->n_far = 0;
         for (size_t s = 0; s < m; s++) {
-            const uint8_t heat = moved2(job, L->at_build, k, s) > t2 * t2     ? 2
-                                 : moved2(job, L->at_refresh, k, s) > t1 * t1 ? 1
-                                                                              : 0;
-            L->heat[s] = heat;
-            if (heat == 2) L->far_pts[L->n_far++] = (uint32_t)s;
-            n_warm += heat == 1;
+            if (L->heat[s] == 2) L->far_pts[L->n_far++] = (uint32_t)s;
+            n_warm += L->heat[s] == 1;
         }
         /* Rent or buy: far points are scanned against all m each pass, which a build (m^2 / 2
          * pairs) would end; warm ones cost their wide list, which a refresh (m lists) would end. */
@@ -267,7 +286,7 @@ int dpc_lists_update(dpc_lists *L, uint64_t mask, const dpc_sub_job *job, const 
     L->r1 = (float)r1;
     L->r2 = (float)r2;
     refresh(L, job, codes, list, threads);
-    snapshot(job, L->at_build, k, m);
+    snapshot(job, L->at_build, m);
     memset(L->hot_off, 0, (m + 1) * sizeof(uint32_t));
     L->far_work = L->warm_work = 0.0;
     L->mask = mask;

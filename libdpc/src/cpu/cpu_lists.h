@@ -48,7 +48,7 @@ typedef struct dpc_lists {
     uint32_t *near_len, *near; /* near[wide_off[i] ...], near_len[i] long: those within r1 at the refresh */
     uint32_t *hot_off, *hot;   /* CSR: this pass's pairs of warm and far points, ascending (repeats possible) */
     size_t hot_cap;
-    float *at_build, *at_refresh; /* m x k: positions at the build (P0) and at the refresh (P1) */
+    float *at_build, *at_refresh; /* the rows (job->row) at the build (P0) and at the refresh (P1) */
     uint8_t *heat;                /* per point: 0 cold, 1 warm, 2 far */
     uint32_t *hot_pts;            /* this pass's warm and far points */
     uint32_t *far_pts;            /* this pass's far points */
@@ -66,7 +66,7 @@ typedef struct dpc_lists {
 void dpc_lists_init(dpc_lists *L, size_t m);
 void dpc_lists_free(dpc_lists *L);
 
-/* Make the lists exact for subspace `mask` at the current coordinates (job->coord, job->radius,
+/* Make the lists exact for subspace `mask` at the current coordinates (job->row, job->radius,
  * the codes of `codes`, whose limit is the radius's; the filters `points` and `list`): reuse, add the hot pairs, refresh or
  * rebuild. 0 when they cannot be used (no memory, or a crowded set): the caller filters per
  * query and the lists are dropped. */
