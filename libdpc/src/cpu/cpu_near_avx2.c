@@ -13,8 +13,9 @@
 
 /* The pass bits of the 64 candidates from j (2 bits per candidate, 32 per vector), the padding
  * past m and the candidates before `from` cleared; whether any is set. */
-static inline int chunk(const __m256i *q, const uint8_t *const *code, unsigned pairs, uint32_t limit16, uint32_t j,
-                        uint32_t from, uint32_t m, uint32_t pass[SUMS]) {
+static inline __attribute__((always_inline)) int chunk(const __m256i *q, const uint8_t *const *code, unsigned pairs,
+                                                       uint32_t limit16, uint32_t j, uint32_t from, uint32_t m,
+                                                       uint32_t pass[SUMS]) {
     const __m256i one = _mm256_set1_epi8(1), limit = _mm256_set1_epi16((short)limit16);
     __m256i acc[SUMS];
     for (unsigned v = 0; v < SUMS; v++) acc[v] = _mm256_setzero_si256();
@@ -47,14 +48,17 @@ static inline void query_codes(const dpc_near_job *job, uint32_t query, __m256i 
     }
 }
 
-unsigned dpc_near_points_avx2(const dpc_near_job *job, uint32_t query, uint32_t from, uint32_t *out, unsigned cap) {
+/* The scan, inlined once per small pair count so that the compiler unrolls the dimension loop
+ * and keeps the four sums in registers (a loop of unknown length copies them every step). */
+static inline __attribute__((always_inline)) unsigned points(const dpc_near_job *job, uint32_t query, uint32_t from,
+                                                             uint32_t *out, unsigned cap, unsigned pairs) {
     __m256i q[DPC_MAX_DIMS / 2];
     const uint8_t *code[DPC_MAX_DIMS / 2];
     query_codes(job, query, q, code);
     unsigned n = 0;
     for (uint32_t j = from / (16 * SUMS) * (16 * SUMS); j < job->m; j += 16 * SUMS) {
         uint32_t pass[SUMS];
-        if (!chunk(q, code, job->pairs, job->limit, j, from, job->m, pass)) continue;
+        if (!chunk(q, code, pairs, job->limit, j, from, job->m, pass)) continue;
         for (unsigned v = 0; v < SUMS; v++)
             for (uint32_t bits = pass[v] & 0x55555555u; bits; bits &= bits - 1) {
                 if (n == cap) return cap + 1;
@@ -62,6 +66,18 @@ unsigned dpc_near_points_avx2(const dpc_near_job *job, uint32_t query, uint32_t 
             }
     }
     return n;
+}
+
+unsigned dpc_near_points_avx2(const dpc_near_job *job, uint32_t query, uint32_t from, uint32_t *out, unsigned cap) {
+    switch (job->pairs) {
+    case 3: return points(job, query, from, out, cap, 3);
+    case 4: return points(job, query, from, out, cap, 4);
+    case 5: return points(job, query, from, out, cap, 5);
+    case 6: return points(job, query, from, out, cap, 6);
+    case 7: return points(job, query, from, out, cap, 7);
+    case 8: return points(job, query, from, out, cap, 8);
+    default: return points(job, query, from, out, cap, job->pairs);
+    }
 }
 
 unsigned dpc_near_avx2(const dpc_near_job *job, uint32_t query, uint32_t *ranges, unsigned cap) {
