@@ -7,9 +7,12 @@
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 extern "C" {
 #include "common/threads.h"
@@ -210,4 +213,55 @@ TEST(Threads, EverySlotAndEveryIndexOnce) {
             for (size_t i = 0; i < n; i++) EXPECT_EQ(seen[i].load(), 1) << T << " " << n << " " << i;
         }
     }
+}
+
+// The worker pool (common/threads.c) behind both calls: callers on several threads at once (all
+// but one get threads of their own), a worker that forks again (nested), and many calls in a
+// row: every slot and index exactly once, every time.
+namespace {
+using Counts = std::vector<std::atomic<int>>;
+bool ranges_once(unsigned T, size_t n) {
+    Counts seen(n);
+    dpc_parallel_ranges(
+        T, n,
+        [](void *ctx, unsigned, size_t lo, size_t hi) {
+            for (size_t i = lo; i < hi; i++) (*static_cast<Counts *>(ctx))[i]++;
+        },
+        &seen);
+    for (size_t i = 0; i < n; i++)
+        if (seen[i].load() != 1) return false;
+    return true;
+}
+} // namespace
+
+TEST(Threads, PoolServesConcurrentAndNestedCallers) {
+    std::atomic<int> bad{0};
+    std::vector<std::thread> callers;
+    for (int c = 0; c < 4; c++)
+        callers.emplace_back([&bad, c] {
+            for (int round = 0; round < 200; round++)
+                if (!ranges_once(2 + (unsigned)(c + round) % 3, 1000 + (size_t)round)) bad++;
+        });
+    for (auto &t : callers) t.join();
+    EXPECT_EQ(bad.load(), 0);
+    // nested: each of 3 slots forks 2 more
+    std::atomic<int> inner_bad{0};
+    dpc_run_workers(
+        3,
+        [](void *ctx, unsigned) {
+            if (!ranges_once(2, 777)) (*static_cast<std::atomic<int> *>(ctx))++;
+        },
+        &inner_bad);
+    EXPECT_EQ(inner_bad.load(), 0);
+}
+
+TEST(WorkerPool, AForkedChildStartsAFreshPool) { // not under TSan (its name): TSan refuses threads after fork
+    ASSERT_TRUE(ranges_once(3, 500));            // the parent's pool is up
+    const pid_t pid = fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) _exit(ranges_once(3, 500) && ranges_once(2, 64) ? 0 : 1);
+    int status = 0;
+    ASSERT_EQ(waitpid(pid, &status, 0), pid);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status;
+    EXPECT_TRUE(ranges_once(3, 500)); // and the parent's still works
 }
