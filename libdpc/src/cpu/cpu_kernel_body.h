@@ -364,8 +364,9 @@ static inline vf vload_row(const float *p) {
 void LIST_KERNEL(const dpc_sub_job *job, const float *xs, const uint32_t *cand, unsigned n, float *accs) {
     const unsigned k = job->k, stride = job->row_stride, chunks = (k + VW - 1) / VW;
     const float cut2 = job->cutoff * job->cutoff, rad2 = job->radius * job->radius;
-    float xrow[DPC_MAX_DIMS + 16] = {0};
+    float xrow[DPC_MAX_DIMS + 16];
     memcpy(xrow, xs, k * sizeof(float));
+    for (unsigned q = k; q < chunks * VW; q++) xrow[q] = 0.0f; /* only what the vectors read: no memset */
     vf x[DPC_MAX_DIMS / 8], lane[CANON][DPC_MAX_DIMS / 8];
     for (unsigned c = 0; c < chunks; c++) {
         x[c] = vload_row(xrow + c * VW);
