@@ -27,7 +27,6 @@ import json
 import os
 import platform
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -84,16 +83,17 @@ def against(rev: str, exe: Path, isas: list[str]) -> list[str]:
     return lines
 
 
-def alternate(old: Path, exe: Path, model: Path, isa: str, counts: list[int]) -> tuple[dict, dict]:
-    """Thread CPU time per count of two builds run alternately, three rounds: the median of each
-    build's per-round medians."""
+def alternate(old: Path, exe: Path, model: Path, isa: str, counts: list[int],
+              key: str = "cpu_median_s") -> tuple[dict, dict]:
+    """Thread CPU time (or, key="median_s", wall time: for several threads) per count of two
+    builds run alternately, three rounds: the median of each build's per-round medians."""
     a = {m: [] for m in counts}
     b = {m: [] for m in counts}
     for _ in range(3):
         for r in run(old, model, isa, counts):
-            a[r["m"]].append(r["cpu_median_s"])
+            a[r["m"]].append(r[key])
         for r in run(exe, model, isa, counts):
-            b[r["m"]].append(r["cpu_median_s"])
+            b[r["m"]].append(r[key])
     return {m: float(np.median(a[m])) for m in counts}, {m: float(np.median(b[m])) for m in counts}
 
 

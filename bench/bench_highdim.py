@@ -1,18 +1,21 @@
 """High-dimensional generation: bnot-10d through libdpc, written to docs/performance.md.
 
-    python bench/bench_highdim.py [--against REV] [--max-m M]
+    python bench/bench_highdim.py [--against REV] [--previous REV] [--max-m M]
 
 bnot-10d is 40 layers over one 10-D subspace of radius one mean spacing: at m = 8,192 that is
 0.41 of the torus on every axis, yet only about 3 points lie within it of each point. The
-all-pairs scan visited all m; the neighbour prefilter (libdpc/src/cpu/cpu_near.h) drops the
-candidate blocks with no point in reach, with neighbour lists kept across layers while they stay
-exact (libdpc/src/cpu/cpu_lists.h), and gives the same bits. Measured with
-bench/bench_generate.c (Release, fastest ISA):
+all-pairs scan visited all m; the neighbour prefilter (libdpc/src/cpu/cpu_near.h) finds the
+points in reach, and two tiers of neighbour lists kept across layers (libdpc/src/cpu/cpu_lists.h)
+spare most layers any scan; the kernel then visits exactly the listed points
+(cpu_kernels.h: dpc_list_fn), with the bits of all pairs. Measured with bench/bench_generate.c
+(Release, fastest ISA):
 1. this tree at m = 1,024 ... --max-m (default 65,536) on one and two threads: wall medians;
 2. revision REV (default 1e40f0e, the all-pairs scan) and this tree alternately, one thread,
    three rounds, m up to 8,192 (thread CPU time, which a busy machine disturbs less);
 3. bnot-5d (5-D, radius 2 spacings: about 170 points in reach, so the lists are off and the
-   prefilter runs every layer) the same way, to show what a denser subspace costs.
+   prefilter runs every layer) the same way, to show what a denser subspace costs;
+4. revision PREV (default c89e46c: one tier of lists, aligned blocks of candidates, a thread
+   per loop) and this tree alternately on two threads (wall time), m = 8,192 ... 32,768.
 """
 
 from __future__ import annotations
@@ -40,9 +43,10 @@ def fastest_isa() -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--against", default="1e40f0e", metavar="REV")
+    ap.add_argument("--previous", default="c89e46c", metavar="REV")
     ap.add_argument("--max-m", type=int, default=65536)
     args = ap.parse_args()
-    exe, old = build(), build_revision(args.against)
+    exe, old, prev = build(), build_revision(args.against), build_revision(args.previous)
     isa = fastest_isa()
     ten = ROOT / "models" / "bnot-10d.onnx"
     counts = [m for m in (1024, 2048, 4096, 8192, 16384, 32768, 65536) if m <= args.max_m]
@@ -74,6 +78,18 @@ def main() -> None:
         for m in ms_:
             ta, tb = a[m], b[m]
             lines.append(f"| `{name}` | {m:,} | {ta * 1e3:,.1f} ms | {tb * 1e3:,.1f} ms | {ta / tb:.1f}x |")
+    mid = [m for m in (8192, 16384, 32768) if m <= args.max_m]
+    lines += [
+        "",
+        f"Against revision `{args.previous}` (one tier of neighbour lists, aligned candidate blocks, a new "
+        "thread per parallel loop), two threads, wall time, three alternating rounds:",
+        "",
+        f"| model | points | {args.previous} | this tree | speed-up |",
+        "|---|---:|---:|---:|---:|",
+    ]
+    a, b = alternate(prev, exe, ten, f"{isa}:2", mid, key="median_s")
+    for m in mid:
+        lines.append(f"| `bnot-10d` | {m:,} | {a[m] * 1e3:,.1f} ms | {b[m] * 1e3:,.1f} ms | {a[m] / b[m]:.1f}x |")
     goal = scaling[2].get(8192)
     if goal is not None:
         met = "met" if goal <= 0.1 else "**not met**"

@@ -23,7 +23,7 @@
 
 #define MAX_RANGES DPC_PLAN_MAX_RANGES /* index ranges per point (2 per row of cells) */
 
-#define PARALLEL_MIN_POINTS 8192 /* below this, threads cost more than they save */
+#define PARALLEL_MIN_POINTS 2048 /* below this, the pool's hand-offs cost more than the threads save */
 
 /* All pairs in subspaces of at least this many dimensions and sets of at least this many points
  * go through the prefilter, when the ball of radius r is expected to hold at most m / 16 points
