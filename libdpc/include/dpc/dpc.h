@@ -142,7 +142,10 @@ typedef struct dpc_load_options {
     dpc_isa isa;          /* default DPC_ISA_AUTO */
     /* Worker threads one generate call may use: 1 (default) runs on the calling thread only;
      * 0 means one per online CPU. Output bits do not depend on this. CPU backend only. (The one
-     * default of libdpc: also dpc_layer_options, and the Python package, its CLI and training.) */
+     * default of libdpc: also dpc_layer_options, and the Python package, its CLI and training.)
+     * The workers come from a pool libdpc keeps for the process (started on first use; an idle
+     * worker spins for up to about 0.1 ms, then sleeps; joined when the library is unloaded);
+     * a call made while another thread's call holds the pool starts threads of its own. */
     uint32_t threads;
     /* Default DPC_BACKEND_AUTO. The field was added after the first release: a struct_size of
      * the struct without it (offsetof(dpc_load_options, backend)) is still accepted, as AUTO. */

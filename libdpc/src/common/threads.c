@@ -2,9 +2,10 @@
  *
  * Why a pool: a filter runs several parallel loops per layer (a 40-layer cascade: a few hundred
  * per set), each only a fraction of a millisecond long at the point counts where threads pay,
- * and creating and joining a thread costs about 0.1 ms on a virtual machine (bench/bench_highdim.py's
- * host: 127 us per create + join). Pool workers wait for their next slot spinning for a while
- * (the next loop usually follows within microseconds), then sleeping on a condition variable.
+ * and creating and joining a thread for each costs more than many of them take (on the
+ * virtual machines bench/bench_highdim.py ran on). Pool workers wait for their next slot
+ * spinning for a while (the next loop usually follows within microseconds), then sleeping on
+ * a condition variable.
  *
  * One caller dispatches to the pool at a time; a concurrent or nested caller (a pool worker
  * that forks again, or another thread's model) creates threads for its call as before. Each
@@ -26,7 +27,7 @@ unsigned dpc_threads_resolve(unsigned threads) {
     return threads > DPC_MAX_THREADS ? DPC_MAX_THREADS : threads;
 }
 
-#define SPIN_ROUNDS 20000 /* a waiting worker polls this often (about 0.3-1 ms) before it sleeps */
+#define SPIN_ROUNDS 2000 /* a waiting worker polls this often (up to about 0.1 ms) before it sleeps */
 
 static inline void relax(void) {
 #if defined(__x86_64__) || defined(__i386__)

@@ -1,6 +1,7 @@
-/* The one fork-join helper of libdpc: the CPU engine's parallel loops, the batch fan-out and the
- * training kernels all run their workers through it. Every user gives each worker a fixed share
- * of the work (a slot), so no result depends on how many threads ran or which ran first. */
+/* The one fork-join helper of libdpc (over a pool of workers kept for the process, threads.c):
+ * the CPU engine's parallel loops, the batch fan-out and the training kernels all run their
+ * workers through it. Every user gives each worker a fixed share of the work (a slot), so no
+ * result depends on how many threads ran or which ran first. */
 #ifndef DPC_COMMON_THREADS_H
 #define DPC_COMMON_THREADS_H
 
@@ -13,7 +14,8 @@
 unsigned dpc_threads_resolve(unsigned threads);
 
 /* fn(ctx, slot) for slot = 0 .. T - 1 (T capped at DPC_MAX_THREADS), slot 0 on the calling
- * thread, the others on new threads; returns when all are done. A thread that cannot be created
+ * thread, the others on pool workers (or, while another caller holds the pool, on new threads);
+ * returns when all are done. A thread that cannot be created
  * has its slot run on the calling thread afterwards (slots are independent, so results do not
  * change; only the speed does). */
 typedef void (*dpc_worker_fn)(void *ctx, unsigned slot);
