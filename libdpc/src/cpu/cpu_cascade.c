@@ -255,10 +255,11 @@ static void sub_pass_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
             if (((s - lo) & (DPC_CPU_POLL_POINTS - 1)) == DPC_CPU_POLL_POINTS - 1 && poll_stop(ws, 0)) return;
             if (ws->frozen && ws->order[ws->perm[s]] < ws->frozen) continue;
             for (unsigned q = 0; q < k; q++) xs[q] = p->job.coord[q][s];
-            unsigned n_cand = MAX_CANDIDATES + 1;
-            if (p->lists) n_cand = dpc_lists_candidates(&ws->lists, (uint32_t)s, cand, MAX_CANDIDATES);
-            if (n_cand <= MAX_CANDIDATES) {
-                p->engine->list(&p->job, xs, cand, n_cand, acc);
+            unsigned n_cand = 0;
+            const uint32_t *cands =
+                p->lists ? dpc_lists_candidates(&ws->lists, (uint32_t)s, cand, MAX_CANDIDATES, &n_cand) : NULL;
+            if (cands) {
+                p->engine->list(&p->job, xs, cands, n_cand, acc);
             } else {
                 unsigned n_ranges =
                     p->lists ? MAX_RANGES + 1 : p->engine->near(&p->near_job, (uint32_t)s, ranges, MAX_RANGES);

@@ -367,10 +367,10 @@ void LIST_KERNEL(const dpc_sub_job *job, const float *xs, const uint32_t *cand, 
     float xrow[DPC_MAX_DIMS + 16];
     memcpy(xrow, xs, k * sizeof(float));
     for (unsigned q = k; q < chunks * VW; q++) xrow[q] = 0.0f; /* only what the vectors read: no memset */
-    vf x[DPC_MAX_DIMS / 8], lane[CANON][DPC_MAX_DIMS / 8];
+    vf x[DPC_MAX_DIMS / 8], lane[DPC_MAX_DIMS / 8][CANON];     /* [chunk][canonical lane]: zeroed as far as used */
     for (unsigned c = 0; c < chunks; c++) {
         x[c] = vload_row(xrow + c * VW);
-        for (unsigned l = 0; l < CANON; l++) lane[l][c] = vsplat(0.0f);
+        for (unsigned l = 0; l < CANON; l++) lane[c][l] = vsplat(0.0f);
     }
     for (unsigned i0 = 0; i0 < n; i0 += LIST_GROUP) { /* a group's squared distances side by side */
         const unsigned g_n = n - i0 < LIST_GROUP ? n - i0 : LIST_GROUP;
@@ -391,13 +391,13 @@ void LIST_KERNEL(const dpc_sub_job *job, const float *xs, const uint32_t *cand, 
             const int32_t b0 = (int32_t)u, b = b0 < job->qmax ? b0 : job->qmax;
             const float f = u - (float)b;
             const vf cv = vsplat(s_fma(f, job->dw[b], job->w[b]) * y);
-            vf *a = lane[cand[i0 + g] % CANON];
-            for (unsigned c = 0; c < chunks; c++) a[c] = FMA(cv, t[g][c], a[c]);
+            const unsigned l = cand[i0 + g] % CANON;
+            for (unsigned c = 0; c < chunks; c++) lane[c][l] = FMA(cv, t[g][c], lane[c][l]);
         }
     }
     for (unsigned c = 0; c < chunks; c++) { /* the canonical tree (vtree), all dimensions at once */
-        const vf sum = ((lane[0][c] + lane[4][c]) + (lane[2][c] + lane[6][c])) +
-                       ((lane[1][c] + lane[5][c]) + (lane[3][c] + lane[7][c]));
+        const vf sum = ((lane[c][0] + lane[c][4]) + (lane[c][2] + lane[c][6])) +
+                       ((lane[c][1] + lane[c][5]) + (lane[c][3] + lane[c][7]));
         const unsigned here = k - c * VW < VW ? k - c * VW : VW;
         for (unsigned l = 0; l < here; l++) accs[c * VW + l] = sum[l];
     }

@@ -294,16 +294,22 @@ int dpc_lists_update(dpc_lists *L, uint64_t mask, const dpc_sub_job *job, const 
     return 1;
 }
 
-unsigned dpc_lists_candidates(const dpc_lists *L, uint32_t s, uint32_t *cand, unsigned cap) {
-    const uint32_t *near = L->near + L->wide_off[s], *hot = L->hot ? L->hot + L->hot_off[s] : NULL;
+const uint32_t *dpc_lists_candidates(const dpc_lists *L, uint32_t s, uint32_t *buf, unsigned cap, unsigned *n) {
+    const uint32_t *near = L->near + L->wide_off[s];
     const uint32_t ae = L->near_len[s], be = L->hot_off[s + 1] - L->hot_off[s];
+    if (be == 0) { /* the near list as it is (it never holds s: builds leave each point out of its own) */
+        *n = ae;
+        return near;
+    }
+    const uint32_t *hot = L->hot + L->hot_off[s];
     uint32_t a = 0, b = 0;
-    unsigned n = 0;
+    unsigned got = 0;
     while (a < ae || b < be) { /* the two ascending lists merged */
         const uint32_t j = (b >= be || (a < ae && near[a] <= hot[b])) ? near[a++] : hot[b++];
-        if (j == s || (n && cand[n - 1] == j)) continue;
-        if (n == cap) return cap + 1;
-        cand[n++] = j;
+        if (j == s || (got && buf[got - 1] == j)) continue;
+        if (got == cap) return NULL;
+        buf[got++] = j;
     }
-    return n;
+    *n = got;
+    return buf;
 }

@@ -74,7 +74,8 @@ int dpc_lists_update(dpc_lists *L, uint64_t mask, const dpc_sub_job *job, const 
                      dpc_near_points_fn points, dpc_near_list_fn list, unsigned threads);
 
 /* The candidates of point s: its near list and hot pairs merged, ascending, without repeats and
- * without s (a dpc_list_fn's input); their count, or cap + 1 if more than cap. */
-unsigned dpc_lists_candidates(const dpc_lists *L, uint32_t s, uint32_t *cand, unsigned cap);
+ * without s (a dpc_list_fn's input), *n of them: the near list itself when s has no hot pairs,
+ * else merged into buf; NULL if more than cap would be needed. */
+const uint32_t *dpc_lists_candidates(const dpc_lists *L, uint32_t s, uint32_t *buf, unsigned cap, unsigned *n);
 
 #endif
