@@ -90,13 +90,16 @@ def main() -> None:
     a, b = alternate(prev, exe, ten, f"{isa}:2", mid, key="median_s")
     for m in mid:
         lines.append(f"| `bnot-10d` | {m:,} | {a[m] * 1e3:,.1f} ms | {b[m] * 1e3:,.1f} ms | {a[m] / b[m]:.1f}x |")
-    goal = scaling[2].get(8192)
-    if goal is not None:
-        met = "met" if goal <= 0.1 else "**not met**"
+    goal = [t for t in (scaling[2].get(8192), b.get(8192)) if t is not None]
+    if goal:
+        # both two-thread medians of this run (the scaling table's and the alternating rounds'):
+        # on a shared host they can differ by a fifth, and the goal is met only if both are
+        met = "met" if max(goal) <= 0.1 else "**not met**"
+        shown = " and ".join(f"{t * 1e3:.0f} ms" for t in goal)
         lines += [
             "",
-            f"Goal of issue 14 (8,192 10-D points through bnot-10d in <= 100 ms on 2 cores): {met}, "
-            f"{goal * 1e3:.0f} ms here.",
+            f"Goal of issue 14 (8,192 10-D points through bnot-10d in <= 100 ms on 2 cores): {met}: {shown} "
+            "here (the scaling table's median, then the alternating rounds').",
         ]
     text = "\n".join(lines)
     print(text)
