@@ -2,7 +2,7 @@
 // in cpu_cascade.c, with the lists kept across layers, cpu_lists.c), below the public API: its
 // ranges are aligned blocks that hold every point within the radius, its point lists hold every
 // such point, the scalar and AVX2 filters agree (columns and rows), the two-tier lists give every
-// point its points in reach through builds, refreshes, warm and far moves,
+// point its points in reach through builds, refreshes, warm moves and re-anchored far ones,
 // and a cascade run through it gives bit for bit the points of the all-pairs scan (every ISA,
 // one and two threads, point counts that are not multiples of 8).
 #include <cmath>
@@ -247,28 +247,29 @@ TEST(Lists, EveryPointKeepsItsPointsInReachThroughEveryKindOfMove) {
             // each step: a move (share of points, distance in r), and which path the lists take
             struct Step {
                 double share, dist;
-                int build, refresh, hot;
+                int build, refresh, hot, reanchor;
             };
             const double r = mv.r;
             const std::vector<Step> steps = {
-                {0.0, 0.0, 1, 1, 0},       // the first pass builds (and fills the near lists)
-                {1.0, 0.01 * r, 0, 0, 0},  // every point barely moves: nothing to do
-                {0.04, 0.08 * r, 0, 0, 1}, // a few warm points: their wide lists
-                {0.3, 0.08 * r, 0, 1, 1},  // many warm points: the near lists are refreshed (and the
-                                           // few moved in both steps are far: scanned)
-                {0.02, 0.4 * r, 0, 0, 1},  // a few far points: scanned against all
-                {0.03, 0.08 * r, 0, 0, 1}, // warm and far together
-                {0.5, 0.4 * r, 1, 1, 0},   // many far points: a build
+                {0.0, 0.0, 1, 1, 0, 0},       // the first pass builds (and fills the near lists)
+                {1.0, 0.01 * r, 0, 0, 0, 0},  // every point barely moves: nothing to do
+                {0.04, 0.08 * r, 0, 0, 1, 0}, // a few warm points: their wide lists
+                {0.3, 0.08 * r, 0, 1, 0, 1},  // many warm points: the near lists are refreshed (the few
+                                              // moved in both steps are far: re-anchored first)
+                {0.02, 0.4 * r, 0, 0, 1, 1},  // a few far points: re-anchored, then warm
+                {0.03, 0.08 * r, 0, 0, 1, 1}, // warm points, and far ones again (moved in earlier steps too)
+                {0.5, 0.4 * r, 1, 1, 0, 0},   // many far points: a build
             };
             long in_reach = 0;
             for (size_t st = 0; st < steps.size(); st++) {
                 const Step &s = steps[st];
                 if (s.share > 0.0) mv.move(rng, s.share, s.dist);
-                const size_t b0 = L.builds, r0 = L.refreshes, h0 = L.hot_passes;
+                const size_t b0 = L.builds, r0 = L.refreshes, h0 = L.hot_passes, a0 = L.reanchors;
                 ASSERT_EQ(dpc_lists_update(&L, 0x3FF, &mv.job, &mv.codes.job, f.points, f.list, threads), 1);
                 EXPECT_EQ((int)(L.builds - b0), s.build) << f.name << " step " << st;
                 EXPECT_EQ((int)(L.refreshes - r0), s.refresh) << f.name << " step " << st;
                 EXPECT_EQ((int)(L.hot_passes - h0), s.hot) << f.name << " step " << st;
+                EXPECT_EQ((int)(L.reanchors - a0), s.reanchor) << f.name << " step " << st;
                 std::vector<uint32_t> cand(mv.m);
                 for (uint32_t i = 0; i < mv.m; i++) {
                     unsigned n = 0;

@@ -5,10 +5,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define FAR_SHARE 16         /* rebuild when more than m / FAR_SHARE points are far */
-#define WARM_SHARE 8         /* refresh the near lists when more than m / WARM_SHARE points are warm */
-#define PAIRS_PER_POINT 256u /* a worker holding more pairs than this per point gives up (crowded) */
-#define MAX_LIST_RADIUS 0.98 /* the filter's 16-bit sums hold (256 r)^2 below this (cpu_near.h) */
+#define FAR_SHARE 16                     /* rebuild when more than m / FAR_SHARE points are far */
+#define WARM_SHARE 8                     /* refresh the near lists when more than m / WARM_SHARE points are warm */
+#define PAIRS_PER_POINT 256u             /* a worker holding more pairs than this per point gives up (crowded) */
+#define ANCHOR_COLUMN(m) (2 * (m) + 160) /* bytes per anchor code column: readable 128 past 2m (cpu_near.h) */
+#define MAX_LIST_RADIUS 0.98             /* the filter's 16-bit sums hold (256 r)^2 below this (cpu_near.h) */
 
 void dpc_lists_init(dpc_lists *L, size_t m) {
     memset(L, 0, sizeof *L);
@@ -18,7 +19,7 @@ void dpc_lists_init(dpc_lists *L, size_t m) {
 void dpc_lists_free(dpc_lists *L) {
     free(L->wide_off), free(L->wide), free(L->near_len), free(L->near), free(L->hot_off), free(L->hot);
     free(L->at_build), free(L->at_refresh), free(L->heat), free(L->hot_pts), free(L->far_pts), free(L->scratch);
-    free(L->rows);
+    free(L->rows), free(L->extra_off), free(L->extra), free(L->extra_pair), free(L->anchor_code), free(L->near_off);
     for (unsigned t = 0; t < DPC_MAX_THREADS; t++) free(L->buf[t].pair);
     memset(L, 0, sizeof *L);
 }
@@ -70,38 +71,58 @@ static void build_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
     for (size_t u = a; u < b && !sc->L->buf[slot].failed; u++) scan_one(sc, slot, (uint32_t)u, (uint32_t)u + 1);
 }
 
-/* The pairs of this pass's warm and far points at radius r: far ones against all points, warm
- * ones against their wide list and the far points. */
+/* A point's wide list and the pairs found for re-anchored points, merged ascending without
+ * repeats and without i (into buf, or the wide list itself when there are none); *n of them. */
+static const uint32_t *wide_and_extra(const dpc_lists *L, uint32_t i, uint32_t *buf, unsigned *n) {
+    const uint32_t *a = L->wide + L->wide_off[i], *b = L->extra + L->extra_off[i];
+    const uint32_t na = L->wide_off[i + 1] - L->wide_off[i], nb = L->extra_off[i + 1] - L->extra_off[i];
+    if (nb == 0) {
+        *n = na;
+        return a;
+    }
+    uint32_t x = 0, y = 0;
+    unsigned got = 0;
+    while (x < na || y < nb) {
+        const uint32_t j = (y >= nb || (x < na && a[x] <= b[y])) ? a[x++] : b[y++];
+        if (j != i && (got == 0 || buf[got - 1] != j)) buf[got++] = j;
+    }
+    *n = got;
+    return buf;
+}
+
+/* The pairs of this pass's warm points at radius r, from their wide and extra lists (far points
+ * were re-anchored first, and are warm now). */
 static void hot_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
     const scan *sc = (const scan *)ctx;
     dpc_lists *L = sc->L;
     dpc_pair_buffer *b = &L->buf[slot];
-    const uint32_t limit = sc->codes->limit;
+    uint32_t *out = L->scratch + (size_t)slot * L->m;
     for (size_t h = lo; h < hi && !b->failed; h++) {
         const uint32_t i = L->hot_pts[h];
-        if (L->heat[i] == 2) {
-            scan_one(sc, slot, i, 0);
-            continue;
-        }
-        uint32_t *out = L->scratch + (size_t)slot * L->m;
-        unsigned n = sc->list(L->rows, L->row_bytes, i, L->wide + L->wide_off[i], L->wide_off[i + 1] - L->wide_off[i],
-                              limit, out);
+        unsigned n;
+        const uint32_t *cand = wide_and_extra(L, i, out, &n);
+        n = sc->list(L->rows, L->row_bytes, i, cand, n, sc->codes->limit, out); /* in place: out never passes cand */
         for (unsigned c = 0; c < n; c++) add_pair(b, i, out[c], sc->limit);
-        n = sc->list(L->rows, L->row_bytes, i, L->far_pts, (unsigned)L->n_far, limit, out);
-        for (unsigned c = 0; c < n; c++)
-            if (out[c] != i) add_pair(b, i, out[c], sc->limit);
     }
 }
 
-/* A refresh: of each wide list, the points within r1 now (codes at limit(r1)). */
+/* Re-anchoring: a far point's pairs within r2 of its new anchor, against every point's anchor. */
+static void reanchor_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
+    const scan *sc = (const scan *)ctx;
+    for (size_t f = lo; f < hi && !sc->L->buf[slot].failed; f++) scan_one(sc, slot, sc->L->far_pts[f], 0);
+}
+
+/* A refresh: of each wide and extra list, the points within r1 now (codes at limit(r1)). */
 static void refresh_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
-    (void)slot;
     const scan *sc = (const scan *)ctx;
     dpc_lists *L = sc->L;
-    const uint32_t limit = sc->codes->limit;
-    for (size_t i = lo; i < hi; i++)
-        L->near_len[i] = sc->list(L->rows, L->row_bytes, (uint32_t)i, L->wide + L->wide_off[i],
-                                  L->wide_off[i + 1] - L->wide_off[i], limit, L->near + L->wide_off[i]);
+    uint32_t *buf = L->scratch + (size_t)slot * L->m;
+    for (size_t i = lo; i < hi; i++) {
+        unsigned n;
+        const uint32_t *cand = wide_and_extra(L, (uint32_t)i, buf, &n);
+        L->near_len[i] =
+            sc->list(L->rows, L->row_bytes, (uint32_t)i, cand, n, sc->codes->limit, L->near + L->near_off[i]);
+    }
 }
 
 static int cmp_u32(const void *a, const void *b) {
@@ -144,11 +165,35 @@ static int assemble(dpc_lists *L, unsigned threads, uint32_t **off, uint32_t **l
     return 1;
 }
 
+/* A CSR of pairs (both directions), each list sorted. */
+static int csr_from_pairs(size_t m, const uint32_t *pair, size_t n, uint32_t **off, uint32_t **list, size_t *cap) {
+    if (!*off && !(*off = (uint32_t *)malloc((m + 1) * sizeof(uint32_t)))) return 0;
+    if (2 * n > *cap || !*list) {
+        uint32_t *p = (uint32_t *)realloc(*list, (n ? 2 * n : 1) * sizeof(uint32_t));
+        if (!p) return 0;
+        *list = p;
+        *cap = 2 * n;
+    }
+    uint32_t *o = *off;
+    memset(o, 0, (m + 1) * sizeof(uint32_t));
+    for (size_t c = 0; c < 2 * n; c++) o[pair[c] + 1]++;
+    for (size_t i = 0; i < m; i++) o[i + 1] += o[i];
+    for (size_t c = 0; c < n; c++) {
+        (*list)[o[pair[2 * c]]++] = pair[2 * c + 1];
+        (*list)[o[pair[2 * c + 1]]++] = pair[2 * c];
+    }
+    for (size_t i = m; i > 0; i--) o[i] = o[i - 1];
+    o[0] = 0;
+    for (size_t i = 0; i < m; i++)
+        if (o[i + 1] - o[i] > 1) qsort(*list + o[i], o[i + 1] - o[i], sizeof(uint32_t), cmp_u32);
+    return 1;
+}
+
 static int ensure(dpc_lists *L, unsigned threads, unsigned k) {
     const size_t m = L->m;
     const unsigned row_bytes = (k + 15) / 16 * 16;
     if (row_bytes > L->row_bytes) {
-        free(L->rows);
+        free(L->rows), free(L->extra_off), free(L->extra), free(L->extra_pair), free(L->anchor_code), free(L->near_off);
         L->rows = (uint8_t *)calloc(m, row_bytes);
         L->row_bytes = L->rows ? row_bytes : 0;
     }
@@ -159,13 +204,16 @@ static int ensure(dpc_lists *L, unsigned threads, unsigned k) {
     if (!L->far_pts) L->far_pts = (uint32_t *)malloc(m * sizeof(uint32_t));
     if (!L->near_len) L->near_len = (uint32_t *)malloc(m * sizeof(uint32_t));
     if (!L->hot_off) L->hot_off = (uint32_t *)calloc(m + 1, sizeof(uint32_t));
+    if (!L->extra_off) L->extra_off = (uint32_t *)calloc(m + 1, sizeof(uint32_t));
+    if (!L->near_off) L->near_off = (uint32_t *)calloc(m + 1, sizeof(uint32_t));
+    if (!L->anchor_code) L->anchor_code = (uint8_t *)calloc(DPC_MAX_DIMS / 2 * ANCHOR_COLUMN(m), 1);
     if (L->scratch_slots < threads) {
         free(L->scratch);
         L->scratch = (uint32_t *)malloc((size_t)threads * m * sizeof(uint32_t));
         L->scratch_slots = L->scratch ? threads : 0;
     }
     return L->rows && L->at_build && L->at_refresh && L->heat && L->hot_pts && L->far_pts && L->near_len &&
-           L->hot_off && L->scratch;
+           L->hot_off && L->extra_off && L->near_off && L->anchor_code && L->scratch;
 }
 
 static void reset_buffers(dpc_lists *L) {
@@ -229,10 +277,56 @@ static int refresh(dpc_lists *L, const dpc_sub_job *job, const dpc_near_job *cod
     dpc_near_job at_r1 = *codes;
     at_r1.limit = dpc_near_limit(L->r1);
     scan sc = {L, &at_r1, NULL, list, 0, threads, job, L->k, 0.0, 0.0};
+    for (size_t i = 0; i <= L->m; i++) L->near_off[i] = L->wide_off[i] + L->extra_off[i];
+    if (L->near_off[L->m] > L->near_cap || !L->near) {
+        uint32_t *p = (uint32_t *)realloc(L->near, (L->near_off[L->m] ? L->near_off[L->m] : 1) * sizeof(uint32_t));
+        if (!p) return 0;
+        L->near = p;
+        L->near_cap = L->near_off[L->m];
+    }
     dpc_parallel_ranges(threads, L->m, refresh_range, &sc);
     snapshot(job, L->at_refresh, L->m);
     L->refreshes++;
     return 1;
+}
+
+/* Re-anchor this pass's far points: their anchors (rows and codes) become their positions now,
+ * and each is filtered at r2 against every point's anchor; the pairs found join the extra lists.
+ * Afterwards they count as warm (heat 1). 0: no memory. */
+static int reanchor(dpc_lists *L, const dpc_sub_job *job, const dpc_near_job *codes, const scan *now) {
+    const size_t m = L->m, stride = job->row_stride;
+    dpc_near_job anchors = *codes;
+    anchors.limit = dpc_near_limit(L->r2);
+    for (unsigned p = 0; p < codes->pairs; p++) anchors.code[p] = L->anchor_code + p * ANCHOR_COLUMN(m);
+    for (size_t h = 0; h < L->n_far; h++) {
+        const uint32_t f = L->far_pts[h];
+        memcpy(L->at_build + f * stride, job->row + f * stride, stride * sizeof(float));
+        for (unsigned p = 0; p < codes->pairs; p++)
+            memcpy((uint8_t *)anchors.code[p] + 2 * (size_t)f, codes->code[p] + 2 * (size_t)f, 2);
+        L->heat[f] = 1;
+    }
+    scan sc = *now;
+    sc.codes = &anchors;
+    reset_buffers(L);
+    dpc_parallel_ranges(sc.threads, L->n_far, reanchor_range, &sc);
+    size_t added = 0;
+    for (unsigned t = 0; t < sc.threads; t++) {
+        if (L->buf[t].failed) return 0;
+        added += L->buf[t].n;
+    }
+    if (L->n_extra_pair + added > L->extra_pair_cap) {
+        const size_t cap = 2 * (L->n_extra_pair + added);
+        uint32_t *p = (uint32_t *)realloc(L->extra_pair, 2 * cap * sizeof(uint32_t));
+        if (!p) return 0;
+        L->extra_pair = p;
+        L->extra_pair_cap = cap;
+    }
+    for (unsigned t = 0; t < sc.threads; t++) {
+        memcpy(L->extra_pair + 2 * L->n_extra_pair, L->buf[t].pair, 2 * L->buf[t].n * sizeof(uint32_t));
+        L->n_extra_pair += L->buf[t].n;
+    }
+    L->reanchors++;
+    return csr_from_pairs(m, L->extra_pair, L->n_extra_pair, &L->extra_off, &L->extra, &L->extra_cap);
 }
 
 int dpc_lists_update(dpc_lists *L, uint64_t mask, const dpc_sub_job *job, const dpc_near_job *codes,
@@ -254,15 +348,18 @@ int dpc_lists_update(dpc_lists *L, uint64_t mask, const dpc_sub_job *job, const 
             if (L->heat[s] == 2) L->far_pts[L->n_far++] = (uint32_t)s;
             n_warm += L->heat[s] == 1;
         }
-        /* Rent or buy: far points are scanned against all m each pass, which a build (m^2 / 2
-         * pairs) would end; warm ones cost their wide list, which a refresh (m lists) would end. */
-        L->far_work += (double)L->n_far * (double)m;
-        if (L->n_far <= m / FAR_SHARE && L->far_work <= 0.5 * (double)m * (double)m) {
+        /* Far points are re-anchored (each filtered once against every anchor), unless so many
+         * are far at once, or the pairs so found outgrow the wide lists, that a build pays. */
+        const size_t wide_pairs = L->wide_off[m] / 2;
+        if (L->n_far <= m / FAR_SHARE && L->n_extra_pair <= wide_pairs + m) {
+            if (L->n_far && !reanchor(L, job, codes, &sc)) return L->mask = 0, 0;
+            n_warm += L->n_far; /* re-anchored: warm (moved since the refresh) */
+            /* Rent or buy: warm points cost their lists each pass, which a refresh (m lists) ends. */
             L->warm_work += (double)n_warm;
             if (n_warm > m / WARM_SHARE || L->warm_work > (double)m) {
                 L->warm_work = 0.0; /* the warm points' pairs with the others now come from the near lists */
-                refresh(L, job, codes, list, threads);
-                for (size_t s = 0; s < m; s++) L->heat[s] = L->heat[s] == 2 ? 2 : 0;
+                if (!refresh(L, job, codes, list, threads)) return L->mask = 0, 0;
+                memset(L->heat, 0, m);
                 n_warm = 0;
             }
             size_t n_hot = 0;
@@ -289,22 +386,23 @@ int dpc_lists_update(dpc_lists *L, uint64_t mask, const dpc_sub_job *job, const 
     reset_buffers(L);
     dpc_parallel_ranges(threads, threads, build_range, &sc);
     if (!assemble(L, threads, &L->wide_off, &L->wide, &L->wide_cap, 1)) return L->mask = 0, 0;
-    free(L->near); /* the same offsets as the wide lists */
-    if (!(L->near = (uint32_t *)malloc((L->wide_cap ? L->wide_cap : 1) * sizeof(uint32_t)))) return L->mask = 0, 0;
+    memset(L->extra_off, 0, (m + 1) * sizeof(uint32_t));
+    L->n_extra_pair = 0;
+    for (unsigned p = 0; p < codes->pairs; p++) memcpy(L->anchor_code + p * ANCHOR_COLUMN(m), codes->code[p], 2 * m);
     L->k = k;
     L->r1 = (float)r1;
     L->r2 = (float)r2;
-    refresh(L, job, codes, list, threads);
+    if (!refresh(L, job, codes, list, threads)) return L->mask = 0, 0;
     snapshot(job, L->at_build, m);
     memset(L->hot_off, 0, (m + 1) * sizeof(uint32_t));
-    L->far_work = L->warm_work = 0.0;
+    L->warm_work = 0.0;
     L->mask = mask;
     L->builds++;
     return 1;
 }
 
 const uint32_t *dpc_lists_candidates(const dpc_lists *L, uint32_t s, uint32_t *buf, unsigned cap, unsigned *n) {
-    const uint32_t *near = L->near + L->wide_off[s];
+    const uint32_t *near = L->near + L->near_off[s];
     const uint32_t ae = L->near_len[s], be = L->hot_off[s + 1] - L->hot_off[s];
     if (be == 0) { /* the near list as it is (it never holds s: builds leave each point out of its own) */
         *n = ae;
