@@ -46,7 +46,6 @@ typedef struct scan {
     size_t limit; /* pairs per worker */
     unsigned threads;
     const dpc_sub_job *job; /* heat_range, rows_range: the positions now, the move thresholds */
-    unsigned k;
     double t1, t2;
 } scan;
 
@@ -130,15 +129,13 @@ static int cmp_u32(const void *a, const void *b) {
     return (x > y) - (x < y);
 }
 
-/* The workers' pairs as CSR lists (both directions), placed in slot and pair order; each list is
- * sorted afterwards unless `sorted` (a build's pairs come in order, build_range). */
-static int assemble(dpc_lists *L, unsigned threads, uint32_t **off, uint32_t **list, size_t *cap, int sorted) {
-    const size_t m = L->m;
+/* Pairs (2 per pair, in `segments` arrays of n[g] pairs) as CSR lists, both directions, placed
+ * in segment and pair order; each list is sorted afterwards unless `sorted` (a build's pairs come
+ * in order, build_range). */
+static int csr(size_t m, const uint32_t *const *seg, const size_t *n, unsigned segments, uint32_t **off,
+               uint32_t **list, size_t *cap, int sorted) {
     size_t total = 0;
-    for (unsigned t = 0; t < threads; t++) {
-        if (L->buf[t].failed) return 0;
-        total += 2 * L->buf[t].n;
-    }
+    for (unsigned g = 0; g < segments; g++) total += 2 * n[g];
     if (!*off && !(*off = (uint32_t *)malloc((m + 1) * sizeof(uint32_t)))) return 0;
     if (total > *cap || !*list) {
         uint32_t *p = (uint32_t *)realloc(*list, (total ? total : 1) * sizeof(uint32_t));
@@ -148,12 +145,12 @@ static int assemble(dpc_lists *L, unsigned threads, uint32_t **off, uint32_t **l
     }
     uint32_t *o = *off;
     memset(o, 0, (m + 1) * sizeof(uint32_t));
-    for (unsigned t = 0; t < threads; t++)
-        for (size_t c = 0; c < 2 * L->buf[t].n; c++) o[L->buf[t].pair[c] + 1]++;
+    for (unsigned g = 0; g < segments; g++)
+        for (size_t c = 0; c < 2 * n[g]; c++) o[seg[g][c] + 1]++;
     for (size_t i = 0; i < m; i++) o[i + 1] += o[i];
-    for (unsigned t = 0; t < threads; t++) /* place with cursors o[i], then restore the starts */
-        for (size_t c = 0; c < L->buf[t].n; c++) {
-            const uint32_t a = L->buf[t].pair[2 * c], b = L->buf[t].pair[2 * c + 1];
+    for (unsigned g = 0; g < segments; g++) /* place with cursors o[i], then restore the starts */
+        for (size_t c = 0; c < n[g]; c++) {
+            const uint32_t a = seg[g][2 * c], b = seg[g][2 * c + 1];
             (*list)[o[a]++] = b;
             (*list)[o[b]++] = a;
         }
@@ -165,40 +162,29 @@ static int assemble(dpc_lists *L, unsigned threads, uint32_t **off, uint32_t **l
     return 1;
 }
 
-/* A CSR of pairs (both directions), each list sorted. */
-static int csr_from_pairs(size_t m, const uint32_t *pair, size_t n, uint32_t **off, uint32_t **list, size_t *cap) {
-    if (!*off && !(*off = (uint32_t *)malloc((m + 1) * sizeof(uint32_t)))) return 0;
-    if (2 * n > *cap || !*list) {
-        uint32_t *p = (uint32_t *)realloc(*list, (n ? 2 * n : 1) * sizeof(uint32_t));
-        if (!p) return 0;
-        *list = p;
-        *cap = 2 * n;
+/* The workers' pairs (csr, one segment per worker); 0 when a worker ran out of room. */
+static int assemble(dpc_lists *L, unsigned threads, uint32_t **off, uint32_t **list, size_t *cap, int sorted) {
+    const uint32_t *seg[DPC_MAX_THREADS];
+    size_t n[DPC_MAX_THREADS];
+    for (unsigned t = 0; t < threads; t++) {
+        if (L->buf[t].failed) return 0;
+        seg[t] = L->buf[t].pair;
+        n[t] = L->buf[t].n;
     }
-    uint32_t *o = *off;
-    memset(o, 0, (m + 1) * sizeof(uint32_t));
-    for (size_t c = 0; c < 2 * n; c++) o[pair[c] + 1]++;
-    for (size_t i = 0; i < m; i++) o[i + 1] += o[i];
-    for (size_t c = 0; c < n; c++) {
-        (*list)[o[pair[2 * c]]++] = pair[2 * c + 1];
-        (*list)[o[pair[2 * c + 1]]++] = pair[2 * c];
-    }
-    for (size_t i = m; i > 0; i--) o[i] = o[i - 1];
-    o[0] = 0;
-    for (size_t i = 0; i < m; i++)
-        if (o[i + 1] - o[i] > 1) qsort(*list + o[i], o[i + 1] - o[i], sizeof(uint32_t), cmp_u32);
-    return 1;
+    return csr(L->m, seg, n, threads, off, list, cap, sorted);
 }
 
 static int ensure(dpc_lists *L, unsigned threads, unsigned k) {
     const size_t m = L->m;
-    const unsigned row_bytes = (k + 15) / 16 * 16;
-    if (row_bytes > L->row_bytes) {
-        free(L->rows), free(L->extra_off), free(L->extra), free(L->extra_pair), free(L->anchor_code), free(L->near_off);
-        L->rows = (uint8_t *)calloc(m, row_bytes);
-        L->row_bytes = L->rows ? row_bytes : 0;
+    const unsigned row = (k + 15) / 16 * 16; /* bytes of a code row, floats of a snapshot row (job->row_stride) */
+    if (row > L->row_bytes) {
+        free(L->rows), free(L->at_build), free(L->at_refresh);
+        L->rows = (uint8_t *)calloc(m, row);
+        L->at_build = (float *)malloc(m * row * sizeof(float));
+        L->at_refresh = (float *)malloc(m * row * sizeof(float));
+        L->row_bytes = L->rows && L->at_build && L->at_refresh ? row : 0;
+        L->mask = 0; /* the snapshots are gone */
     }
-    if (!L->at_build) L->at_build = (float *)malloc(m * DPC_MAX_DIMS * sizeof(float)); /* rows of <= 64 floats */
-    if (!L->at_refresh) L->at_refresh = (float *)malloc(m * DPC_MAX_DIMS * sizeof(float));
     if (!L->heat) L->heat = (uint8_t *)malloc(m);
     if (!L->hot_pts) L->hot_pts = (uint32_t *)malloc(m * sizeof(uint32_t));
     if (!L->far_pts) L->far_pts = (uint32_t *)malloc(m * sizeof(uint32_t));
@@ -220,12 +206,12 @@ static void reset_buffers(dpc_lists *L) {
     for (unsigned t = 0; t < DPC_MAX_THREADS; t++) L->buf[t].n = 0, L->buf[t].failed = 0;
 }
 
-/* Squared torus distance of a point now from its position at a snapshot (rows of
- * job->row_stride floats), in float: the thresholds it is compared with carry a margin for its
- * rounding (a relative 1e-6, where the margin is 1e-4). */
 typedef float v4 __attribute__((vector_size(16)));
 typedef int32_t i4 __attribute__((vector_size(16)));
 
+/* Squared torus distance of a point now from its position at a snapshot (rows of
+ * job->row_stride floats), in float: the thresholds it is compared with carry a margin for its
+ * rounding (a relative 1e-6, where the margin is 1e-4). */
 static float moved2(const float *now, const float *at, unsigned stride) {
     v4 d2 = {0.0f, 0.0f, 0.0f, 0.0f};
     for (unsigned q = 0; q < stride; q += 4) { /* whole rows (zero past k), four dimensions at a time */
@@ -249,7 +235,7 @@ static void snapshot(const dpc_sub_job *job, float *at, size_t m) {
 static void rows_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
     (void)slot;
     const scan *sc = (const scan *)ctx;
-    const unsigned k = sc->k, stride = sc->job->row_stride;
+    const unsigned k = sc->job->k, stride = sc->job->row_stride;
     for (size_t j = lo; j < hi; j++) {
         uint8_t *row = sc->L->rows + j * sc->L->row_bytes;
         const float *x = sc->job->row + j * stride;
@@ -276,7 +262,7 @@ static int refresh(dpc_lists *L, const dpc_sub_job *job, const dpc_near_job *cod
                    unsigned threads) {
     dpc_near_job at_r1 = *codes;
     at_r1.limit = dpc_near_limit(L->r1);
-    scan sc = {L, &at_r1, NULL, list, 0, threads, job, L->k, 0.0, 0.0};
+    scan sc = {L, &at_r1, NULL, list, 0, threads, job, 0.0, 0.0};
     for (size_t i = 0; i <= L->m; i++) L->near_off[i] = L->wide_off[i] + L->extra_off[i];
     if (L->near_off[L->m] > L->near_cap || !L->near) {
         uint32_t *p = (uint32_t *)realloc(L->near, (L->near_off[L->m] ? L->near_off[L->m] : 1) * sizeof(uint32_t));
@@ -326,7 +312,8 @@ static int reanchor(dpc_lists *L, const dpc_sub_job *job, const dpc_near_job *co
         L->n_extra_pair += L->buf[t].n;
     }
     L->reanchors++;
-    return csr_from_pairs(m, L->extra_pair, L->n_extra_pair, &L->extra_off, &L->extra, &L->extra_cap);
+    const uint32_t *all = L->extra_pair;
+    return csr(m, &all, &L->n_extra_pair, 1, &L->extra_off, &L->extra, &L->extra_cap, 0);
 }
 
 int dpc_lists_update(dpc_lists *L, uint64_t mask, const dpc_sub_job *job, const dpc_near_job *codes,
@@ -336,7 +323,7 @@ int dpc_lists_update(dpc_lists *L, uint64_t mask, const dpc_sub_job *job, const 
     const double r = job->radius * (1.0 + 1e-4); /* a margin for the kernel's float32 distances */
     if (threads < 1) threads = 1;
     if (!ensure(L, threads, k)) return L->mask = 0, 0;
-    scan sc = {L, codes, points, list, PAIRS_PER_POINT * m / threads + 1024, threads, job, k, 0.0, 0.0};
+    scan sc = {L, codes, points, list, PAIRS_PER_POINT * m / threads + 1024, threads, job, 0.0, 0.0};
     dpc_parallel_ranges(threads, m, rows_range, &sc);
     if (L->mask == mask && L->k == k && r < L->r1) {
         sc.t1 = 0.5 * ((double)L->r1 - r);
@@ -413,7 +400,7 @@ const uint32_t *dpc_lists_candidates(const dpc_lists *L, uint32_t s, uint32_t *b
     unsigned got = 0;
     while (a < ae || b < be) { /* the two ascending lists merged */
         const uint32_t j = (b >= be || (a < ae && near[a] <= hot[b])) ? near[a++] : hot[b++];
-        if (j == s || (got && buf[got - 1] == j)) continue;
+        if (got && buf[got - 1] == j) continue; /* neither list holds s (wide_and_extra leaves it out) */
         if (got == cap) return NULL;
         buf[got++] = j;
     }

@@ -64,7 +64,7 @@ typedef struct dpc_lists {
     uint32_t *far_pts; /* this pass's far points */
     size_t n_far;
     double warm_work; /* warm points handled since the refresh */
-    uint8_t *rows;    /* m x row_bytes: the codes as rows (cpu_near.h) */
+    uint8_t *rows;    /* m x row_bytes: the codes as rows (cpu_near.h); row_bytes = job->row_stride */
     unsigned row_bytes;
     uint32_t *scratch; /* per worker: m indices */
     unsigned scratch_slots;
