@@ -13,6 +13,7 @@ from .errors import InvalidArgumentError
 DEFAULT_MODEL = "bnot-2d-stratified"
 MAX_SPP = int(_core.SAMPLER_MAX_SPP)  # DPC_SAMPLER_MAX_SPP
 MAX_DIMENSIONS = int(_core.SAMPLER_MAX_DIMENSIONS)  # DPC_SAMPLER_MAX_DIMENSIONS
+NO_FOLD = int(_core.SAMPLER_NO_FOLD)  # DPC_SAMPLER_NO_FOLD
 
 
 def _integer(value, name: str, low: int, high: int) -> int:
@@ -44,16 +45,25 @@ class Sampler:
     Each of the ``dimensions`` slots holds one dpc point set of ``samples_per_pixel`` points
     (made once on libdpc's CPU backend, so every machine gets the same values); each pixel
     reads it rotated and toroidally shifted by its entry of a 32 x 32 screen-space mask, so
-    neighbouring pixels' errors cancel at low screen frequencies. docs/rendering.md defines
-    every step. Values are float32 in [0, 1); the same C object backs the C API, the Mitsuba
-    plugin and this class, so all three give the same bits.
+    neighbouring pixels' errors cancel at low screen frequencies. Dimensions from ``fold_from``
+    on (default 1: all but dimension 0, the pixel position) are folded by the baker's transform
+    ``1 - |2v - 1|``, which makes smooth integrands periodic over the shifted table; ``None``
+    folds none. docs/rendering.md defines every step. Values are float32 in [0, 1); the same C
+    object backs the C API, the Mitsuba plugin and this class, so all three give the same bits.
 
     >>> s = dpc.Sampler("bnot-2d-stratified", samples_per_pixel=16)
     >>> s.get_2d(x=np.arange(640)[None, :], y=np.arange(480)[:, None], index=0, dimension=0).shape
     (480, 640, 2)
     """
 
-    def __init__(self, models=DEFAULT_MODEL, samples_per_pixel: int = 16, dimensions: int = 16, seed: int = 0):
+    def __init__(
+        self,
+        models=DEFAULT_MODEL,
+        samples_per_pixel: int = 16,
+        dimensions: int = 16,
+        seed: int = 0,
+        fold_from: int | None = 1,
+    ):
         if isinstance(models, (str, bytes)) or isinstance(models, Model) or hasattr(models, "__fspath__"):
             models = [models]
         models = list(models)
@@ -63,13 +73,20 @@ class Sampler:
         self.samples_per_pixel = _integer(samples_per_pixel, "samples_per_pixel", 1, MAX_SPP)
         self.dimensions = _integer(dimensions, "dimensions", 1, MAX_DIMENSIONS)
         self.seed = _integer(seed, "seed", 0, (1 << 64) - 1)
-        self._h = _core.Sampler([m._h for m in self.models], self.samples_per_pixel, self.dimensions, self.seed)
+        self.fold_from = None if fold_from is None else _integer(fold_from, "fold_from", 0, NO_FOLD - 1)
+        self._h = _core.Sampler(
+            [m._h for m in self.models],
+            self.samples_per_pixel,
+            self.dimensions,
+            self.seed,
+            NO_FOLD if self.fold_from is None else self.fold_from,
+        )
 
     def __repr__(self) -> str:
         names = ", ".join(m.name for m in self.models)
         return (
             f"dpc.Sampler([{names}], samples_per_pixel={self.samples_per_pixel}, "
-            f"dimensions={self.dimensions}, seed={self.seed})"
+            f"dimensions={self.dimensions}, seed={self.seed}, fold_from={self.fold_from})"
         )
 
     def _lookup(self, x, y, index, dimension, width: int) -> np.ndarray:

@@ -19,7 +19,8 @@ struct SamplerDeleter {
 };
 using SamplerPtr = std::unique_ptr<dpc_sampler, SamplerDeleter>;
 
-SamplerPtr make(const std::vector<const dpc_model *> &models, uint32_t spp, uint32_t dims, uint64_t seed) {
+SamplerPtr make(const std::vector<const dpc_model *> &models, uint32_t spp, uint32_t dims, uint64_t seed,
+                uint32_t fold_from = 1) {
     dpc_sampler_options o;
     dpc_sampler_options_init(&o);
     o.models = models.data();
@@ -27,6 +28,7 @@ SamplerPtr make(const std::vector<const dpc_model *> &models, uint32_t spp, uint
     o.samples_per_pixel = spp;
     o.dimensions = dims;
     o.seed = seed;
+    o.fold_from = fold_from;
     dpc_sampler *s = nullptr;
     EXPECT_EQ(dpc_sampler_create(&o, &s), DPC_OK) << dpc_last_error();
     return SamplerPtr(s);
@@ -49,6 +51,7 @@ TEST(SamplerOptions, InitSetsDocumentedDefaults) {
     EXPECT_EQ(o.n_models, 0u);
     EXPECT_EQ(o.samples_per_pixel, 16u);
     EXPECT_EQ(o.dimensions, 16u);
+    EXPECT_EQ(o.fold_from, 1u);
     EXPECT_EQ(o.seed, 0u);
     dpc_sampler_options_init(nullptr); // no-op
 }
@@ -196,7 +199,7 @@ TEST(SamplerDeterminism, ModelsMayBeFreedAfterCreate) {
 TEST(SamplerStructure, EachPixelGetsItsTableShiftedAndALattice) {
     ModelPtr m = load(model_path("model_2d"));
     const uint32_t n = 16;
-    SamplerPtr s = make({m.get()}, n, 4, 3);
+    SamplerPtr s = make({m.get()}, n, 4, 3, DPC_SAMPLER_NO_FOLD);
     for (uint32_t d = 0; d < 6; d++) { // d >= 4 reuses table d mod 4
         std::vector<float> tab = table_of(s.get(), d % 4, n);
         for (uint32_t p = 0; p < 5; p++) {
@@ -229,6 +232,32 @@ TEST(SamplerStructure, EachPixelGetsItsTableShiftedAndALattice) {
             for (uint32_t i = 1; i < n; i++) EXPECT_NEAR(one[i] - one[i - 1], 1.0 / n, 1e-6);
         }
     }
+}
+
+// Dimensions >= fold_from give the baker's transform of the unfolded value, on every path (the
+// precomputed first 64 dimensions, later passes, dimensions past them), in [0, 1).
+TEST(SamplerStructure, FoldedDimensionsAreTheBakerTransformOfTheUnfolded) {
+    ModelPtr m = load(model_path("model_2d"));
+    SamplerPtr plain = make({m.get()}, 8, 70, 5, DPC_SAMPLER_NO_FOLD);
+    SamplerPtr folded = make({m.get()}, 8, 70, 5, 2);
+    auto fold = [](float v) { return v < 0.5f ? 2.0f * v : 2.0f * (1.0f - v) - 0x1p-24f; };
+    for (uint32_t d : {0u, 1u, 2u, 3u, 63u, 64u, 69u, 71u, 500u})
+        for (uint32_t i : {0u, 7u, 8u, 29u})
+            for (uint32_t x : {0u, 5u, 1000u}) {
+                float a[2], b[2], a1, b1;
+                dpc_sampler_get_2d(plain.get(), x, x + 3, i, d, a);
+                dpc_sampler_get_2d(folded.get(), x, x + 3, i, d, b);
+                dpc_sampler_get_1d(plain.get(), x, x + 3, i, d, &a1);
+                dpc_sampler_get_1d(folded.get(), x, x + 3, i, d, &b1);
+                const bool f = d >= 2;
+                EXPECT_EQ(b[0], f ? fold(a[0]) : a[0]) << d << " " << i << " " << x;
+                EXPECT_EQ(b[1], f ? fold(a[1]) : a[1]) << d << " " << i << " " << x;
+                EXPECT_EQ(b1, f ? fold(a1) : a1) << d << " " << i << " " << x;
+                EXPECT_TRUE(b[0] >= 0.0f && b[0] < 1.0f && b[1] >= 0.0f && b[1] < 1.0f && b1 >= 0.0f && b1 < 1.0f);
+            }
+    EXPECT_EQ(fold(0.5f), 1.0f - 0x1p-24f);
+    EXPECT_EQ(fold(1.0f - 0x1p-24f), 0x1p-24f);
+    EXPECT_EQ(fold(0.0f), 0.0f);
 }
 
 TEST(SamplerThreads, ConcurrentLookupsMatchSerialOnes) {

@@ -32,6 +32,14 @@ def wrap(a, b) -> np.float32:
     return F32(t - F32(1.0)) if t >= F32(1.0) else t
 
 
+def fold(v) -> np.float32:
+    """The baker's transform on the 2^-24 grid: 2v below 1/2, 2(1 - v) - 2^-24 from 1/2 on."""
+    v = F32(v)
+    if v < F32(0.5):
+        return F32(F32(2.0) * v)
+    return F32(F32(F32(2.0) * F32(F32(1.0) - v)) - F32(2.0**-24))
+
+
 def stratify(table: np.ndarray) -> np.ndarray:
     """Each coordinate -> (rank + 1/2) / n, ties ranked by position."""
     n = len(table)
@@ -45,8 +53,9 @@ def stratify(table: np.ndarray) -> np.ndarray:
 
 
 class ReferenceSampler:
-    def __init__(self, model_paths, spp: int, dims: int, seed: int):
+    def __init__(self, model_paths, spp: int, dims: int, seed: int, fold_from: int | None = 1):
         self.n, self.D, self.base = spp, dims, mix64(seed)
+        self.fold_from = fold_from  # None: no dimension folded
         models = [dpc.load(p, isa="scalar", threads=1) for p in model_paths]
         # progressive models: tables read in order (rotation range 0), 1-D strata by x rank
         self.progressive = models[0].order == "progressive"
@@ -81,11 +90,18 @@ class ReferenceSampler:
     def get_2d(self, x: int, y: int, index: int, dim: int) -> np.ndarray:
         t, j, m, c = self._locate(x, y, index, dim)
         p = self.tables[t][j]
-        return np.array([wrap(p[0], wrap(m[0], c[0])), wrap(p[1], wrap(m[1], c[1]))], dtype=F32)
+        v = [wrap(p[0], wrap(m[0], c[0])), wrap(p[1], wrap(m[1], c[1]))]
+        if self._folds(dim):
+            v = [fold(a) for a in v]
+        return np.array(v, dtype=F32)
+
+    def _folds(self, dim: int) -> bool:
+        return self.fold_from is not None and dim >= self.fold_from
 
     def get_1d(self, x: int, y: int, index: int, dim: int) -> np.float32:
         t, j, m, c = self._locate(x, y, index, dim)
         u = wrap(m[2], c[0])
         i = int(F32(self.tables[t][j][0] * F32(self.n))) if self.progressive else j
         lattice = F32(F32(F32(i) + u) * F32(F32(1.0) / F32(self.n)))
-        return wrap(lattice if lattice < F32(1.0) else F32(0.0), c[1])
+        v = wrap(lattice if lattice < F32(1.0) else F32(0.0), c[1])
+        return fold(v) if self._folds(dim) else v

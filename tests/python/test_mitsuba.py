@@ -48,6 +48,7 @@ def test_loads_from_xml_with_every_property():
           <string name="model" value="bnot-2d-stratified,bnot-4d"/>
           <integer name="dimensions" value="6"/>
           <integer name="block_size" value="32"/>
+          <integer name="fold_from" value="-1"/>
         </sampler>
         <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film>
       </sensor>
@@ -56,7 +57,7 @@ def test_loads_from_xml_with_every_property():
     scene = mi.load_string(xml)
     sampler = scene.sensors()[0].sampler()
     assert sampler.sample_count() == 8
-    assert "bnot-2d-stratified,bnot-4d" in str(sampler)
+    assert "bnot-2d-stratified,bnot-4d" in str(sampler) and "fold_from = none" in str(sampler)
     img = np.array(mi.render(scene))
     assert img.shape == (16, 16, 3) and np.all(np.isfinite(img))
 
@@ -65,7 +66,7 @@ def test_values_are_those_of_dpc_sampler():
     """The plugin asks libdpc for (pixel in its 32x32 block, sample index, dimension): a fork
     seeded like Mitsuba's renderer seeds pixel (x, y) of block b gives dpc.Sampler's values."""
     plugin = mi.load_dict({"type": "dpc", "sample_count": 4, "seed": 9, "dimensions": 3})
-    ref = dpc.Sampler("bnot-2d-stratified", samples_per_pixel=4, dimensions=3, seed=9)
+    ref = dpc.Sampler("bnot-2d-stratified", samples_per_pixel=4, dimensions=3, seed=9)  # both fold from 1
     block_base = 5 * 1024 + 77  # a fork's first seed starts a block, whatever the render seed
     fork = plugin.fork()
     fork.seed(block_base)
@@ -101,6 +102,7 @@ def test_bad_properties_say_what_is_wrong():
         ({"model": "no-such-model"}, "no-such-model"),
         ({"dimensions": 0}, "dimensions"),
         ({"block_size": 48}, "block_size"),
+        ({"fold_from": -2}, "fold_from"),
         ({"sample_count": 0}, "samples_per_pixel"),
     ]:
         with pytest.raises(Exception, match=says):

@@ -20,21 +20,22 @@ PROGRESSIVE = dpc.model_path("progressive-2d")
 
 
 @pytest.mark.parametrize(
-    "models,spp,dims,seed",
+    "models,spp,dims,seed,fold_from",
     [
-        ([BNOT], 16, 4, 0),
-        ([BNOT], 5, 3, 12345),  # spp not a power of two
-        ([BNOT], 1, 2, 7),
-        ([dpc.model_path("bnot-4d"), BNOT], 8, 5, 2**64 - 1),  # 4-D model fills two slots per set
-        ([DATA / "model_3d_mixed.onnx"], 12, 3, 99),  # odd dims: the last is left out
-        ([BNOT], 3, 70, 5),  # past the 64 dimensions with precomputed shifted masks
-        ([PROGRESSIVE], 64, 4, 3),  # progressive: tables in order, 1-D strata by x rank
-        ([PROGRESSIVE], 48, 70, 8),
+        ([BNOT], 16, 4, 0, 1),
+        ([BNOT], 16, 4, 0, None),  # no dimension folded
+        ([BNOT], 5, 3, 12345, 0),  # spp not a power of two; every dimension folded
+        ([BNOT], 1, 2, 7, 1),
+        ([dpc.model_path("bnot-4d"), BNOT], 8, 5, 2**64 - 1, 3),  # 4-D model fills two slots per set
+        ([DATA / "model_3d_mixed.onnx"], 12, 3, 99, 1),  # odd dims: the last is left out
+        ([BNOT], 3, 70, 5, 66),  # past the 64 dimensions with precomputed shifted masks
+        ([PROGRESSIVE], 64, 4, 3, 1),  # progressive: tables in order, 1-D strata by x rank
+        ([PROGRESSIVE], 48, 70, 8, None),
     ],
 )
-def test_lookups_match_the_reference_bit_for_bit(models, spp, dims, seed):
-    s = dpc.Sampler(models, samples_per_pixel=spp, dimensions=dims, seed=seed)
-    ref = ReferenceSampler(models, spp, dims, seed)
+def test_lookups_match_the_reference_bit_for_bit(models, spp, dims, seed, fold_from):
+    s = dpc.Sampler(models, samples_per_pixel=spp, dimensions=dims, seed=seed, fold_from=fold_from)
+    ref = ReferenceSampler(models, spp, dims, seed, fold_from)
     for t in range(dims):
         assert np.array_equal(s.table(t), ref.tables[t]), f"table {t}"
     rng = np.random.default_rng(seed % 1000)
@@ -62,7 +63,7 @@ def test_shapes_broadcast_and_range():
 
 def test_structure_each_pixel_gets_the_table_shifted_and_a_stratified_lattice():
     n = 16
-    s = dpc.Sampler(samples_per_pixel=n, dimensions=4, seed=5)
+    s = dpc.Sampler(samples_per_pixel=n, dimensions=4, seed=5, fold_from=None)
     for x, y, d in [(0, 0, 0), (17, 3, 2), (-5, 40, 3)]:
         pts = s.get_2d(x, y, np.arange(n), d).astype(np.float64)
         table = s.table(d).astype(np.float64)
@@ -83,7 +84,7 @@ def test_progressive_pixels_read_the_table_in_order():
     first 2^k samples are the table's prefix of 2^k points (a blue-noise set of its own); later
     passes are the whole table again, shifted anew."""
     n = 64
-    s = dpc.Sampler(PROGRESSIVE, samples_per_pixel=n, dimensions=3, seed=2)
+    s = dpc.Sampler(PROGRESSIVE, samples_per_pixel=n, dimensions=3, seed=2, fold_from=None)
     for x, y, d in [(0, 0, 0), (17, 3, 2), (-5, 40, 1)]:
         table = s.table(d).astype(np.float64)
         pts = s.get_2d(x, y, np.arange(2 * n), d).astype(np.float64)
@@ -98,6 +99,54 @@ def test_progressive_pixels_read_the_table_in_order():
         assert np.array_equal((strata - strata[0]) % n, (ranks - ranks[0]) % n)
     with pytest.raises(dpc.InvalidArgumentError, match="progressive"):
         dpc.Sampler([PROGRESSIVE, BNOT])
+
+
+def test_folded_dimensions_are_the_baker_transform_of_the_unfolded():
+    """fold_from = 1 (the default): dimension 0 as without folding, every later one v -> 1 - |2v - 1|
+    on the 2^-24 grid, which keeps values in [0, 1) and maps the grid onto itself."""
+    plain = dpc.Sampler(samples_per_pixel=16, dimensions=4, seed=3, fold_from=None)
+    folded = dpc.Sampler(samples_per_pixel=16, dimensions=4, seed=3)
+    assert folded.fold_from == 1 and "fold_from=1" in repr(folded)
+    xs, ys = np.meshgrid(np.arange(40), np.arange(40))
+    for d in range(6):
+        for get in ("get_1d", "get_2d"):
+            v = getattr(plain, get)(xs, ys, 3, d).astype(np.float64)
+            w = getattr(folded, get)(xs, ys, 3, d).astype(np.float64)
+            if d == 0:
+                assert np.array_equal(v, w)
+            else:
+                assert np.array_equal(w, np.where(v < 0.5, 2 * v, 2 * (1 - v) - 2.0**-24))
+                assert w.min() >= 0 and w.max() < 1
+    grid = np.arange(1 << 24, dtype=np.float64) / (1 << 24)
+    image = np.where(grid < 0.5, 2 * grid, 2 * (1 - grid) - 2.0**-24)
+    assert np.array_equal(np.sort(image), grid)  # a bijection of the grid: uniform stays uniform
+
+
+def test_folding_makes_smooth_non_periodic_integrands_converge_faster():
+    """The reason for folding (docs/rendering.md): a Gaussian lobe in the unit square is not
+    periodic, so a shifted table sees a jump at its wrap; folded, the integrand is periodic and
+    continuous. For 24 lobes (random centres, widths 0.1-0.4) over 48 seeds at 64 spp, the folded
+    estimates' mean squared error is below half the unfolded ones' (0.30 of it here)."""
+    n, seeds = 64, 48
+    rng = np.random.default_rng(5)
+    centres, widths = rng.uniform(0, 1, (24, 2)), rng.uniform(0.1, 0.4, 24)
+
+    def f(p):  # (n, 2) -> the 24 lobes' estimates
+        return np.exp(-((p[None] - centres[:, None]) ** 2).sum(-1) / (2 * widths[:, None] ** 2)).mean(-1)
+
+    g = (np.arange(1000) + 0.5) / 1000
+    grid = np.stack(np.meshgrid(g, g), -1).reshape(-1, 2)
+    exact = np.array([np.exp(-((grid - c) ** 2).sum(-1) / (2 * w * w)).mean() for c, w in zip(centres, widths)])
+    err = {}
+    for fold_from in (None, 0):
+        est = np.stack(
+            [
+                f(dpc.Sampler(samples_per_pixel=n, dimensions=1, seed=s, fold_from=fold_from).get_2d(0, 0, np.arange(n), 0))
+                for s in range(seeds)
+            ]
+        )
+        err[fold_from] = ((est - exact) ** 2).mean()
+    assert err[0] < 0.5 * err[None], err
 
 
 def test_same_options_same_values_and_threads_agree():
@@ -132,6 +181,9 @@ def test_same_options_same_values_and_threads_agree():
         dict(seed=2**64),
         dict(seed=1.5),
         dict(models=[]),
+        dict(fold_from=-1),
+        dict(fold_from=2**32 - 1),
+        dict(fold_from=1.0),
     ],
 )
 def test_bad_options_are_invalid_argument_errors(kwargs):

@@ -322,7 +322,7 @@ DPC_API dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, f
  * space at low sample counts). docs/rendering.md defines every step and the reasoning.
  *
  * - Values are in [0, 1). Every value is a pure function of (the models' files, their input
- *   kinds, spp, D, seed, x, y, i, d), the same bits across runs, threads and machines (IEEE-754
+ *   kinds, spp, D, fold_from, seed, x, y, i, d), the same bits across runs, threads and machines (IEEE-754
  *   float arithmetic in a fixed order; no FMA contraction).
  * - Any pixel: x and y are taken modulo 2^32 (negative coordinates cast to uint32_t tile
  *   seamlessly). Any dimension: d >= D reuses table d mod D with its own index rotation and
@@ -337,6 +337,8 @@ DPC_API dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, f
  * - get_1d draws from the stratified lattice (j + u) / spp (one value per stratum, u the pixel's
  *   mask value), get_2d from the model's set; dimension d of get_1d and of get_2d share their
  *   index rotation and shift, so use each dimension for one of them.
+ * - Dimensions from options.fold_from on (default 1: all but the pixel position, dimension 0)
+ *   are folded by the baker's transform, which makes smooth integrands periodic over the table.
  * - A created sampler is immutable: lookups take no lock, allocate nothing and may run on any
  *   number of threads. It does not keep the models: they may be freed after dpc_sampler_create.
  *   To stay within a few nanoseconds, lookups leave the thread's error message alone unless
@@ -363,8 +365,19 @@ typedef struct dpc_sampler_options {
     uint32_t n_models;          /* >= 1 */
     uint32_t samples_per_pixel; /* spp: points per table, 1 .. DPC_SAMPLER_MAX_SPP (default 16) */
     uint32_t dimensions;        /* D: tables, 1 .. DPC_SAMPLER_MAX_DIMENSIONS (default 16) */
-    uint64_t seed;              /* default 0 */
+    /* Dimensions d >= fold_from return their value v folded by the baker's (tent) transform
+     * 1 - |2v - 1| (on the 2^-24 grid: 2v below 1/2, 2(1 - v) - 2^-24 from 1/2 on, a bijection
+     * of the grid, so values stay uniform). A shifted table wraps around the unit square, where
+     * a renderer's integrands (a light's area, a BSDF lobe) are not periodic: the wrap is a jump
+     * the points must integrate. Folded, every continuous integrand is periodic, and on the
+     * soft-shadow scene of docs/rendering.md the MSE halves; the cost is twice the length of the
+     * integrand's own discontinuities, which is why dimension 0, the pixel position (geometry
+     * edges), is left as it is. Default 1; DPC_SAMPLER_NO_FOLD for none, 0 for all. */
+    uint32_t fold_from;
+    uint64_t seed; /* default 0 */
 } dpc_sampler_options;
+
+#define DPC_SAMPLER_NO_FOLD 0xFFFFFFFFu
 
 /* Fill *options with the defaults (no models: set models and n_models). */
 DPC_API void dpc_sampler_options_init(dpc_sampler_options *options);

@@ -14,6 +14,7 @@ void dpc_sampler_options_init(dpc_sampler_options *options) {
     options->struct_size = (uint32_t)sizeof *options;
     options->samples_per_pixel = 16;
     options->dimensions = 16;
+    options->fold_from = 1;
 }
 
 static dpc_status check_options(const dpc_sampler_options *o) {

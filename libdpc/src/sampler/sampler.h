@@ -34,6 +34,7 @@ struct dpc_sampler {
     uint64_t seed;
     uint64_t base; /* mix64 of the seed: the root of every key */
     float inv_spp; /* 1 / n, for 1-D values */
+    uint32_t fold_from; /* dimensions >= fold_from are folded (dpc_sampler_fold) */
     /* The range of a pixel's rotation of the sample index: n for set models; 0 for progressive
      * models (format §6), whose tables are read in order so that the first 2^k samples of a
      * pixel are a progressive prefix. */
@@ -96,6 +97,11 @@ static inline float dpc_sampler_wrap(float a, float b) {
     return t - one;
 #endif
 }
+
+/* The baker's (tent) transform 1 - |2v - 1| as a bijection of the 2^-24 grid of [0, 1): 2v below
+ * 1/2, 2(1 - v) - 2^-24 from 1/2 on. Every step is exact (1 - v by Sterbenz, the doubling, and
+ * the result, a multiple of 2^-24 in [2^-24, 1 - 2^-24]), so contraction cannot change it. */
+static inline float dpc_sampler_fold(float v) { return v < 0.5f ? 2.0f * v : 2.0f * (1.0f - v) - 0x1p-24f; }
 
 typedef struct dpc_sampler_point {
     uint32_t table; /* t = dim mod D */
@@ -173,6 +179,10 @@ static inline dpc_status dpc_sampler_lookup_2d(const struct dpc_sampler *s, uint
     const float *t = s->tables + ((size_t)dim * s->spp + dpc_sampler_fast_j(s, x, y, index, dim)) * 2;
     out[0] = dpc_sampler_wrap(t[0], m[0]);
     out[1] = dpc_sampler_wrap(t[1], m[1]);
+    if (dim >= s->fold_from) {
+        out[0] = dpc_sampler_fold(out[0]);
+        out[1] = dpc_sampler_fold(out[1]);
+    }
     return DPC_OK;
 }
 
@@ -192,7 +202,8 @@ static inline dpc_status dpc_sampler_lookup_1d(const struct dpc_sampler *s, uint
                                                uint32_t dim, float *out) {
     if (index >= s->spp || dim >= s->fast_slots) return dpc_sampler_lookup_1d_general(s, x, y, index, dim, out);
     const uint32_t j = dpc_sampler_fast_j(s, x, y, index, dim);
-    *out = dpc_sampler_lattice(s, dim, j, dpc_sampler_shifted_at(s, x, y, dim)[2], s->keyed[dim].c[1]);
+    const float v = dpc_sampler_lattice(s, dim, j, dpc_sampler_shifted_at(s, x, y, dim)[2], s->keyed[dim].c[1]);
+    *out = dim >= s->fold_from ? dpc_sampler_fold(v) : v;
     return DPC_OK;
 }
 

@@ -9,7 +9,9 @@
 Plugin properties, as for Mitsuba's own samplers: ``sample_count`` (default 4), ``seed``
 (default 0), and ``model`` (default ``bnot-2d-stratified``; a bundled name or a ``.onnx`` path,
 several separated by commas), ``dimensions`` (tables, default 16), ``block_size`` (the
-integrator's block size when it is not Mitsuba's default 32). In XML::
+integrator's block size when it is not Mitsuba's default 32), ``fold_from`` (the first dimension
+folded by the baker's transform, default 1: all but Mitsuba's film position; -1 folds none;
+docs/rendering.md). In XML::
 
     <sampler type="dpc"><integer name="sample_count" value="16"/></sampler>
 

@@ -64,7 +64,7 @@ struct Table {
 };
 
 inline std::shared_ptr<Table> build(const std::vector<std::string> &models, uint32_t spp, uint32_t dims, uint64_t seed,
-                                    std::string &error) {
+                                    uint32_t fold_from, std::string &error) {
     std::vector<dpc_model *> loaded;
     auto table = std::make_shared<Table>();
     for (const std::string &m : models) {
@@ -84,6 +84,7 @@ inline std::shared_ptr<Table> build(const std::vector<std::string> &models, uint
         o.samples_per_pixel = spp;
         o.dimensions = dims;
         o.seed = seed;
+        o.fold_from = fold_from;
         if (dpc_sampler_create(&o, &table->sampler) != DPC_OK) error = dpc_last_error();
     }
     for (dpc_model *h : loaded) dpc_model_free(h);
@@ -119,6 +120,10 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
         if (block < 32 || block > 4096 || (block & (block - 1)))
             Throw("property \"block_size\" is %d: a power of two from 32 (the mask tile) to 4096", block);
         m_dims = (uint32_t)dims;
+        // Mitsuba draws the film position first: dimension 0 stays unfolded by default
+        int fold_from = props.get<int>("fold_from", 1);
+        if (fold_from < -1) Throw("property \"fold_from\" is %d: a dimension (>= 0), or -1 to fold none", fold_from);
+        m_fold_from = fold_from < 0 ? DPC_SAMPLER_NO_FOLD : (uint32_t)fold_from;
         m_block_pixels = (uint32_t)block * (uint32_t)block;
         rebuild();
     }
@@ -178,7 +183,9 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
         std::string models;
         for (const std::string &m : m_models) models += (models.empty() ? "" : ",") + m;
         return "DpcSampler[model = " + models + ", sample_count = " + std::to_string(m_sample_count) +
-               ", dimensions = " + std::to_string(m_dims) + ", seed = " + std::to_string(m_base_seed) + "]";
+               ", dimensions = " + std::to_string(m_dims) + ", fold_from = " +
+               (m_fold_from == DPC_SAMPLER_NO_FOLD ? std::string("none") : std::to_string(m_fold_from)) +
+               ", seed = " + std::to_string(m_base_seed) + "]";
     }
 
     MI_DECLARE_CLASS(DpcSampler)
@@ -192,17 +199,18 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
         m_phase = other.m_phase;
         m_phase_known = other.m_phase_known;
         m_x = other.m_x;
+        m_fold_from = other.m_fold_from;
         m_y = other.m_y;
     }
 
     void rebuild() {
         std::string error;
-        m_table = dpc_plugin::build(m_models, m_sample_count, m_dims, m_base_seed, error);
+        m_table = dpc_plugin::build(m_models, m_sample_count, m_dims, m_base_seed, m_fold_from, error);
         if (!m_table) Throw("dpc sampler: %s", error);
     }
 
     std::vector<std::string> m_models;
-    uint32_t m_dims = 16, m_block_pixels = 1024;
+    uint32_t m_dims = 16, m_block_pixels = 1024, m_fold_from = 1;
     std::shared_ptr<dpc_plugin::Table> m_table;
     uint32_t m_phase = 0;
     bool m_phase_known = false;
