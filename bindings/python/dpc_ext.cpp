@@ -488,8 +488,8 @@ PYBIND11_MODULE(_core, mod) {
     mod.attr("SAMPLER_MAX_DIMENSIONS") = DPC_SAMPLER_MAX_DIMENSIONS;
     mod.attr("SAMPLER_NO_FOLD") = DPC_SAMPLER_NO_FOLD;
     py::class_<Sampler>(mod, "Sampler")
-        .def(py::init<const std::vector<const Model *> &, uint32_t, uint32_t, uint64_t, uint32_t>(),
-             py::arg("models"), py::arg("spp"), py::arg("dims"), py::arg("seed"), py::arg("fold_from"))
+        .def(py::init<const std::vector<const Model *> &, uint32_t, uint32_t, uint64_t, uint32_t>(), py::arg("models"),
+             py::arg("spp"), py::arg("dims"), py::arg("seed"), py::arg("fold_from"))
         .def("get", &Sampler::get, py::arg("x"), py::arg("y"), py::arg("index"), py::arg("dim"), py::arg("width"))
         .def("table", &Sampler::table, py::arg("t"));
     mod.def("sampler_mask", &sampler_mask);

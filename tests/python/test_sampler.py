@@ -141,7 +141,11 @@ def test_folding_makes_smooth_non_periodic_integrands_converge_faster():
     for fold_from in (None, 0):
         est = np.stack(
             [
-                f(dpc.Sampler(samples_per_pixel=n, dimensions=1, seed=s, fold_from=fold_from).get_2d(0, 0, np.arange(n), 0))
+                f(
+                    dpc.Sampler(samples_per_pixel=n, dimensions=1, seed=s, fold_from=fold_from).get_2d(
+                        0, 0, np.arange(n), 0
+                    )
+                )
                 for s in range(seeds)
             ]
         )

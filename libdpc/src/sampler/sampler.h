@@ -32,8 +32,8 @@ struct dpc_sampler {
     uint32_t spp;   /* n: points per table */
     uint32_t slots; /* D: tables; dimension d reads table d mod D */
     uint64_t seed;
-    uint64_t base; /* mix64 of the seed: the root of every key */
-    float inv_spp; /* 1 / n, for 1-D values */
+    uint64_t base;      /* mix64 of the seed: the root of every key */
+    float inv_spp;      /* 1 / n, for 1-D values */
     uint32_t fold_from; /* dimensions >= fold_from are folded (dpc_sampler_fold) */
     /* The range of a pixel's rotation of the sample index: n for set models; 0 for progressive
      * models (format §6), whose tables are read in order so that the first 2^k samples of a
@@ -101,7 +101,26 @@ static inline float dpc_sampler_wrap(float a, float b) {
 /* The baker's (tent) transform 1 - |2v - 1| as a bijection of the 2^-24 grid of [0, 1): 2v below
  * 1/2, 2(1 - v) - 2^-24 from 1/2 on. Every step is exact (1 - v by Sterbenz, the doubling, and
  * the result, a multiple of 2^-24 in [2^-24, 1 - 2^-24]), so contraction cannot change it. */
-static inline float dpc_sampler_fold(float v) { return v < 0.5f ? 2.0f * v : 2.0f * (1.0f - v) - 0x1p-24f; }
+static inline float dpc_sampler_fold(float v) {
+    /* both sides, then a select: which side is a coin flip, so a branch would mispredict half
+     * the time (21 against 10 ns per 2-D lookup on bench_sampler) */
+#if defined(__SSE2__)
+    const __m128 x = _mm_set_ss(v);
+    const __m128 t = _mm_sub_ss(_mm_set_ss(1.0f), x);
+    const __m128 hi = _mm_sub_ss(_mm_add_ss(t, t), _mm_set_ss(0x1p-24f));
+    const __m128 below = _mm_cmplt_ss(x, _mm_set_ss(0.5f));
+    return _mm_cvtss_f32(_mm_or_ps(_mm_and_ps(below, _mm_add_ss(x, x)), _mm_andnot_ps(below, hi)));
+#else
+    const float lo = 2.0f * v, hi = 2.0f * (1.0f - v) - 0x1p-24f;
+    uint32_t a, b;
+    memcpy(&a, &lo, sizeof a);
+    memcpy(&b, &hi, sizeof b);
+    const uint32_t below = 0u - (uint32_t)(v < 0.5f), bits = (a & below) | (b & ~below);
+    float r;
+    memcpy(&r, &bits, sizeof r);
+    return r;
+#endif
+}
 
 typedef struct dpc_sampler_point {
     uint32_t table; /* t = dim mod D */
