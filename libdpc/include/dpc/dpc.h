@@ -322,8 +322,8 @@ DPC_API dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, f
  * space at low sample counts). docs/rendering.md defines every step and the reasoning.
  *
  * - Values are in [0, 1). Every value is a pure function of (the models' files, their input
- *   kinds, spp, D, fold_from, seed, x, y, i, d), the same bits across runs, threads and machines (IEEE-754
- *   float arithmetic in a fixed order; no FMA contraction).
+ *   kinds, spp, D, fold_from, seed, x, y, i, d), the same bits across runs, threads and
+ *   machines (IEEE-754 float arithmetic in a fixed order; no FMA contraction).
  * - Any pixel: x and y are taken modulo 2^32 (negative coordinates cast to uint32_t tile
  *   seamlessly). Any dimension: d >= D reuses table d mod D with its own index rotation and
  *   shift. Any index: indices i >= spp continue in passes of spp samples, pass i / spp rotated
@@ -369,10 +369,11 @@ typedef struct dpc_sampler_options {
      * 1 - |2v - 1| (on the 2^-24 grid: 2v below 1/2, 2(1 - v) - 2^-24 from 1/2 on, a bijection
      * of the grid, so values stay uniform). A shifted table wraps around the unit square, where
      * a renderer's integrands (a light's area, a BSDF lobe) are not periodic: the wrap is a jump
-     * the points must integrate. Folded, every continuous integrand is periodic, and on the
-     * soft-shadow scene of docs/rendering.md the MSE halves; the cost is twice the length of the
-     * integrand's own discontinuities, which is why dimension 0, the pixel position (geometry
-     * edges), is left as it is. Default 1; DPC_SAMPLER_NO_FOLD for none, 0 for all. */
+     * the points must integrate. Folded, every continuous integrand is periodic (on the
+     * soft-shadow scene of docs/rendering.md the MSE halves from 16 spp on); the cost is twice
+     * the length of the integrand's own discontinuities, which is why dimension 0, the pixel
+     * position (geometry edges), is left as it is. Default 1; DPC_SAMPLER_NO_FOLD for none, 0
+     * for all. */
     uint32_t fold_from;
     uint64_t seed; /* default 0 */
 } dpc_sampler_options;
