@@ -15,6 +15,9 @@ measure) and the per-pixel MSE, for:
   with the test errors of 4-point tables drawn from the model;
 - 2 x 2 blocks of a 64 x 64 mask optimised for 1 spp: pixel p's 4 samples are the 4 values of its
   block (no table), the screen-space ordering of Ahmed and Wonka 2020 in its simplest form;
+- a per-pixel choice among 16 tables of 4 points (in the spirit of Heitz et al. 2019, who choose
+  per pixel among scramblings of one sequence): the same optimiser swaps (shift, table) pairs
+  between pixels, the shipped mask's shifts paired with tables 0 .. 15 in turn;
 - white-noise shifts.
 Writes the section `mask_study` of docs/rendering.md.
 """
@@ -107,6 +110,38 @@ def optimise_for_tables(values: np.ndarray, n: int) -> np.ndarray:
         return M.assign_shifts(values, log=None)
 
 
+POOL = 16  # tables a pixel chooses among
+
+
+def optimise_pool(values: np.ndarray, n: int) -> np.ndarray:
+    """The swap optimiser over (shift, table) pairs: value i carries table i mod POOL, so a swap
+    moves a shift and its table together. Returns (TILE, TILE) indices into values."""
+    rng = np.random.default_rng(0)
+    angle, origin = half_planes(rng, M.TESTS)
+    tables = [table(n, s) for s in range(POOL)]
+    e = np.empty((M.TESTS, len(values)))
+    for t in range(POOL):
+        idx = np.arange(t, len(values), POOL)
+        for k in range(M.TESTS):
+            pts = (tables[t][None] + values[idx][:, None, :]) % 1.0
+            e[k, idx] = half_plane(pts, angle[k : k + 1], origin[k : k + 1])[0].mean(-1) - 0.5
+    with optimiser(N=TILE, ITERATIONS=3000, BATCH=256, test_errors=lambda v, r: e):
+        placed = M.assign_shifts(values, log=None).reshape(-1, 2)
+    where = {tuple(v): i for i, v in enumerate(values)}
+    return np.array([where[tuple(v)] for v in placed]).reshape(TILE, TILE)
+
+
+def screen_pool(values: np.ndarray, chosen: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
+    """Pixel p's samples: table chosen[p] mod POOL shifted by values[chosen[p]] (the mask at a
+    random tile offset, plus a random global rotation, as the sampler)."""
+    tables = np.stack([table(n, s) for s in range(POOL)])
+    ox, oy = rng.integers(0, TILE, 2)
+    c = rng.random(2)
+    yy, xx = np.mgrid[0:SCREEN, 0:SCREEN]
+    i = chosen[(yy + oy) % TILE, (xx + ox) % TILE]
+    return (tables[i % POOL] + ((values[i] + c) % 1.0)[:, :, None, :]) % 1.0
+
+
 def optimise_wide(size: int) -> np.ndarray:
     """A size x size mask for 1 spp by the shipped optimiser (values: a bnot-2d-stratified set)."""
     values = dpc.load(MODEL, isa="scalar").generate(seed=7, n_points=size * size).astype(np.float64)
@@ -143,6 +178,9 @@ def main() -> None:
     opt4 = optimise_for_tables(shipped.reshape(-1, 2), 4)
     for n in (1, 4, 8):
         row("mask optimised for 4-spp tables", n, lambda r, s, n=n: screen_shifted(opt4, n, r, s))
+    flat = shipped.reshape(-1, 2)
+    chosen = optimise_pool(flat, 4)
+    row(f"per-pixel choice among {POOL} tables (optimised for 4 spp)", 4, lambda r, s: screen_pool(flat, chosen, 4, r))
     wide = optimise_wide(2 * TILE)
     row("2 x 2 blocks of a 64 x 64 mask for 1 spp (no table)", 4, lambda r, s: screen_blocks(wide, 2, r))
     body = "\n".join(
