@@ -20,13 +20,9 @@ from pathlib import Path
 
 import numpy as np
 from doc_sections import replace_section
-from scipy.stats import qmc
-
-import dpc
-from dpc import baselines
+from sampler_fold_study import point_sets  # the same pixel, PMJ02BN and Sobol' sets
 
 ROOT = Path(__file__).resolve().parents[1]
-MODEL = "bnot-2d-stratified"
 SEEDS = 256
 EDGES = 64
 COUNTS = (16, 64)
@@ -48,18 +44,8 @@ def main() -> None:
         "|---:|---:|" + "---:|" * (len(samplers) + 1),
     ]
     for n in COUNTS:
-        sets = [
-            np.stack(
-                [
-                    dpc.Sampler(MODEL, samples_per_pixel=n, dimensions=1, seed=s, fold_from=None)
-                    .get_2d(0, 0, np.arange(n), 0)
-                    .astype(np.float64)
-                    for s in range(SEEDS)
-                ]
-            ),
-            np.stack([baselines.pmj02(n, np.random.default_rng(s), candidates=10) for s in range(SEEDS)]),
-            np.stack([qmc.Sobol(2, scramble=True, seed=s).random(n) for s in range(SEEDS)]),
-        ]
+        every = point_sets(n, SEEDS)
+        sets = [every[name] for name in samplers]
         for angle in ANGLES:
             origin = np.stack([np.full(EDGES, 0.5), rng.uniform(0.2, 0.8, EDGES)], -1)
             normal = np.array([np.sin(angle), np.cos(angle)])

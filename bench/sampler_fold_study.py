@@ -63,6 +63,22 @@ def integrands(rng: np.random.Generator):
     }
 
 
+def point_sets(n: int, seeds: int) -> dict[str, np.ndarray]:
+    """(seeds, n, 2) point sets of each sampler compared here, seed s for realisation s: one pixel
+    of dpc.Sampler (dimension 0, unfolded and folded), PMJ02BN and Owen-scrambled Sobol'."""
+
+    def pixel(seed, fold_from):
+        s = dpc.Sampler(MODEL, samples_per_pixel=n, dimensions=1, seed=seed, fold_from=fold_from)
+        return s.get_2d(0, 0, np.arange(n), 0).astype(np.float64)
+
+    return {
+        "dpc sampler": np.stack([pixel(s, None) for s in range(seeds)]),
+        "dpc sampler, folded": np.stack([pixel(s, 0) for s in range(seeds)]),
+        "PMJ02BN": np.stack([baselines.pmj02(n, np.random.default_rng(s), candidates=10) for s in range(seeds)]),
+        "Sobol' (Owen)": np.stack([qmc.Sobol(2, scramble=True, seed=s).random(n) for s in range(seeds)]),
+    }
+
+
 def main() -> None:
     t0 = time.time()
     kinds = integrands(np.random.default_rng(7))
@@ -70,23 +86,9 @@ def main() -> None:
     grid = np.stack(np.meshgrid(g, g), -1)
     exact = {name: f(grid).mean(axis=(1, 2)) for name, f in kinds.items()}
 
-    def sets(n: int) -> dict[str, np.ndarray]:
-        """(SEEDS, n, 2) point sets of each sampler."""
-
-        def pixel(seed, fold_from):
-            s = dpc.Sampler(MODEL, samples_per_pixel=n, dimensions=1, seed=seed, fold_from=fold_from)
-            return s.get_2d(0, 0, np.arange(n), 0).astype(np.float64)
-
-        return {
-            "dpc sampler": np.stack([pixel(s, None) for s in range(SEEDS)]),
-            "dpc sampler, folded": np.stack([pixel(s, 0) for s in range(SEEDS)]),
-            "PMJ02BN": np.stack([baselines.pmj02(n, np.random.default_rng(s), candidates=10) for s in range(SEEDS)]),
-            "Sobol' (Owen)": np.stack([qmc.Sobol(2, scramble=True, seed=s).random(n) for s in range(SEEDS)]),
-        }
-
     results = {}  # (kind, sampler) -> [mse per count]
     for n in COUNTS:
-        for sampler, pts in sets(n).items():
+        for sampler, pts in point_sets(n, SEEDS).items():
             for name, f in kinds.items():
                 est = f(pts).mean(-1)  # (K, SEEDS)
                 mse = float(((est - exact[name][:, None]) ** 2).mean())

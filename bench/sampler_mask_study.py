@@ -25,6 +25,7 @@ Writes the section `mask_study` of docs/rendering.md.
 from __future__ import annotations
 
 import contextlib
+import functools
 import sys
 import time
 from pathlib import Path
@@ -113,12 +114,18 @@ def optimise_for_tables(values: np.ndarray, n: int) -> np.ndarray:
 POOL = 16  # tables a pixel chooses among
 
 
+@functools.cache
+def pool_tables(n: int) -> np.ndarray:
+    """(POOL, n, 2): the tables a pixel chooses among."""
+    return np.stack([table(n, s) for s in range(POOL)])
+
+
 def optimise_pool(values: np.ndarray, n: int) -> np.ndarray:
     """The swap optimiser over (shift, table) pairs: value i carries table i mod POOL, so a swap
     moves a shift and its table together. Returns (TILE, TILE) indices into values."""
     rng = np.random.default_rng(0)
     angle, origin = half_planes(rng, M.TESTS)
-    tables = [table(n, s) for s in range(POOL)]
+    tables = pool_tables(n)
     e = np.empty((M.TESTS, len(values)))
     for t in range(POOL):
         idx = np.arange(t, len(values), POOL)
@@ -134,7 +141,7 @@ def optimise_pool(values: np.ndarray, n: int) -> np.ndarray:
 def screen_pool(values: np.ndarray, chosen: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
     """Pixel p's samples: table chosen[p] mod POOL shifted by values[chosen[p]] (the mask at a
     random tile offset, plus a random global rotation, as the sampler)."""
-    tables = np.stack([table(n, s) for s in range(POOL)])
+    tables = pool_tables(n)
     ox, oy = rng.integers(0, TILE, 2)
     c = rng.random(2)
     yy, xx = np.mgrid[0:SCREEN, 0:SCREEN]

@@ -92,19 +92,14 @@ dpc_status dpc_sampler_lookup_2d_general(const dpc_sampler *s, uint32_t x, uint3
                                          float out[2]) {
     const dpc_sampler_point p = dpc_sampler_locate(s, x, y, index, dim);
     const float *t = s->tables + ((size_t)p.table * s->spp + p.j) * 2;
-    out[0] = dpc_sampler_wrap(t[0], dpc_sampler_wrap(p.mask[0], p.c[0]));
-    out[1] = dpc_sampler_wrap(t[1], dpc_sampler_wrap(p.mask[1], p.c[1]));
-    if (dim >= s->fold_from) {
-        out[0] = dpc_sampler_fold(out[0]);
-        out[1] = dpc_sampler_fold(out[1]);
-    }
+    out[0] = dpc_sampler_out(s, dim, dpc_sampler_wrap(t[0], dpc_sampler_wrap(p.mask[0], p.c[0])));
+    out[1] = dpc_sampler_out(s, dim, dpc_sampler_wrap(t[1], dpc_sampler_wrap(p.mask[1], p.c[1])));
     return DPC_OK;
 }
 
 dpc_status dpc_sampler_lookup_1d_general(const dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index, uint32_t dim,
                                          float *out) {
     const dpc_sampler_point p = dpc_sampler_locate(s, x, y, index, dim);
-    const float v = dpc_sampler_lattice(s, p.table, p.j, dpc_sampler_wrap(p.mask[2], p.c[0]), p.c[1]);
-    *out = dim >= s->fold_from ? dpc_sampler_fold(v) : v;
+    *out = dpc_sampler_out(s, dim, dpc_sampler_lattice(s, p.table, p.j, dpc_sampler_wrap(p.mask[2], p.c[0]), p.c[1]));
     return DPC_OK;
 }

@@ -122,6 +122,11 @@ static inline float dpc_sampler_fold(float v) {
 #endif
 }
 
+/* The value dimension dim returns for v: v folded from fold_from on (docs/rendering.md). */
+static inline float dpc_sampler_out(const struct dpc_sampler *s, uint32_t dim, float v) {
+    return dim >= s->fold_from ? dpc_sampler_fold(v) : v;
+}
+
 typedef struct dpc_sampler_point {
     uint32_t table; /* t = dim mod D */
     uint32_t j;     /* point of table t: k rotated by the pixel's offset */
@@ -196,12 +201,8 @@ static inline dpc_status dpc_sampler_lookup_2d(const struct dpc_sampler *s, uint
     /* the common case: one hash, two reads */
     const float *m = dpc_sampler_shifted_at(s, x, y, dim);
     const float *t = s->tables + ((size_t)dim * s->spp + dpc_sampler_fast_j(s, x, y, index, dim)) * 2;
-    out[0] = dpc_sampler_wrap(t[0], m[0]);
-    out[1] = dpc_sampler_wrap(t[1], m[1]);
-    if (dim >= s->fold_from) {
-        out[0] = dpc_sampler_fold(out[0]);
-        out[1] = dpc_sampler_fold(out[1]);
-    }
+    out[0] = dpc_sampler_out(s, dim, dpc_sampler_wrap(t[0], m[0]));
+    out[1] = dpc_sampler_out(s, dim, dpc_sampler_wrap(t[1], m[1]));
     return DPC_OK;
 }
 
@@ -221,8 +222,8 @@ static inline dpc_status dpc_sampler_lookup_1d(const struct dpc_sampler *s, uint
                                                uint32_t dim, float *out) {
     if (index >= s->spp || dim >= s->fast_slots) return dpc_sampler_lookup_1d_general(s, x, y, index, dim, out);
     const uint32_t j = dpc_sampler_fast_j(s, x, y, index, dim);
-    const float v = dpc_sampler_lattice(s, dim, j, dpc_sampler_shifted_at(s, x, y, dim)[2], s->keyed[dim].c[1]);
-    *out = dim >= s->fold_from ? dpc_sampler_fold(v) : v;
+    *out = dpc_sampler_out(s, dim,
+                           dpc_sampler_lattice(s, dim, j, dpc_sampler_shifted_at(s, x, y, dim)[2], s->keyed[dim].c[1]));
     return DPC_OK;
 }
 
