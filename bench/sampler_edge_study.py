@@ -6,10 +6,12 @@ A pixel's footprint integrand is dominated by geometry edges, and in a rendered 
 nearly along the pixel axes (walls, a light's rim, a box's sides). For straight edges through
 the unit square at a given angle to the x axis (offsets uniform in 0.2 .. 0.8), this measures
 the mean squared error of the estimate of the covered area by: one pixel of `dpc.Sampler`
-(bnot-2d-stratified, dimension 0, unfolded: stratified 1-D projections), PMJ02BN
-(dpc.baselines.pmj02, 10 candidates) and Owen-scrambled Sobol' (scipy.stats.qmc), over seeds.
-(0,2)-nets stratify every elementary interval (2 x n/2, 4 x n/4, ...), dpc's tables only the
-1 x n and n x 1 ones and, by being blue noise, roughly the square ones.
+(dimension 0, unfolded) as a net slot (net_dims=1, the default: a blue-noise (0,m,2)-net,
+digitally shifted) and as the shifted set (net_dims=0: bnot-2d-stratified with stratified 1-D
+projections), PMJ02BN (dpc.baselines.pmj02, 10 candidates) and Owen-scrambled Sobol'
+(scipy.stats.qmc), over seeds. (0,2)-nets stratify every elementary interval (2 x n/2,
+4 x n/4, ...), dpc's sets only the 1 x n and n x 1 ones and, by being blue noise, roughly the
+square ones.
 Writes the section `edge_study` of docs/rendering.md.
 """
 
@@ -35,13 +37,13 @@ def main() -> None:
     rng = np.random.default_rng(3)
     g = (np.arange(GRID) + 0.5) / GRID
     grid = np.stack(np.meshgrid(g, g), -1).reshape(-1, 2)
-    samplers = ["dpc sampler", "PMJ02BN", "Sobol' (Owen)"]
+    samplers = ["dpc net", "dpc set", "PMJ02BN", "Sobol' (Owen)"]
     lines = [
         f"Measured by `python bench/sampler_edge_study.py` ({SEEDS} seeds, {EDGES} edges per angle; mean "
         f"squared error of the covered fraction; {{seconds}} s):",
         "",
-        "| spp | edge angle (rad) | " + " | ".join(samplers) + " | dpc / PMJ02BN |",
-        "|---:|---:|" + "---:|" * (len(samplers) + 1),
+        "| spp | edge angle (rad) | " + " | ".join(samplers) + " | net / PMJ02BN | set / PMJ02BN |",
+        "|---:|---:|" + "---:|" * (len(samplers) + 2),
     ]
     for n in COUNTS:
         every = point_sets(n, SEEDS)
@@ -55,7 +57,9 @@ def main() -> None:
                 est = ((pts[None] - origin[:, None, None]) @ normal > 0).mean(-1)  # (EDGES, SEEDS)
                 mse.append(float(((est - exact[:, None]) ** 2).mean()))
             lines.append(
-                f"| {n} | {angle:.2f} | " + " | ".join(f"{v:.2e}" for v in mse) + f" | {mse[0] / mse[1]:.2f} |"
+                f"| {n} | {angle:.2f} | "
+                + " | ".join(f"{v:.2e}" for v in mse)
+                + f" | {mse[0] / mse[2]:.2f} | {mse[1] / mse[2]:.2f} |"
             )
     body = "\n".join(lines).replace("{seconds}", f"{time.time() - t0:.0f}")
     print(body)

@@ -266,7 +266,8 @@ using ArrayU32 = py::array_t<uint32_t, py::array::c_style>;
 
 class Sampler {
   public:
-    Sampler(const std::vector<const Model *> &models, uint32_t spp, uint32_t dims, uint64_t seed, uint32_t fold_from) {
+    Sampler(const std::vector<const Model *> &models, uint32_t spp, uint32_t dims, uint64_t seed, uint32_t fold_from,
+            uint32_t net_dims) {
         std::vector<const dpc_model *> handles;
         for (const Model *m : models) handles.push_back(m->handle());
         dpc_sampler_options o;
@@ -277,6 +278,7 @@ class Sampler {
         o.dimensions = dims;
         o.seed = seed;
         o.fold_from = fold_from;
+        o.net_dims = net_dims;
         call([&] { return dpc_sampler_create(&o, &sampler_); });
         spp_ = spp;
         dims_ = dims;
@@ -488,8 +490,9 @@ PYBIND11_MODULE(_core, mod) {
     mod.attr("SAMPLER_MAX_DIMENSIONS") = DPC_SAMPLER_MAX_DIMENSIONS;
     mod.attr("SAMPLER_NO_FOLD") = DPC_SAMPLER_NO_FOLD;
     py::class_<Sampler>(mod, "Sampler")
-        .def(py::init<const std::vector<const Model *> &, uint32_t, uint32_t, uint64_t, uint32_t>(), py::arg("models"),
-             py::arg("spp"), py::arg("dims"), py::arg("seed"), py::arg("fold_from"))
+        .def(py::init<const std::vector<const Model *> &, uint32_t, uint32_t, uint64_t, uint32_t, uint32_t>(),
+             py::arg("models"), py::arg("spp"), py::arg("dims"), py::arg("seed"), py::arg("fold_from"),
+             py::arg("net_dims"))
         .def("get", &Sampler::get, py::arg("x"), py::arg("y"), py::arg("index"), py::arg("dim"), py::arg("width"))
         .def("table", &Sampler::table, py::arg("t"));
     mod.def("sampler_mask", &sampler_mask);

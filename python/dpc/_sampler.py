@@ -48,8 +48,12 @@ class Sampler:
     neighbouring pixels' errors cancel at low screen frequencies. Dimensions from ``fold_from``
     on (default 1: all but dimension 0, the pixel position) are folded by the baker's transform
     ``1 - |2v - 1|``, which makes smooth integrands periodic over the shifted table; ``None``
-    folds none. docs/rendering.md defines every step. Values are float32 in [0, 1); the same C
-    object backs the C API, the Mitsuba plugin and this class, so all three give the same bits.
+    folds none. Slots below ``net_dims`` (default 1: the pixel position) hold blue-noise
+    (0,m,2)-nets, each pixel's a digital shift of its own, when ``samples_per_pixel`` is a power
+    of two >= 2: every elementary interval of a pixel's samples holds one, which integrates
+    geometry edges nearly along the pixel axes like a Sobol' net; 0 for none.
+    docs/rendering.md defines every step. Values are float32 in [0, 1); the same C object backs
+    the C API, the Mitsuba plugin and this class, so all three give the same bits.
 
     >>> s = dpc.Sampler("bnot-2d-stratified", samples_per_pixel=16)
     >>> s.get_2d(x=np.arange(640)[None, :], y=np.arange(480)[:, None], index=0, dimension=0).shape
@@ -63,6 +67,7 @@ class Sampler:
         dimensions: int = 16,
         seed: int = 0,
         fold_from: int | None = 1,
+        net_dims: int = 1,
     ):
         if isinstance(models, (str, bytes)) or isinstance(models, Model) or hasattr(models, "__fspath__"):
             models = [models]
@@ -74,19 +79,21 @@ class Sampler:
         self.dimensions = _integer(dimensions, "dimensions", 1, MAX_DIMENSIONS)
         self.seed = _integer(seed, "seed", 0, (1 << 64) - 1)
         self.fold_from = None if fold_from is None else _integer(fold_from, "fold_from", 0, NO_FOLD - 1)
+        self.net_dims = _integer(net_dims, "net_dims", 0, (1 << 32) - 1)
         self._h = _core.Sampler(
             [m._h for m in self.models],
             self.samples_per_pixel,
             self.dimensions,
             self.seed,
             NO_FOLD if self.fold_from is None else self.fold_from,
+            self.net_dims,
         )
 
     def __repr__(self) -> str:
         names = ", ".join(m.name for m in self.models)
         return (
             f"dpc.Sampler([{names}], samples_per_pixel={self.samples_per_pixel}, "
-            f"dimensions={self.dimensions}, seed={self.seed}, fold_from={self.fold_from})"
+            f"dimensions={self.dimensions}, seed={self.seed}, fold_from={self.fold_from}, net_dims={self.net_dims})"
         )
 
     def _lookup(self, x, y, index, dimension, width: int) -> np.ndarray:

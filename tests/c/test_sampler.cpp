@@ -20,7 +20,7 @@ struct SamplerDeleter {
 using SamplerPtr = std::unique_ptr<dpc_sampler, SamplerDeleter>;
 
 SamplerPtr make(const std::vector<const dpc_model *> &models, uint32_t spp, uint32_t dims, uint64_t seed,
-                uint32_t fold_from = 1) {
+                uint32_t fold_from = 1, uint32_t net_dims = 1) {
     dpc_sampler_options o;
     dpc_sampler_options_init(&o);
     o.models = models.data();
@@ -29,6 +29,7 @@ SamplerPtr make(const std::vector<const dpc_model *> &models, uint32_t spp, uint
     o.dimensions = dims;
     o.seed = seed;
     o.fold_from = fold_from;
+    o.net_dims = net_dims;
     dpc_sampler *s = nullptr;
     EXPECT_EQ(dpc_sampler_create(&o, &s), DPC_OK) << dpc_last_error();
     return SamplerPtr(s);
@@ -52,6 +53,7 @@ TEST(SamplerOptions, InitSetsDocumentedDefaults) {
     EXPECT_EQ(o.samples_per_pixel, 16u);
     EXPECT_EQ(o.dimensions, 16u);
     EXPECT_EQ(o.fold_from, 1u);
+    EXPECT_EQ(o.net_dims, 1u);
     EXPECT_EQ(o.seed, 0u);
     dpc_sampler_options_init(nullptr); // no-op
 }
@@ -199,7 +201,7 @@ TEST(SamplerDeterminism, ModelsMayBeFreedAfterCreate) {
 TEST(SamplerStructure, EachPixelGetsItsTableShiftedAndALattice) {
     ModelPtr m = load(model_path("model_2d"));
     const uint32_t n = 16;
-    SamplerPtr s = make({m.get()}, n, 4, 3, DPC_SAMPLER_NO_FOLD);
+    SamplerPtr s = make({m.get()}, n, 4, 3, DPC_SAMPLER_NO_FOLD, 0);
     for (uint32_t d = 0; d < 6; d++) { // d >= 4 reuses table d mod 4
         std::vector<float> tab = table_of(s.get(), d % 4, n);
         for (uint32_t p = 0; p < 5; p++) {
@@ -231,6 +233,60 @@ TEST(SamplerStructure, EachPixelGetsItsTableShiftedAndALattice) {
             std::sort(one.begin(), one.end());
             for (uint32_t i = 1; i < n; i++) EXPECT_NEAR(one[i] - one[i - 1], 1.0 / n, 1e-6);
         }
+    }
+}
+
+// Each (0,m,2) elementary interval (2^a x 2^(m-a) boxes of a grid of 2^-m cells) holds exactly
+// one of the n = 2^m points.
+bool is_net(const std::vector<float> &pts, uint32_t m) {
+    const uint32_t n = 1u << m;
+    for (uint32_t a = 0; a <= m; a++) {
+        std::vector<int> count(n, 0);
+        for (uint32_t i = 0; i < n; i++) {
+            const uint32_t cx = (uint32_t)(pts[2 * i] * (float)(1u << a));
+            const uint32_t cy = (uint32_t)(pts[2 * i + 1] * (float)(1u << (m - a)));
+            if (cx >= (1u << a) || cy >= (1u << (m - a)) || count[cx << (m - a) | cy]++) return false;
+        }
+    }
+    return true;
+}
+
+// Net slots (net_dims): every pixel's samples of every pass are a (0,m,2)-net, also through
+// dimensions past D that reuse a net slot; get_1d is get_2d's x; the table shows the cells'
+// centres; other slots keep the shifted set (the same table as with net_dims = 0).
+TEST(SamplerStructure, NetSlotsGiveEachPixelANet) {
+    ModelPtr m = load(model_path("model_2d"));
+    for (uint32_t log_n : {1u, 2u, 4u, 6u}) {
+        const uint32_t n = 1u << log_n;
+        SamplerPtr s = make({m.get()}, n, 3, 9, DPC_SAMPLER_NO_FOLD, 2);
+        SamplerPtr plain = make({m.get()}, n, 3, 9, DPC_SAMPLER_NO_FOLD, 0);
+        EXPECT_TRUE(is_net(table_of(s.get(), 0, n), log_n));
+        EXPECT_TRUE(is_net(table_of(s.get(), 1, n), log_n));
+        EXPECT_EQ(table_of(s.get(), 2, n), table_of(plain.get(), 2, n));
+        for (uint32_t d : {0u, 1u, 3u, 4u, 70u}) // 3, 4, 70 reuse slots 0, 1, 1
+            for (uint32_t pass : {0u, 2u})
+                for (uint32_t p = 0; p < 4; p++) {
+                    std::vector<float> pts;
+                    for (uint32_t i = pass * n; i < (pass + 1) * n; i++) {
+                        float v[2], w;
+                        ASSERT_EQ(dpc_sampler_get_2d(s.get(), p * 91 + 5, p * 7, i, d, v), DPC_OK);
+                        ASSERT_EQ(dpc_sampler_get_1d(s.get(), p * 91 + 5, p * 7, i, d, &w), DPC_OK);
+                        EXPECT_EQ(w, v[0]);
+                        pts.push_back(v[0]);
+                        pts.push_back(v[1]);
+                    }
+                    EXPECT_TRUE(is_net(pts, log_n)) << "n " << n << " dimension " << d << " pass " << pass;
+                }
+    }
+    // spp not a power of two: no nets, slot 0 is the shifted set
+    SamplerPtr odd = make({m.get()}, 12, 2, 9, DPC_SAMPLER_NO_FOLD, 2);
+    SamplerPtr odd_plain = make({m.get()}, 12, 2, 9, DPC_SAMPLER_NO_FOLD, 0);
+    for (uint32_t i = 0; i < 12; i++) {
+        float a[2], b[2];
+        dpc_sampler_get_2d(odd.get(), 3, 4, i, 0, a);
+        dpc_sampler_get_2d(odd_plain.get(), 3, 4, i, 0, b);
+        EXPECT_EQ(a[0], b[0]);
+        EXPECT_EQ(a[1], b[1]);
     }
 }
 

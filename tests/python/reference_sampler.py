@@ -52,8 +52,82 @@ def stratify(table: np.ndarray) -> np.ndarray:
     return out
 
 
+NET_OPTIMISED = 1024
+NET_SWEEPS = 4
+NET_SEED = 0x243F6A8885A308D3
+
+
+def net_kernel(m: int) -> np.ndarray:
+    """h(c): the mean over u of w(torus distance of u and u XOR c), w(e) = 65535 (Q - e^2)^4 / Q^4
+    (integer division) for e^2 < Q, Q = 81 n / 50 (integer division); integer mean (>> m)."""
+    n = 1 << m
+    q = 81 * n // 50
+    u = np.arange(n, dtype=np.int64)
+    h = np.zeros(n, dtype=np.int64)
+    for c in range(n):
+        d = np.abs(u - (u ^ c))
+        e = np.minimum(d, n - d)
+        r = np.maximum(q - e * e, 0)
+        h[c] = sum(int(v) ** 4 * 65535 // q**4 for v in r) >> m
+    return h
+
+
+def make_net(m: int, seed: int) -> np.ndarray:
+    """The (n, 2) integer cells of a net slot (docs/rendering.md, "Net dimensions")."""
+    n = 1 << m
+    i = np.arange(n, dtype=np.int64)
+    bx = np.zeros(n, dtype=np.int64)
+    by = np.zeros(n, dtype=np.int64)
+    v = 1 << (m - 1)
+    for b in range(m):  # x: i's bits reversed; y: XOR of direction numbers v_b of i's set bits
+        bx |= ((i >> b) & 1) << (m - 1 - b)
+        by ^= np.where((i >> b) & 1, v, 0)
+        v ^= v >> 1
+    base = np.stack([bx, by], -1)
+    p = base.copy()
+    f = 0
+    for c in range(2):
+        for j in range(1, m):
+            for pre in range(1 << j):
+                f += 1
+                if mix64(seed + f * GOLDEN) >> 63:
+                    p[(base[:, c] >> (m - j)) == pre, c] ^= 1 << (m - 1 - j)
+    if n <= NET_OPTIMISED and m >= 1:
+        h = net_kernel(m)
+        for _ in range(NET_SWEEPS):
+            changed = False
+            for j in range(1, m):
+                for pre in range(1 << j):
+                    for c in range(2):
+                        o, bit = 1 - c, 1 << (m - 1 - j)
+                        inside = (base[:, c] >> (m - j)) == pre
+                        a, b = p[inside], p[~inside]
+                        new = h[(a[:, None, c] ^ bit) ^ b[None, :, c]]
+                        old = h[a[:, None, c] ^ b[None, :, c]]
+                        if int(((new - old) * h[a[:, None, o] ^ b[None, :, o]]).sum()) < 0:
+                            p[inside, c] ^= bit
+                            changed = True
+            if not changed:
+                break
+    return p
+
+
+def net_values(cell, j: int, h: int, m: int) -> list:
+    """Net point j's cell randomised by the pixel's hash h: swap (bit 32), XOR (bits 0.., 16..),
+    offset inside the cell from mix(h + (j + 1) golden) (bits 0.. for x, 24.. for y)."""
+    a, b = int(cell[0]), int(cell[1])
+    if (h >> 32) & 1:
+        a, b = b, a
+    a ^= h & ((1 << m) - 1)
+    b ^= (h >> 16) & ((1 << m) - 1)
+    g = mix64(h + (j + 1) * GOLDEN)
+    shift = 24 - m
+    low = (1 << shift) - 1
+    return [F32((a << shift) | (g & low)) * F32(2.0**-24), F32((b << shift) | ((g >> 24) & low)) * F32(2.0**-24)]
+
+
 class ReferenceSampler:
-    def __init__(self, model_paths, spp: int, dims: int, seed: int, fold_from: int | None = 1):
+    def __init__(self, model_paths, spp: int, dims: int, seed: int, fold_from: int | None = 1, net_dims: int = 1):
         self.n, self.D, self.base = spp, dims, mix64(seed)
         self.fold_from = fold_from  # None: no dimension folded
         models = [dpc.load(p, isa="scalar", threads=1) for p in model_paths]
@@ -70,6 +144,10 @@ class ReferenceSampler:
                     self.tables.append(stratify(pts[:, a : a + 2].astype(F32)))
             k += 1
         self.mask = dpc.Sampler.mask()
+        # net slots: only when spp is a power of two >= 2
+        self.m = spp.bit_length() - 1
+        self.net_slots = min(net_dims, dims) if spp >= 2 and spp == 1 << self.m else 0
+        self.nets = [make_net(self.m, mix64(self.base ^ mix64(t + NET_SEED))) for t in range(self.net_slots)]
 
     def key(self, dim: int, pass_: int) -> int:
         return mix64(self.base ^ mix64(((pass_ << 32) | dim) + GOLDEN))
@@ -85,12 +163,15 @@ class ReferenceSampler:
             j -= n
         ox, oy = key & 31, (key >> 5) & 31
         m = self.mask[(y + oy) % TILE, (x + ox) % TILE]
-        return dim % self.D, j, m, (unit24(key >> 10), unit24(key >> 34))
+        return dim % self.D, j, m, (unit24(key >> 10), unit24(key >> 34)), h
 
     def get_2d(self, x: int, y: int, index: int, dim: int) -> np.ndarray:
-        t, j, m, c = self._locate(x, y, index, dim)
-        p = self.tables[t][j]
-        v = [wrap(p[0], wrap(m[0], c[0])), wrap(p[1], wrap(m[1], c[1]))]
+        t, j, m, c, h = self._locate(x, y, index, dim)
+        if t < self.net_slots:
+            v = net_values(self.nets[t][j], j, h, self.m)
+        else:
+            p = self.tables[t][j]
+            v = [wrap(p[0], wrap(m[0], c[0])), wrap(p[1], wrap(m[1], c[1]))]
         if self._folds(dim):
             v = [fold(a) for a in v]
         return np.array(v, dtype=F32)
@@ -99,7 +180,10 @@ class ReferenceSampler:
         return self.fold_from is not None and dim >= self.fold_from
 
     def get_1d(self, x: int, y: int, index: int, dim: int) -> np.float32:
-        t, j, m, c = self._locate(x, y, index, dim)
+        t, j, m, c, h = self._locate(x, y, index, dim)
+        if t < self.net_slots:
+            v = net_values(self.nets[t][j], j, h, self.m)[0]
+            return fold(v) if self._folds(dim) else v
         u = wrap(m[2], c[0])
         i = int(F32(self.tables[t][j][0] * F32(self.n))) if self.progressive else j
         lattice = F32(F32(F32(i) + u) * F32(F32(1.0) / F32(self.n)))

@@ -20,24 +20,30 @@ PROGRESSIVE = dpc.model_path("progressive-2d")
 
 
 @pytest.mark.parametrize(
-    "models,spp,dims,seed,fold_from",
+    "models,spp,dims,seed,fold_from,net_dims",
     [
-        ([BNOT], 16, 4, 0, 1),
-        ([BNOT], 16, 4, 0, None),  # no dimension folded
-        ([BNOT], 5, 3, 12345, 0),  # spp not a power of two; every dimension folded
-        ([BNOT], 1, 2, 7, 1),
-        ([dpc.model_path("bnot-4d"), BNOT], 8, 5, 2**64 - 1, 3),  # 4-D model fills two slots per set
-        ([DATA / "model_3d_mixed.onnx"], 12, 3, 99, 1),  # odd dims: the last is left out
-        ([BNOT], 3, 70, 5, 66),  # past the 64 dimensions with precomputed shifted masks
-        ([PROGRESSIVE], 64, 4, 3, 1),  # progressive: tables in order, 1-D strata by x rank
-        ([PROGRESSIVE], 48, 70, 8, None),
+        ([BNOT], 16, 4, 0, 1, 1),  # dimension 0 a net (the default)
+        ([BNOT], 16, 4, 0, None, 0),  # no dimension folded, no nets
+        ([BNOT], 16, 4, 0, 0, 3),  # three net slots, folded
+        ([BNOT], 5, 3, 12345, 0, 1),  # spp not a power of two (no nets); every dimension folded
+        ([BNOT], 1, 2, 7, 1, 1),
+        ([BNOT], 2, 3, 7, 1, 2),  # the smallest net
+        ([BNOT], 256, 2, 11, 1, 1),
+        ([BNOT], 2048, 1, 4, 1, 1),  # past the optimised sizes: the randomly scrambled net
+        ([dpc.model_path("bnot-4d"), BNOT], 8, 5, 2**64 - 1, 3, 1),  # 4-D model fills two slots per set
+        ([DATA / "model_3d_mixed.onnx"], 12, 3, 99, 1, 1),  # odd dims: the last is left out
+        ([BNOT], 3, 70, 5, 66, 1),  # past the 64 dimensions with precomputed shifted masks
+        ([BNOT], 4, 70, 5, 66, 67),  # net slots past them too
+        ([PROGRESSIVE], 64, 4, 3, 1, 1),  # progressive: tables in order, 1-D strata by x rank
+        ([PROGRESSIVE], 48, 70, 8, None, 1),
     ],
 )
-def test_lookups_match_the_reference_bit_for_bit(models, spp, dims, seed, fold_from):
-    s = dpc.Sampler(models, samples_per_pixel=spp, dimensions=dims, seed=seed, fold_from=fold_from)
-    ref = ReferenceSampler(models, spp, dims, seed, fold_from)
+def test_lookups_match_the_reference_bit_for_bit(models, spp, dims, seed, fold_from, net_dims):
+    s = dpc.Sampler(models, samples_per_pixel=spp, dimensions=dims, seed=seed, fold_from=fold_from, net_dims=net_dims)
+    ref = ReferenceSampler(models, spp, dims, seed, fold_from, net_dims)
     for t in range(dims):
-        assert np.array_equal(s.table(t), ref.tables[t]), f"table {t}"
+        want = ref.tables[t] if t >= ref.net_slots else ((ref.nets[t] + 0.5) / spp).astype(np.float32)
+        assert np.array_equal(s.table(t), want), f"table {t}"
     rng = np.random.default_rng(seed % 1000)
     x = np.concatenate([rng.integers(-70, 300, 40), [0, 31, 32, -1, 2**31 - 1]])
     y = rng.integers(-70, 300, len(x))
@@ -63,7 +69,7 @@ def test_shapes_broadcast_and_range():
 
 def test_structure_each_pixel_gets_the_table_shifted_and_a_stratified_lattice():
     n = 16
-    s = dpc.Sampler(samples_per_pixel=n, dimensions=4, seed=5, fold_from=None)
+    s = dpc.Sampler(samples_per_pixel=n, dimensions=4, seed=5, fold_from=None, net_dims=0)
     for x, y, d in [(0, 0, 0), (17, 3, 2), (-5, 40, 3)]:
         pts = s.get_2d(x, y, np.arange(n), d).astype(np.float64)
         table = s.table(d).astype(np.float64)
@@ -79,12 +85,58 @@ def test_structure_each_pixel_gets_the_table_shifted_and_a_stratified_lattice():
         assert np.allclose(np.diff(one), 1 / n, atol=1e-6)
 
 
+def _is_net(pts: np.ndarray) -> bool:
+    """Every 2^a x 2^(m - a) elementary interval holds exactly one of the 2^m points."""
+    m = len(pts).bit_length() - 1
+    for a in range(m + 1):
+        cells = np.floor(pts[:, 0] * 2**a).astype(int) * 2 ** (m - a) + np.floor(pts[:, 1] * 2 ** (m - a)).astype(int)
+        if len(np.unique(cells)) != len(pts):
+            return False
+    return True
+
+
+@pytest.mark.parametrize("n", [2, 4, 16, 64, 256])
+def test_net_slots_give_every_pixel_a_02_net(n):
+    s = dpc.Sampler(samples_per_pixel=n, dimensions=2, seed=3)  # net_dims=1: dimension 0
+    for x, y, first in [(0, 0, 0), (17, 3, n), (-5, 40, 5 * n)]:
+        assert _is_net(s.get_2d(x, y, first + np.arange(n), 0).astype(np.float64))
+    assert _is_net(s.table(0).astype(np.float64))
+    assert not _is_net(s.get_2d(0, 0, np.arange(n), 1).astype(np.float64)) or n <= 4  # the set is not one
+
+
+def test_net_slots_integrate_nearly_axis_aligned_edges_better():
+    """Straight edges 0.05-0.2 rad off the pixel axes, 64 spp, one edge per pixel of 64 x 64:
+    the net slot's MSE is below 0.85x the shifted set's (measured: about 0.7x)."""
+    n, W = 64, 64
+    rng = np.random.default_rng(0)
+    angle = rng.uniform(0.05, 0.2, (W, W, 1)) * rng.choice([-1, 1], (W, W, 1)) + rng.choice([0, np.pi / 2], (W, W, 1))
+    offset = rng.uniform(0.2, 0.8, (W, W, 1))
+    normal = np.stack([np.sin(angle), np.cos(angle)], -1)
+    origin = np.stack([np.full_like(offset, 0.5), offset], -1)
+    g = (np.arange(512) + 0.5) / 512
+    grid = np.stack(np.meshgrid(g, g), -1).reshape(-1, 2)
+    xs, ys = np.meshgrid(np.arange(W), np.arange(W))
+    exact = np.array([[(((grid - origin[i, j]) @ normal[i, j, 0]) > 0).mean() for j in range(W)] for i in range(W)])
+    mse = []
+    for net_dims in (1, 0):
+        s = dpc.Sampler(samples_per_pixel=n, dimensions=1, seed=1, net_dims=net_dims)
+        pts = s.get_2d(xs[..., None], ys[..., None], np.arange(n), 0).astype(np.float64)
+        est = ((((pts - origin) * normal).sum(-1)) > 0).mean(-1)
+        mse.append(((est - exact) ** 2).mean())
+    assert mse[0] < 0.85 * mse[1], mse
+
+
 def test_progressive_pixels_read_the_table_in_order():
     """A progressive model's pixel gets its table's points in order, shifted by one vector, so its
     first 2^k samples are the table's prefix of 2^k points (a blue-noise set of its own); later
-    passes are the whole table again, shifted anew."""
+    passes are the whole table again, shifted anew. A net slot (dimension 0 by default) is read
+    in its Sobol' order, so every prefix of 2^k samples is a (0,k,2)-net."""
     n = 64
-    s = dpc.Sampler(PROGRESSIVE, samples_per_pixel=n, dimensions=3, seed=2, fold_from=None)
+    nets = dpc.Sampler(PROGRESSIVE, samples_per_pixel=n, dimensions=1, seed=2)
+    for x, y in [(0, 0), (17, 3)]:
+        pts = nets.get_2d(x, y, np.arange(n), 0).astype(np.float64)
+        assert all(_is_net(pts[: 1 << k]) for k in range(7))
+    s = dpc.Sampler(PROGRESSIVE, samples_per_pixel=n, dimensions=3, seed=2, fold_from=None, net_dims=0)
     for x, y, d in [(0, 0, 0), (17, 3, 2), (-5, 40, 1)]:
         table = s.table(d).astype(np.float64)
         pts = s.get_2d(x, y, np.arange(2 * n), d).astype(np.float64)
@@ -142,7 +194,7 @@ def test_folding_makes_smooth_non_periodic_integrands_converge_faster():
         est = np.stack(
             [
                 f(
-                    dpc.Sampler(samples_per_pixel=n, dimensions=1, seed=s, fold_from=fold_from).get_2d(
+                    dpc.Sampler(samples_per_pixel=n, dimensions=1, seed=s, fold_from=fold_from, net_dims=0).get_2d(
                         0, 0, np.arange(n), 0
                     )
                 )
@@ -213,10 +265,12 @@ def test_models_a_sampler_cannot_use_are_refused_with_the_reason():
 
 def test_each_value_is_uniform_over_seeds():
     """KS test of one lookup over 2,000 seeds (each a new sampler: new tables, keys, rotation)."""
-    v2 = np.array([dpc.Sampler(samples_per_pixel=4, dimensions=2, seed=s).get_2d(5, 9, 2, 1) for s in range(2000)])
-    v1 = np.array([dpc.Sampler(samples_per_pixel=4, dimensions=2, seed=s).get_1d(5, 9, 2, 1) for s in range(2000)])
-    for sample in (v2[:, 0], v2[:, 1], v1):
-        assert stats.kstest(sample, "uniform").pvalue > 1e-3
+    samplers = [dpc.Sampler(samples_per_pixel=4, dimensions=2, seed=s) for s in range(2000)]
+    for d in (0, 1):  # dimension 0 is a net slot, 1 a shifted set
+        v2 = np.array([s.get_2d(5, 9, 2, d) for s in samplers])
+        v1 = np.array([s.get_1d(5, 9, 2, d) for s in samplers])
+        for sample in (v2[:, 0], v2[:, 1], v1):
+            assert stats.kstest(sample, "uniform").pvalue > 1e-3
 
 
 def test_mean_image_over_seeds_converges_to_the_integral():

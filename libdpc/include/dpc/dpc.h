@@ -375,6 +375,15 @@ typedef struct dpc_sampler_options {
      * position (geometry edges), is left as it is. Default 1; DPC_SAMPLER_NO_FOLD for none, 0
      * for all. */
     uint32_t fold_from;
+    /* Slots t < net_dims hold (0,m,2)-nets instead of the models' sets when spp = 2^m >= 2
+     * (docs/rendering.md, "Net dimensions"): every elementary interval of the pixel's samples
+     * (1 x n, 2 x n/2, ... boxes) holds one sample, as in a scrambled Sobol' net, and the net is
+     * blue noise on average over its randomisation. A pixel's samples are the net XORed by a
+     * digital shift of its own (the mask's toroidal shift would undo the intervals), plus a
+     * uniform offset inside each sample's cell. For dimension 0, the pixel position: geometry
+     * edges nearly along the pixel axes (a light's rim) are integrated like a (0,2)-sequence's,
+     * where the sets' 1 x n strata alone trail it. Default 1; 0 for none. */
+    uint32_t net_dims;
     uint64_t seed; /* default 0 */
 } dpc_sampler_options;
 

@@ -15,6 +15,7 @@ void dpc_sampler_options_init(dpc_sampler_options *options) {
     options->samples_per_pixel = 16;
     options->dimensions = 16;
     options->fold_from = 1;
+    options->net_dims = 1;
 }
 
 static dpc_status check_options(const dpc_sampler_options *o) {
@@ -76,6 +77,7 @@ void dpc_sampler_free(dpc_sampler *sampler) {
     free(sampler->tables);
     free(sampler->keyed);
     free(sampler->shifted);
+    free(sampler->nets);
     free(sampler);
 }
 

@@ -43,6 +43,10 @@ dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
     s->inv_spp = 1.0f / (float)n;
     s->fold_from = o->fold_from;
     s->rotate = o->models[0]->cascade.progressive_base ? 0 : n; /* all progressive or none (api_sampler.c) */
+    uint32_t log_n = 0;
+    while ((1u << log_n) < n) log_n++;
+    s->net_slots = n >= 2 && (1u << log_n) == n ? (o->net_dims < D ? o->net_dims : D) : 0;
+    s->net_shift = 24 - log_n;
     s->tables = (float *)malloc((size_t)D * n * 2 * sizeof(float));
     s->keyed = (struct dpc_sampler_keyed *)malloc((size_t)D * sizeof *s->keyed);
     s->fast_slots = D < DPC_SAMPLER_FAST_SLOTS ? D : DPC_SAMPLER_FAST_SLOTS;
@@ -50,8 +54,9 @@ dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
                                  DPC_SAMPLER_MASK_CHANNELS * sizeof(float));
     float *set = (float *)malloc((size_t)n * widest * sizeof(float)); /* one set of the widest model */
     ranked *scratch = (ranked *)malloc((size_t)n * sizeof *scratch);
+    s->nets = s->net_slots ? (uint32_t *)malloc((size_t)s->net_slots * n * sizeof *s->nets) : NULL;
     dpc_status st = DPC_OK;
-    if (!s->tables || !s->keyed || !s->shifted || !set || !scratch) {
+    if (!s->tables || !s->keyed || !s->shifted || !set || !scratch || (s->net_slots && !s->nets)) {
         st = dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory for a sampler of %u x %u points", D, n);
         goto done;
     }
@@ -82,6 +87,20 @@ dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
             stratify_projections(table, n, scratch);
         }
     }
+    /* Net slots: the net's cells replace the set, as cell centres (what dpc_sampler_table shows;
+     * the lookups read the cells). The sets are still made, so every other slot's table is the
+     * same whatever net_dims is. */
+    for (t = 0; t < s->net_slots; t++) {
+        uint32_t *cells = s->nets + (size_t)t * n;
+        if ((st = dpc_sampler_make_net(log_n, dpc_mix64(s->base ^ dpc_mix64(t + 0x243F6A8885A308D3ull)), cells)) !=
+            DPC_OK)
+            goto done;
+        float *table = s->tables + (size_t)t * n * 2;
+        for (uint32_t i = 0; i < n; i++) {
+            table[(size_t)i * 2] = ((float)(cells[i] >> 16) + 0.5f) / (float)n;
+            table[(size_t)i * 2 + 1] = ((float)(cells[i] & 0xFFFFu) + 0.5f) / (float)n;
+        }
+    }
 done:
     free(set);
     free(scratch);
@@ -91,6 +110,13 @@ done:
 dpc_status dpc_sampler_lookup_2d_general(const dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index, uint32_t dim,
                                          float out[2]) {
     const dpc_sampler_point p = dpc_sampler_locate(s, x, y, index, dim);
+    if (p.table < s->net_slots) {
+        float v[2];
+        dpc_sampler_net_values(s, p.table, p.j, p.h, v);
+        out[0] = dpc_sampler_out(s, dim, v[0]);
+        out[1] = dpc_sampler_out(s, dim, v[1]);
+        return DPC_OK;
+    }
     const float *t = s->tables + ((size_t)p.table * s->spp + p.j) * 2;
     out[0] = dpc_sampler_out(s, dim, dpc_sampler_wrap(t[0], dpc_sampler_wrap(p.mask[0], p.c[0])));
     out[1] = dpc_sampler_out(s, dim, dpc_sampler_wrap(t[1], dpc_sampler_wrap(p.mask[1], p.c[1])));
@@ -100,6 +126,12 @@ dpc_status dpc_sampler_lookup_2d_general(const dpc_sampler *s, uint32_t x, uint3
 dpc_status dpc_sampler_lookup_1d_general(const dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index, uint32_t dim,
                                          float *out) {
     const dpc_sampler_point p = dpc_sampler_locate(s, x, y, index, dim);
+    if (p.table < s->net_slots) { /* the net's x: one value per stratum, as the lattice */
+        float v[2];
+        dpc_sampler_net_values(s, p.table, p.j, p.h, v);
+        *out = dpc_sampler_out(s, dim, v[0]);
+        return DPC_OK;
+    }
     *out = dpc_sampler_out(s, dim, dpc_sampler_lattice(s, p.table, p.j, dpc_sampler_wrap(p.mask[2], p.c[0]), p.c[1]));
     return DPC_OK;
 }

@@ -39,6 +39,12 @@ struct dpc_sampler {
      * models (format §6), whose tables are read in order so that the first 2^k samples of a
      * pixel are a progressive prefix. */
     uint32_t rotate;
+    /* Net slots (docs/rendering.md, "Net dimensions"): tables t < net_slots are (0,m,2)-nets,
+     * n = 2^m, randomised per pixel by a digital shift, not by the mask; 0 when n is not a
+     * power of two >= 2. nets: net_slots * n cells, x << 16 | y, each coordinate m bits. */
+    uint32_t net_slots;
+    uint32_t net_shift; /* 24 - m: a cell's coordinate times 2^net_shift is its value on the 2^-24 grid */
+    uint32_t *nets;
     float *tables;                   /* D * n * 2 floats: table t, point j at (t * n + j) * 2 */
     struct dpc_sampler_keyed *keyed; /* D: what key (d, pass 0) gives, for d < D: the common case */
     /* The common case precomputed: for pass 0 of dimension d < fast_slots, the mask moved by the
@@ -127,11 +133,37 @@ static inline float dpc_sampler_out(const struct dpc_sampler *s, uint32_t dim, f
     return dim >= s->fold_from ? dpc_sampler_fold(v) : v;
 }
 
+/* Nets are optimised up to this many points (construction cost 2 (m - 1) n^2 pair terms per
+ * sweep); larger ones keep their random scrambling. */
+#define DPC_SAMPLER_NET_OPTIMISED 1024u
+#define DPC_SAMPLER_NET_SWEEPS 4u
+
+/* The n = 2^m cells (x << 16 | y) of the net of seed (sampler_net.c). */
+dpc_status dpc_sampler_make_net(uint32_t m, uint64_t seed, uint32_t *cells);
+
+/* Net slot t, point j, as randomised by the pixel's hash h: the cell's coordinates exchanged
+ * when bit 32 of h is set, then XORed with h's bits 0.. and 16.. (a digital shift: every
+ * elementary interval of the net keeps one point), then a uniform offset inside the cell from
+ * mix(h + (j + 1) * golden), bits 0.. for x and 24.. for y. */
+static inline void dpc_sampler_net_values(const struct dpc_sampler *s, uint32_t t, uint32_t j, uint64_t h,
+                                          float out[2]) {
+    const uint32_t cell = s->nets[(size_t)t * s->spp + j], cells = s->spp - 1;
+    uint32_t a = cell >> 16, b = cell & 0xFFFFu;
+    const uint32_t swap = (a ^ b) & (0u - (uint32_t)((h >> 32) & 1u)); /* a select: the swap is a coin flip */
+    a ^= swap ^ ((uint32_t)h & cells);
+    b ^= swap ^ ((uint32_t)(h >> 16) & cells);
+    const uint64_t g = dpc_mix64(h + (uint64_t)(j + 1) * 0x9E3779B97F4A7C15ull);
+    const uint32_t low = (1u << s->net_shift) - 1u;
+    out[0] = (float)(a << s->net_shift | ((uint32_t)g & low)) * 0x1p-24f;
+    out[1] = (float)(b << s->net_shift | ((uint32_t)(g >> 24) & low)) * 0x1p-24f;
+}
+
 typedef struct dpc_sampler_point {
     uint32_t table; /* t = dim mod D */
     uint32_t j;     /* point of table t: k rotated by the pixel's offset */
     float mask[3];  /* the pixel's mask values, moved by the key's (ox, oy) */
     float c[2];     /* the key's rotation of every value */
+    uint64_t h;     /* the pixel's hash: its index rotation and, for net slots, its digital shift */
 } dpc_sampler_point;
 
 /* Fill a zeroed sampler from checked options: keys, then D tables from the models' sets, each
@@ -167,6 +199,7 @@ static inline dpc_sampler_point dpc_sampler_locate(const struct dpc_sampler *s, 
     p.mask[2] = m[2];
     p.c[0] = kd.c[0];
     p.c[1] = kd.c[1];
+    p.h = h;
     return p;
 }
 
@@ -197,7 +230,8 @@ dpc_status dpc_sampler_lookup_1d_general(const struct dpc_sampler *s, uint32_t x
 /* The value pair for (x, y, index, dim) into out; returns DPC_OK. */
 static inline dpc_status dpc_sampler_lookup_2d(const struct dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index,
                                                uint32_t dim, float out[2]) {
-    if (index >= s->spp || dim >= s->fast_slots) return dpc_sampler_lookup_2d_general(s, x, y, index, dim, out);
+    if (index >= s->spp || dim >= s->fast_slots || dim < s->net_slots)
+        return dpc_sampler_lookup_2d_general(s, x, y, index, dim, out);
     /* the common case: one hash, two reads */
     const float *m = dpc_sampler_shifted_at(s, x, y, dim);
     const float *t = s->tables + ((size_t)dim * s->spp + dpc_sampler_fast_j(s, x, y, index, dim)) * 2;
@@ -220,7 +254,8 @@ static inline float dpc_sampler_lattice(const struct dpc_sampler *s, uint32_t t,
  * blue noise across pixels, so neighbouring pixels fill each other's strata. */
 static inline dpc_status dpc_sampler_lookup_1d(const struct dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index,
                                                uint32_t dim, float *out) {
-    if (index >= s->spp || dim >= s->fast_slots) return dpc_sampler_lookup_1d_general(s, x, y, index, dim, out);
+    if (index >= s->spp || dim >= s->fast_slots || dim < s->net_slots)
+        return dpc_sampler_lookup_1d_general(s, x, y, index, dim, out);
     const uint32_t j = dpc_sampler_fast_j(s, x, y, index, dim);
     *out = dpc_sampler_out(s, dim,
                            dpc_sampler_lattice(s, dim, j, dpc_sampler_shifted_at(s, x, y, dim)[2], s->keyed[dim].c[1]));

@@ -64,7 +64,7 @@ struct Table {
 };
 
 inline std::shared_ptr<Table> build(const std::vector<std::string> &models, uint32_t spp, uint32_t dims, uint64_t seed,
-                                    uint32_t fold_from, std::string &error) {
+                                    uint32_t fold_from, uint32_t net_dims, std::string &error) {
     std::vector<dpc_model *> loaded;
     auto table = std::make_shared<Table>();
     for (const std::string &m : models) {
@@ -85,6 +85,7 @@ inline std::shared_ptr<Table> build(const std::vector<std::string> &models, uint
         o.dimensions = dims;
         o.seed = seed;
         o.fold_from = fold_from;
+        o.net_dims = net_dims;
         if (dpc_sampler_create(&o, &table->sampler) != DPC_OK) error = dpc_last_error();
     }
     for (dpc_model *h : loaded) dpc_model_free(h);
@@ -124,6 +125,10 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
         int fold_from = props.get<int>("fold_from", 1);
         if (fold_from < -1) Throw("property \"fold_from\" is %d: a dimension (>= 0), or -1 to fold none", fold_from);
         m_fold_from = fold_from < 0 ? DPC_SAMPLER_NO_FOLD : (uint32_t)fold_from;
+        // the film position (dimension 0) is a net when sample_count is a power of two
+        int net_dims = props.get<int>("net_dims", 1);
+        if (net_dims < 0) Throw("property \"net_dims\" is %d: a dimension count (>= 0)", net_dims);
+        m_net_dims = (uint32_t)net_dims;
         m_block_pixels = (uint32_t)block * (uint32_t)block;
         rebuild();
     }
@@ -185,7 +190,7 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
         return "DpcSampler[model = " + models + ", sample_count = " + std::to_string(m_sample_count) +
                ", dimensions = " + std::to_string(m_dims) + ", fold_from = " +
                (m_fold_from == DPC_SAMPLER_NO_FOLD ? std::string("none") : std::to_string(m_fold_from)) +
-               ", seed = " + std::to_string(m_base_seed) + "]";
+               ", net_dims = " + std::to_string(m_net_dims) + ", seed = " + std::to_string(m_base_seed) + "]";
     }
 
     MI_DECLARE_CLASS(DpcSampler)
@@ -200,17 +205,18 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
         m_phase_known = other.m_phase_known;
         m_x = other.m_x;
         m_fold_from = other.m_fold_from;
+        m_net_dims = other.m_net_dims;
         m_y = other.m_y;
     }
 
     void rebuild() {
         std::string error;
-        m_table = dpc_plugin::build(m_models, m_sample_count, m_dims, m_base_seed, m_fold_from, error);
+        m_table = dpc_plugin::build(m_models, m_sample_count, m_dims, m_base_seed, m_fold_from, m_net_dims, error);
         if (!m_table) Throw("dpc sampler: %s", error);
     }
 
     std::vector<std::string> m_models;
-    uint32_t m_dims = 16, m_block_pixels = 1024, m_fold_from = 1;
+    uint32_t m_dims = 16, m_block_pixels = 1024, m_fold_from = 1, m_net_dims = 1;
     std::shared_ptr<dpc_plugin::Table> m_table;
     uint32_t m_phase = 0;
     bool m_phase_known = false;
