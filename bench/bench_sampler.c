@@ -2,7 +2,8 @@
  *   dpc_bench_sampler MODEL SPP:DIMS [SPP:DIMS ...]
  * create: dpc_sampler_create of SPP samples per pixel and DIMS dimensions, median over repeats
  * (at least 3, until 1.5 s or 25); lookups: ns per get_2d / get_1d value over a renderer-style
- * loop (256 x 256 pixels, every sample index, 8 dimensions), median of 11 passes. */
+ * loop (256 x 256 pixels, every sample index, 8 dimensions), median of 11 passes; and get_2d
+ * of dimension 0 alone (a net slot where spp is a power of two >= 2: net_dims = 1). */
 #define _POSIX_C_SOURCE 200809L
 #include <stdio.h>
 #include <stdlib.h>
@@ -30,8 +31,8 @@ static double median(double *v, int n) {
 /* Sum every value so the loop cannot be optimised away. */
 static volatile float g_sink;
 
-static double lookup_ns(const dpc_sampler *s, unsigned spp, int two_d) {
-    const unsigned W = 256, dims = 8;
+static double lookup_ns(const dpc_sampler *s, unsigned spp, int two_d, unsigned dims) {
+    const unsigned W = 256;
     double t[11];
     for (int pass = 0; pass < 11; pass++) {
         float acc = 0.0f, v[2];
@@ -91,10 +92,11 @@ int main(int argc, char **argv) {
             times[runs++] = now() - t0;
         }
         const double create = median(times, runs);
-        const double ns2 = lookup_ns(s, spp < 64 ? spp : 64, 1), ns1 = lookup_ns(s, spp < 64 ? spp : 64, 0);
+        const unsigned k = spp < 64 ? spp : 64;
+        const double ns2 = lookup_ns(s, k, 1, 8), ns1 = lookup_ns(s, k, 0, 8), ns0 = lookup_ns(s, k, 1, 1);
         printf("{\"spp\": %u, \"dims\": %u, \"create_ms\": %.3f, \"runs\": %d, \"get_2d_ns\": %.2f, "
-               "\"get_1d_ns\": %.2f, \"table_bytes\": %zu}\n",
-               spp, dims, create * 1e3, runs, ns2, ns1, (size_t)8 * spp * dims);
+               "\"get_1d_ns\": %.2f, \"get_2d_dim0_ns\": %.2f, \"table_bytes\": %zu}\n",
+               spp, dims, create * 1e3, runs, ns2, ns1, ns0, (size_t)8 * spp * dims);
         dpc_sampler_free(s);
     }
     dpc_model_free(model);

@@ -322,7 +322,7 @@ DPC_API dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, f
  * space at low sample counts). docs/rendering.md defines every step and the reasoning.
  *
  * - Values are in [0, 1). Every value is a pure function of (the models' files, their input
- *   kinds, spp, D, fold_from, seed, x, y, i, d), the same bits across runs, threads and
+ *   kinds, spp, D, fold_from, net_dims, seed, x, y, i, d), the same bits across runs, threads and
  *   machines (IEEE-754 float arithmetic in a fixed order; no FMA contraction).
  * - Any pixel: x and y are taken modulo 2^32 (negative coordinates cast to uint32_t tile
  *   seamlessly). Any dimension: d >= D reuses table d mod D with its own index rotation and
@@ -343,10 +343,13 @@ DPC_API dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, f
  *   number of threads. It does not keep the models: they may be freed after dpc_sampler_create.
  *   To stay within a few nanoseconds, lookups leave the thread's error message alone unless
  *   they fail (the one exception to the convention at the top of this header).
- * - Memory: sizeof(dpc_sampler) + D * (8 * spp + 24) + min(D, 64) * 12,288 bytes (64 spp,
- *   16 dimensions: 200.4 KiB; the second term holds each of the first 64 dimensions' moved
- *   mask, so that a lookup reads it instead of computing it), plus a 12 KiB mask shared by all
- *   samplers.
+ * - Memory: sizeof(dpc_sampler) + D * (8 * spp + 24) + min(D, 64) * 12,288 bytes, plus
+ *   min(net_dims, D) * 4 * spp for the nets when spp is a power of two (64 spp, 16 dimensions,
+ *   one net: 201.2 KiB; the third term holds each of the first 64 dimensions' moved mask, so
+ *   that a lookup reads it instead of computing it), plus a 12 KiB mask shared by all samplers.
+ * - Slots t < options.net_dims (default 1: dimension 0, the pixel position) hold blue-noise
+ *   (0,m,2)-nets instead when spp = 2^m >= 2, each pixel's digitally shifted rather than
+ *   toroidally: every elementary interval of a pixel's samples holds one sample.
  * ------------------------------------------------------------------------------------------- */
 
 typedef struct dpc_sampler dpc_sampler;
