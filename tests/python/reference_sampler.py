@@ -52,7 +52,7 @@ def stratify(table: np.ndarray) -> np.ndarray:
     return out
 
 
-NET_OPTIMISED = 1024
+NET_OPTIMISED = 64
 NET_SWEEPS = 4
 NET_SEED = 0x243F6A8885A308D3
 
@@ -114,16 +114,20 @@ def make_net(m: int, seed: int) -> np.ndarray:
 
 def net_values(cell, j: int, h: int, m: int) -> list:
     """Net point j's cell randomised by the pixel's hash h: swap (bit 32), XOR (bits 0.., 16..),
-    offset inside the cell from mix(h + (j + 1) golden) (bits 0.. for x, 24.. for y)."""
+    offset inside the cell from g = (h XOR (j + 1) golden) * 0xD6E8FEB86659FD93 (bits 40.. for x,
+    16.. for y)."""
     a, b = int(cell[0]), int(cell[1])
     if (h >> 32) & 1:
         a, b = b, a
     a ^= h & ((1 << m) - 1)
     b ^= (h >> 16) & ((1 << m) - 1)
-    g = mix64(h + (j + 1) * GOLDEN)
+    g = ((h ^ ((j + 1) * GOLDEN & M64)) * 0xD6E8FEB86659FD93) & M64
     shift = 24 - m
     low = (1 << shift) - 1
-    return [F32((a << shift) | (g & low)) * F32(2.0**-24), F32((b << shift) | ((g >> 24) & low)) * F32(2.0**-24)]
+    return [
+        F32((a << shift) | ((g >> 40) & low)) * F32(2.0**-24),
+        F32((b << shift) | ((g >> 16) & low)) * F32(2.0**-24),
+    ]
 
 
 class ReferenceSampler:

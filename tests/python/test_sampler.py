@@ -28,8 +28,9 @@ PROGRESSIVE = dpc.model_path("progressive-2d")
         ([BNOT], 5, 3, 12345, 0, 1),  # spp not a power of two (no nets); every dimension folded
         ([BNOT], 1, 2, 7, 1, 1),
         ([BNOT], 2, 3, 7, 1, 2),  # the smallest net
-        ([BNOT], 256, 2, 11, 1, 1),
-        ([BNOT], 2048, 1, 4, 1, 1),  # past the optimised sizes: the randomly scrambled net
+        ([BNOT], 64, 2, 11, 1, 1),  # the largest optimised net
+        ([BNOT], 128, 2, 11, 1, 1),  # past the optimised sizes: the randomly scrambled net
+        ([BNOT], 2048, 1, 4, 1, 1),
         ([dpc.model_path("bnot-4d"), BNOT], 8, 5, 2**64 - 1, 3, 1),  # 4-D model fills two slots per set
         ([DATA / "model_3d_mixed.onnx"], 12, 3, 99, 1, 1),  # odd dims: the last is left out
         ([BNOT], 3, 70, 5, 66, 1),  # past the 64 dimensions with precomputed shifted masks

@@ -133,9 +133,9 @@ static inline float dpc_sampler_out(const struct dpc_sampler *s, uint32_t dim, f
     return dim >= s->fold_from ? dpc_sampler_fold(v) : v;
 }
 
-/* Nets are optimised up to this many points (construction cost 2 (m - 1) n^2 pair terms per
- * sweep); larger ones keep their random scrambling. */
-#define DPC_SAMPLER_NET_OPTIMISED 1024u
+/* Nets are optimised up to this many points; larger ones keep their random scrambling, which
+ * integrated the Cornell box's light rim better at 256 spp (docs/rendering.md, "Net dimensions"). */
+#define DPC_SAMPLER_NET_OPTIMISED 64u
 #define DPC_SAMPLER_NET_SWEEPS 4u
 
 /* The n = 2^m cells (x << 16 | y) of the net of seed (sampler_net.c). */
@@ -144,7 +144,7 @@ dpc_status dpc_sampler_make_net(uint32_t m, uint64_t seed, uint32_t *cells);
 /* Net slot t, point j, as randomised by the pixel's hash h: the cell's coordinates exchanged
  * when bit 32 of h is set, then XORed with h's bits 0.. and 16.. (a digital shift: every
  * elementary interval of the net keeps one point), then a uniform offset inside the cell from
- * mix(h + (j + 1) * golden), bits 0.. for x and 24.. for y. */
+ * g = (h XOR (j + 1) * golden) * 0xD6E8FEB86659FD93, bits 40.. for x and 16.. for y. */
 static inline void dpc_sampler_net_values(const struct dpc_sampler *s, uint32_t t, uint32_t j, uint64_t h,
                                           float out[2]) {
     const uint32_t cell = s->nets[(size_t)t * s->spp + j], cells = s->spp - 1;
@@ -152,10 +152,11 @@ static inline void dpc_sampler_net_values(const struct dpc_sampler *s, uint32_t 
     const uint32_t swap = (a ^ b) & (0u - (uint32_t)((h >> 32) & 1u)); /* a select: the swap is a coin flip */
     a ^= swap ^ ((uint32_t)h & cells);
     b ^= swap ^ ((uint32_t)(h >> 16) & cells);
-    const uint64_t g = dpc_mix64(h + (uint64_t)(j + 1) * 0x9E3779B97F4A7C15ull);
+    /* one multiply, not a full mix: the offsets need only be uniform (h is) and differ per point */
+    const uint64_t g = (h ^ (uint64_t)(j + 1) * 0x9E3779B97F4A7C15ull) * 0xD6E8FEB86659FD93ull;
     const uint32_t low = (1u << s->net_shift) - 1u;
-    out[0] = (float)(a << s->net_shift | ((uint32_t)g & low)) * 0x1p-24f;
-    out[1] = (float)(b << s->net_shift | ((uint32_t)(g >> 24) & low)) * 0x1p-24f;
+    out[0] = (float)(a << s->net_shift | ((uint32_t)(g >> 40) & low)) * 0x1p-24f;
+    out[1] = (float)(b << s->net_shift | ((uint32_t)(g >> 16) & low)) * 0x1p-24f;
 }
 
 typedef struct dpc_sampler_point {
@@ -230,8 +231,17 @@ dpc_status dpc_sampler_lookup_1d_general(const struct dpc_sampler *s, uint32_t x
 /* The value pair for (x, y, index, dim) into out; returns DPC_OK. */
 static inline dpc_status dpc_sampler_lookup_2d(const struct dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index,
                                                uint32_t dim, float out[2]) {
-    if (index >= s->spp || dim >= s->fast_slots || dim < s->net_slots)
-        return dpc_sampler_lookup_2d_general(s, x, y, index, dim, out);
+    if (index >= s->spp || dim >= s->fast_slots) return dpc_sampler_lookup_2d_general(s, x, y, index, dim, out);
+    if (dim < s->net_slots) { /* a net slot's pass 0: one hash, one read, one multiply */
+        const uint64_t h = dpc_mix64(s->fast_key[dim] ^ ((uint64_t)y << 32 | x));
+        uint32_t j = index + (uint32_t)(((h >> 32) * s->rotate) >> 32);
+        j -= j >= s->spp ? s->spp : 0;
+        float v[2];
+        dpc_sampler_net_values(s, dim, j, h, v);
+        out[0] = dpc_sampler_out(s, dim, v[0]);
+        out[1] = dpc_sampler_out(s, dim, v[1]);
+        return DPC_OK;
+    }
     /* the common case: one hash, two reads */
     const float *m = dpc_sampler_shifted_at(s, x, y, dim);
     const float *t = s->tables + ((size_t)dim * s->spp + dpc_sampler_fast_j(s, x, y, index, dim)) * 2;
