@@ -1,6 +1,6 @@
 """dpc's sampler in a real renderer: Mitsuba 3 (scalar_rgb), against every built-in sampler.
 
-    python bench/bench_rendering.py [--width 128] [--seeds 8] [--quick]
+    python bench/bench_rendering.py [--width 128] [--seeds 16] [--quick]
 
 Three scenes built from Mitsuba's own scene dicts: the Cornell box with the `direct` integrator,
 a soft-shadow scene (a sphere over a plane under a large area light, `direct`), and the Cornell
@@ -310,7 +310,9 @@ def section(res: dict, checks, figs) -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--width", type=int, default=128)
-    ap.add_argument("--seeds", type=int, default=8)
+    # 16: with 8, the Cornell boxes' ratios moved by up to 10% between seed sets (a hundred rim
+    # pixels decide them; docs/rendering.md, "How sure these ratios are")
+    ap.add_argument("--seeds", type=int, default=16)
     ap.add_argument("--quick", action="store_true", help="64 x 64 pixels, 3 seeds, REF_SPP 4096: a smoke run "
                     "that does not write docs/")
     args = ap.parse_args()

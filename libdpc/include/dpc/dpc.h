@@ -332,7 +332,8 @@ DPC_API dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, f
  *   sampler's models or none): tables are read in order, not rotated per pixel, so a pixel's
  *   first 2^k samples (k >= 4) are a blue-noise set of their own and an adaptive renderer may
  *   stop at any of them; get_1d then uses the stratum of point i's x rank
- *   (docs/progressive.md).
+ *   (docs/progressive.md). Net slots are then read in the net's Sobol' order, so their first
+ *   2^k samples are a (0,k,2)-net.
  * - Each value, over seeds, is uniformly distributed on a grid of 2^-24: estimates are unbiased.
  * - get_1d draws from the stratified lattice (j + u) / spp (one value per stratum, u the pixel's
  *   mask value), get_2d from the model's set; dimension d of get_1d and of get_2d share their
