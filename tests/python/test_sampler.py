@@ -12,6 +12,7 @@ import pytest
 from scipy import stats
 
 import dpc
+from dpc.baselines import is_02_net
 from reference_sampler import ReferenceSampler  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[1] / "data"
@@ -86,23 +87,13 @@ def test_structure_each_pixel_gets_the_table_shifted_and_a_stratified_lattice():
         assert np.allclose(np.diff(one), 1 / n, atol=1e-6)
 
 
-def _is_net(pts: np.ndarray) -> bool:
-    """Every 2^a x 2^(m - a) elementary interval holds exactly one of the 2^m points."""
-    m = len(pts).bit_length() - 1
-    for a in range(m + 1):
-        cells = np.floor(pts[:, 0] * 2**a).astype(int) * 2 ** (m - a) + np.floor(pts[:, 1] * 2 ** (m - a)).astype(int)
-        if len(np.unique(cells)) != len(pts):
-            return False
-    return True
-
-
 @pytest.mark.parametrize("n", [2, 4, 16, 64, 256])
 def test_net_slots_give_every_pixel_a_02_net(n):
     s = dpc.Sampler(samples_per_pixel=n, dimensions=2, seed=3)  # net_dims=1: dimension 0
     for x, y, first in [(0, 0, 0), (17, 3, n), (-5, 40, 5 * n)]:
-        assert _is_net(s.get_2d(x, y, first + np.arange(n), 0).astype(np.float64))
-    assert _is_net(s.table(0).astype(np.float64))
-    assert not _is_net(s.get_2d(0, 0, np.arange(n), 1).astype(np.float64)) or n <= 4  # the set is not one
+        assert is_02_net(s.get_2d(x, y, first + np.arange(n), 0).astype(np.float64))
+    assert is_02_net(s.table(0).astype(np.float64))
+    assert not is_02_net(s.get_2d(0, 0, np.arange(n), 1).astype(np.float64)) or n <= 4  # the set is not one
 
 
 def test_net_slots_integrate_nearly_axis_aligned_edges_better():
@@ -136,7 +127,7 @@ def test_progressive_pixels_read_the_table_in_order():
     nets = dpc.Sampler(PROGRESSIVE, samples_per_pixel=n, dimensions=1, seed=2)
     for x, y in [(0, 0), (17, 3)]:
         pts = nets.get_2d(x, y, np.arange(n), 0).astype(np.float64)
-        assert all(_is_net(pts[: 1 << k]) for k in range(7))
+        assert all(is_02_net(pts[: 1 << k]) for k in range(7))
     s = dpc.Sampler(PROGRESSIVE, samples_per_pixel=n, dimensions=3, seed=2, fold_from=None, net_dims=0)
     for x, y, d in [(0, 0, 0), (17, 3, 2), (-5, 40, 1)]:
         table = s.table(d).astype(np.float64)
