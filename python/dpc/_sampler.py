@@ -44,8 +44,9 @@ class Sampler:
 
     Each of the ``dimensions`` slots holds one dpc point set of ``samples_per_pixel`` points
     (made once on libdpc's CPU backend, so every machine gets the same values); each pixel
-    reads it rotated and toroidally shifted by its entry of a 32 x 32 screen-space mask, so
-    neighbouring pixels' errors cancel at low screen frequencies. Dimensions from ``fold_from``
+    reads it rotated and toroidally shifted by its entry of a 32 x 32 screen-space mask (moved
+    per 32 x 32 tile, so tiles do not repeat each other), so neighbouring pixels'
+    errors cancel at low screen frequencies. Dimensions from ``fold_from``
     on (default 1: all but dimension 0, the pixel position) are folded by the baker's transform
     ``1 - |2v - 1|``, which makes smooth integrands periodic over the shifted table; ``None``
     folds none. Slots below ``net_dims`` (default 1: the pixel position) hold blue-noise

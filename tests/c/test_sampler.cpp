@@ -6,6 +6,7 @@
 #include "test_util.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <functional>
 #include <thread>
@@ -233,6 +234,64 @@ TEST(SamplerStructure, EachPixelGetsItsTableShiftedAndALattice) {
             std::sort(one.begin(), one.end());
             for (uint32_t i = 1; i < n; i++) EXPECT_NEAR(one[i] - one[i - 1], 1.0 / n, 1e-6);
         }
+    }
+}
+
+// The shift of pixel (x, y) in dimension d: value - table point, for the table point that
+// sample 0 reads (found as the j that makes every sample a shifted table point).
+static bool shift_of(const dpc_sampler *s, const std::vector<float> &tab, uint32_t n, uint32_t x, uint32_t y,
+                     uint32_t d, double out[2]) {
+    float first[2];
+    dpc_sampler_get_2d(s, x, y, 0, d, first);
+    for (uint32_t j0 = 0; j0 < n; j0++) {
+        const double sx = first[0] - tab[2 * j0], sy = first[1] - tab[2 * j0 + 1];
+        bool all = true;
+        for (uint32_t i = 1; i < n && all; i++) {
+            float v[2];
+            dpc_sampler_get_2d(s, x, y, i, d, v);
+            bool hit = false;
+            for (uint32_t j = 0; j < n && !hit; j++)
+                hit = torus_diff(v[0], tab[2 * j] + sx) < 1e-6 && torus_diff(v[1], tab[2 * j + 1] + sy) < 1e-6;
+            all = hit;
+        }
+        if (all) {
+            out[0] = sx - std::floor(sx);
+            out[1] = sy - std::floor(sy);
+            return true;
+        }
+    }
+    return false;
+}
+
+// The mask's offset and rotation are the 32 x 32 tile's own: two pixels of one tile keep the
+// mask's difference of shifts (for some offset), and the same pixel of the next tile (32 to the
+// right or below) has another shift, so tiles do not repeat each other's sets.
+TEST(SamplerStructure, EachTileRotatesTheMaskItsOwnWay) {
+    ModelPtr m = load(model_path("model_2d"));
+    const uint32_t n = 16;
+    SamplerPtr s = make({m.get()}, n, 2, 5, DPC_SAMPLER_NO_FOLD, 0);
+    const float *mask = dpc_sampler_mask();
+    std::vector<float> tab = table_of(s.get(), 1, n);
+    for (uint32_t tile = 0; tile < 4; tile++) {
+        const uint32_t bx = 32 * (tile * 7 + 1), by = 32 * (tile * 3);
+        double a[2], b[2], c[2], e[2];
+        ASSERT_TRUE(shift_of(s.get(), tab, n, bx + 3, by + 4, 1, a));
+        ASSERT_TRUE(shift_of(s.get(), tab, n, bx + 20, by + 9, 1, b));
+        ASSERT_TRUE(shift_of(s.get(), tab, n, bx + 32 + 3, by + 4, 1, c));
+        ASSERT_TRUE(shift_of(s.get(), tab, n, bx + 3, by + 32 + 4, 1, e));
+        // the mask moved by the key's (ox, oy) is unknown here, so compare differences over
+        // all 1,024 offsets: exactly the mask's difference of some pair 17 right, 5 down apart
+        bool kept = false;
+        for (uint32_t o = 0; o < 1024 && !kept; o++) {
+            const uint32_t ox = o % 32, oy = o / 32;
+            const float *p = mask + ((oy + 4) % 32 * 32 + (ox + 3) % 32) * 3;
+            const float *q = mask + ((oy + 9) % 32 * 32 + (ox + 20) % 32) * 3;
+            kept = torus_diff(b[0] - a[0], q[0] - p[0]) < 1e-5 && torus_diff(b[1] - a[1], q[1] - p[1]) < 1e-5;
+        }
+        EXPECT_TRUE(kept) << "tile " << tile;
+        EXPECT_GT(torus_diff(c[0], a[0]) + torus_diff(c[1], a[1]), 1e-4)
+            << "tile " << tile << ": the tile to the right";
+        EXPECT_GT(torus_diff(e[0], a[0]) + torus_diff(e[1], a[1]), 1e-4) << "tile " << tile << ": the tile below";
     }
 }
 

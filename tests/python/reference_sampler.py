@@ -13,6 +13,7 @@ M64 = (1 << 64) - 1
 GOLDEN = 0x9E3779B97F4A7C15
 SET_STEP = 0xD1B54A32D192ED03
 TILE = 32
+SPIN = 0xBF58476D1CE4E5B9
 F32 = np.float32
 
 
@@ -161,13 +162,19 @@ class ReferenceSampler:
         x, y = x % (1 << 32), y % (1 << 32)
         pass_, k = divmod(index, n)
         key = self.key(dim, pass_)
-        h = mix64(key ^ ((y << 32) | x))
-        j = k + (((h >> 32) * self.rotate) >> 32)
-        if j >= n:
-            j -= n
-        ox, oy = key & 31, (key >> 5) & 31
+        t = dim % self.D
+        if t < self.net_slots:  # the pixel's own hash: rotation and digital shift
+            h = mix64(key ^ ((y << 32) | x))
+            j = k + (((h >> 32) * self.rotate) >> 32)
+            return t, j - n if j >= n else j, None, None, h
+        tile = ((y // TILE) << 32) | (x // TILE)
+        kt = mix64(key ^ tile)
+        place = (y % TILE) * TILE + (x % TILE)
+        spin = ((kt ^ (((place + 1) * GOLDEN) & M64)) * SPIN) & M64
+        j = k + (((spin >> 32) * self.rotate) >> 32)
+        ox, oy = kt & 31, (kt >> 5) & 31
         m = self.mask[(y + oy) % TILE, (x + ox) % TILE]
-        return dim % self.D, j, m, (unit24(key >> 10), unit24(key >> 34)), h
+        return t, j - n if j >= n else j, m, (unit24(key >> 10), unit24(key >> 34)), None
 
     def get_2d(self, x: int, y: int, index: int, dim: int) -> np.ndarray:
         t, j, m, c, h = self._locate(x, y, index, dim)

@@ -65,21 +65,71 @@ def test_loads_from_xml_with_every_property():
 
 
 def test_values_are_those_of_dpc_sampler():
-    """The plugin asks libdpc for (pixel in its 32x32 block, sample index, dimension): a fork
-    seeded like Mitsuba's renderer seeds pixel (x, y) of block b gives dpc.Sampler's values."""
+    """The plugin asks libdpc for (pixel, sample index, dimension), the pixel being its place in
+    its 32x32 block moved to the block's own tile: a fork seeded like Mitsuba's renderer seeds
+    pixel (x, y) of the block whose first seed is b gives dpc.Sampler's values at
+    (32 (b & 0xFFFF) + x, 32 (b >> 16) + y), and in a later block (b + 1024) the same place
+    gives other values."""
     plugin = mi.load_dict({"type": "dpc", "sample_count": 4, "seed": 9, "dimensions": 3})
     ref = dpc.Sampler("bnot-2d-stratified", samples_per_pixel=4, dimensions=3, seed=9)  # both fold from 1
-    block_base = 5 * 1024 + 77  # a fork's first seed starts a block, whatever the render seed
     fork = plugin.fork()
-    fork.seed(block_base)
-    for morton, (x, y) in [(0, (0, 0)), (1, (1, 0)), (2, (0, 1)), (11, (1, 3)), (1023, (31, 31))]:
-        fork.seed(block_base + morton)
-        for i in range(5):  # index 4 is a second pass
-            got = [fork.next_2d(), fork.next_1d(), fork.next_2d()]
-            assert np.array_equal(np.array(got[0]), ref.get_2d(x, y, i, 0))
-            assert np.float32(got[1]) == ref.get_1d(x, y, i, 1)
-            assert np.array_equal(np.array(got[2]), ref.get_2d(x, y, i, 2))
-            fork.advance()
+    # a fork's first seed starts a block, whatever the render seed; the second block has
+    # nonzero high bits, so both halves of the block's name are used
+    for block_base in (5 * 1024 + 77, 3 * 65536 + 5 * 1024 + 77 + 1024):
+        fork.seed(block_base)
+        bx, by = 32 * (block_base & 0xFFFF), 32 * (block_base >> 16)
+        for morton, (x, y) in [(0, (0, 0)), (1, (1, 0)), (2, (0, 1)), (11, (1, 3)), (1023, (31, 31))]:
+            fork.seed(block_base + morton)
+            for i in range(5):  # index 4 is a second pass
+                got = [fork.next_2d(), fork.next_1d(), fork.next_2d()]
+                assert np.array_equal(np.array(got[0]), ref.get_2d(bx + x, by + y, i, 0))
+                assert np.float32(got[1]) == ref.get_1d(bx + x, by + y, i, 1)
+                assert np.array_equal(np.array(got[2]), ref.get_2d(bx + x, by + y, i, 2))
+                fork.advance()
+
+
+def _plane_under_sky(sampler: dict, width: int = 64) -> object:
+    """A diffuse plane filling the view under a sky with one bright quarter, at infinity: every
+    pixel integrates the same function of its light sample."""
+    T = mi.ScalarTransform4f
+    sky = np.full((16, 32, 3), 0.2, dtype=np.float32)
+    sky[:8, :16] = 4.0
+    return mi.load_dict(
+        {
+            "type": "scene",
+            "integrator": {"type": "direct", "emitter_samples": 1, "bsdf_samples": 0},
+            "sensor": {
+                "type": "perspective",
+                "fov": 30,
+                "sampler": sampler,
+                "to_world": T().look_at(origin=[0, 0, 1], target=[0, 0, 0], up=[0, 1, 0]),
+                "film": {"type": "hdrfilm", "width": width, "height": width, "rfilter": {"type": "box"}},
+            },
+            "plane": {
+                "type": "rectangle",
+                "to_world": T().scale([10, 10, 1]),
+                "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": 0.5}},
+            },
+            "sky": {"type": "envmap", "bitmap": mi.Bitmap(sky)},
+        }
+    )
+
+
+def test_blocks_and_render_seeds_draw_their_own_values():
+    """Every 32x32 block of a render, and every mi.render seed, draws its own samples. On a scene
+    where every pixel integrates the same function, blocks that shared their samples would share
+    their error image (correlation 1); here the blocks' errors are uncorrelated, renders with
+    seeds 0 and 1 differ (as the built-in samplers' do), and the same seed renders the same
+    image."""
+    scene = _plane_under_sky({"type": "dpc", "sample_count": 4})
+    a, b, a2 = (np.array(mi.render(scene, seed=s)).mean(-1) for s in (0, 1, 0))
+    assert a.std() > 0.01 * a.mean()  # the scene is what the docstring says: the samples matter
+    assert np.array_equal(a, a2)
+    assert not np.array_equal(a, b)
+    err = a - a.mean()
+    blocks = [err[y : y + 32, x : x + 32].ravel() for y in (0, 32) for x in (0, 32)]
+    corr = [np.corrcoef(blocks[0], blk)[0, 1] for blk in blocks[1:]]
+    assert max(abs(c) for c in corr) < 0.3, corr
 
 
 def test_progressive_models_render_their_prefixes():
@@ -89,9 +139,9 @@ def test_progressive_models_render_their_prefixes():
     plugin = mi.load_dict({"type": "dpc", "sample_count": 64, "seed": 2, "model": "progressive-2d", "dimensions": 2})
     ref = dpc.Sampler("progressive-2d", samples_per_pixel=64, dimensions=2, seed=2)
     fork = plugin.fork()
-    fork.seed(40)
+    fork.seed(40)  # pixel (0, 0) of the block named 40: dpc.Sampler's pixel (32 * 40, 0)
     for i in range(16):
-        assert np.array_equal(np.array(fork.next_2d()), ref.get_2d(0, 0, i, 0))
+        assert np.array_equal(np.array(fork.next_2d()), ref.get_2d(32 * 40, 0, i, 0))
         fork.advance()
     img = np.array(mi.render(_scene({"type": "dpc", "model": "progressive-2d"}, 16, width=16)))
     assert np.all(np.isfinite(img)) and img.mean() > 0

@@ -316,10 +316,11 @@ DPC_API dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, f
  * samples per pixel), generated once when it is created on the CPU backend (whose ISA paths all
  * give the same bits), so the tables are the same on every machine. A lookup for pixel (x, y), sample index i and
  * dimension d reads table d mod D at point (i mod spp) rotated by a per-pixel offset, and shifts
- * it toroidally by the pixel's entry of a 32 x 32 screen-space mask (moved and rotated per
- * dimension): each pixel gets the model's blue-noise set, and neighbouring pixels get shifts
- * chosen so that their errors cancel at low screen frequencies (blue-noise error in screen
- * space at low sample counts). docs/rendering.md defines every step and the reasoning.
+ * it toroidally by the pixel's entry of a 32 x 32 screen-space mask (rotated per dimension and
+ * moved per dimension and 32 x 32 tile, so no two tiles repeat each other's samples): each
+ * pixel gets the model's blue-noise set, and neighbouring pixels get shifts chosen so that
+ * their errors cancel at low screen frequencies (blue-noise error in screen space at low
+ * sample counts). docs/rendering.md defines every step and the reasoning.
  *
  * - Values are in [0, 1). Every value is a pure function of (the models' files, their input
  *   kinds, spp, D, fold_from, net_dims, seed, x, y, i, d), the same bits across runs, threads and
@@ -344,10 +345,11 @@ DPC_API dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, f
  *   number of threads. It does not keep the models: they may be freed after dpc_sampler_create.
  *   To stay within a few nanoseconds, lookups leave the thread's error message alone unless
  *   they fail (the one exception to the convention at the top of this header).
- * - Memory: sizeof(dpc_sampler) + D * (8 * spp + 24) + min(D, 64) * 12,288 bytes, plus
+ * - Memory: sizeof(dpc_sampler) + D * (8 * spp + 8) + min(D, 64) * 12,288 bytes, plus
  *   min(net_dims, D) * 4 * spp for the nets when spp is a power of two (64 spp, 16 dimensions,
- *   one net: 201.2 KiB; the third term holds each of the first 64 dimensions' moved mask, so
- *   that a lookup reads it instead of computing it), plus a 12 KiB mask shared by all samplers.
+ *   one net: 201.0 KiB; the third term holds each of the first 64 dimensions' mask with its
+ *   rotation added, so that a lookup reads it instead of computing it), plus a 12 KiB mask
+ *   shared by all samplers.
  * - Slots t < options.net_dims (default 1: dimension 0, the pixel position) hold blue-noise
  *   (0,m,2)-nets instead when spp = 2^m >= 2, each pixel's digitally shifted rather than
  *   toroidally: every elementary interval of a pixel's samples holds one sample.

@@ -75,7 +75,7 @@ dpc_status dpc_sampler_create(const dpc_sampler_options *options, dpc_sampler **
 void dpc_sampler_free(dpc_sampler *sampler) {
     if (!sampler) return;
     free(sampler->tables);
-    free(sampler->keyed);
+    free(sampler->keys);
     free(sampler->shifted);
     free(sampler->nets);
     free(sampler);

@@ -48,7 +48,7 @@ dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
     s->net_slots = n >= 2 && (1u << log_n) == n ? (o->net_dims < D ? o->net_dims : D) : 0;
     s->net_shift = 24 - log_n;
     s->tables = (float *)malloc((size_t)D * n * 2 * sizeof(float));
-    s->keyed = (struct dpc_sampler_keyed *)malloc((size_t)D * sizeof *s->keyed);
+    s->keys = (uint64_t *)malloc((size_t)D * sizeof *s->keys);
     s->fast_slots = D < DPC_SAMPLER_FAST_SLOTS ? D : DPC_SAMPLER_FAST_SLOTS;
     s->shifted = (float *)malloc((size_t)s->fast_slots * DPC_SAMPLER_TILE * DPC_SAMPLER_TILE *
                                  DPC_SAMPLER_MASK_CHANNELS * sizeof(float));
@@ -56,22 +56,20 @@ dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
     ranked *scratch = (ranked *)malloc((size_t)n * sizeof *scratch);
     s->nets = s->net_slots ? (uint32_t *)malloc((size_t)s->net_slots * n * sizeof *s->nets) : NULL;
     dpc_status st = DPC_OK;
-    if (!s->tables || !s->keyed || !s->shifted || !set || !scratch || (s->net_slots && !s->nets)) {
+    if (!s->tables || !s->keys || !s->shifted || !set || !scratch || (s->net_slots && !s->nets)) {
         st = dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory for a sampler of %u x %u points", D, n);
         goto done;
     }
-    for (uint32_t d = 0; d < D; d++) s->keyed[d] = dpc_sampler_keyed_of(dpc_sampler_key(s->base, d, 0));
-    for (uint32_t d = 0; d < s->fast_slots; d++) s->fast_key[d] = s->keyed[d].key;
+    for (uint32_t d = 0; d < D; d++) s->keys[d] = dpc_sampler_key(s->base, d, 0);
+    for (uint32_t d = 0; d < s->fast_slots; d++) s->fast_key[d] = s->keys[d];
     for (uint32_t d = 0; d < s->fast_slots; d++) /* what dpc_sampler_locate and the lookups compute */
-        for (uint32_t y = 0; y < DPC_SAMPLER_TILE; y++)
-            for (uint32_t x = 0; x < DPC_SAMPLER_TILE; x++) {
-                const dpc_sampler_point p = dpc_sampler_locate(s, x, y, 0, d);
-                float *e = s->shifted +
-                           (((size_t)d * DPC_SAMPLER_TILE + y) * DPC_SAMPLER_TILE + x) * DPC_SAMPLER_MASK_CHANNELS;
-                e[0] = dpc_sampler_wrap(p.mask[0], p.c[0]);
-                e[1] = dpc_sampler_wrap(p.mask[1], p.c[1]);
-                e[2] = dpc_sampler_wrap(p.mask[2], p.c[0]);
-            }
+        for (uint32_t at = 0; at < DPC_SAMPLER_TILE * DPC_SAMPLER_TILE; at++) {
+            const float *m = dpc_sampler_mask_data + (size_t)at * DPC_SAMPLER_MASK_CHANNELS;
+            float *e = s->shifted + ((size_t)d * DPC_SAMPLER_TILE * DPC_SAMPLER_TILE + at) * DPC_SAMPLER_MASK_CHANNELS;
+            e[0] = dpc_sampler_wrap(m[0], dpc_sampler_c0(s->keys[d]));
+            e[1] = dpc_sampler_wrap(m[1], dpc_sampler_c1(s->keys[d]));
+            e[2] = dpc_sampler_wrap(m[2], dpc_sampler_c0(s->keys[d]));
+        }
     /* Fill the slots in order: the next model in turn gives a set, its dimension pairs fill slots. */
     uint32_t t = 0;
     for (uint64_t k = 0; t < D; k++) {

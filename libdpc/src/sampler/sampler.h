@@ -1,6 +1,6 @@
 /* The renderer-facing sampler (dpc_sampler_*): per dimension slot, a dpc point set of spp points
- * generated once on the CPU backend; per pixel, a toroidal shift from a screen-space mask
- * and a rotation of the sample index. A lookup is a few integer hashes, two table reads and two
+ * generated once on the CPU backend; per pixel, a toroidal shift from a screen-space mask, moved
+ * and rotated per 32 x 32 tile, and a rotation of the sample index. A lookup is a few integer hashes, two table reads and two
  * float additions: no allocation, no lock, the same bits on every machine.
  * The definition is written out in docs/rendering.md ("Definition"); tests/python/
  * reference_sampler.py is an independent transcription of it. */
@@ -25,7 +25,8 @@
 #define DPC_SAMPLER_MASK_CHANNELS 3u
 extern const float dpc_sampler_mask_data[DPC_SAMPLER_TILE * DPC_SAMPLER_TILE * DPC_SAMPLER_MASK_CHANNELS];
 
-/* Dimensions whose pass-0 lookups use precomputed shifted masks (12 KiB each). */
+/* Dimensions whose pass-0 keys are kept inside the object, with their rotated masks (12 KiB
+ * each). */
 #define DPC_SAMPLER_FAST_SLOTS 64u
 
 struct dpc_sampler {
@@ -45,16 +46,15 @@ struct dpc_sampler {
     uint32_t net_slots;
     uint32_t net_shift; /* 24 - m: a cell's coordinate times 2^net_shift is its value on the 2^-24 grid */
     uint32_t *nets;
-    float *tables;                   /* D * n * 2 floats: table t, point j at (t * n + j) * 2 */
-    struct dpc_sampler_keyed *keyed; /* D: what key (d, pass 0) gives, for d < D: the common case */
-    /* The common case precomputed: for pass 0 of dimension d < fast_slots, the mask moved by the
-     * key's (ox, oy) with the key's rotation added, per pixel (x mod 32, y mod 32): 3 floats,
-     * wrap(mask0, c0), wrap(mask1, c1), wrap(mask2, c0): the values the general path computes,
-     * read instead of recomputed (the same bits; bench/bench_sampler.c). */
+    float *tables;       /* D * n * 2 floats: table t, point j at (t * n + j) * 2 */
+    uint64_t *keys;      /* D: key (d, pass 0), the common case */
     uint32_t fast_slots; /* min(D, DPC_SAMPLER_FAST_SLOTS) */
-    float *shifted;      /* fast_slots * 32 * 32 * 3 floats */
-    /* keyed[d].key for d < fast_slots, inside the object: one dependent load less on the
-     * lookups' critical path (key -> hash -> point -> table read) */
+    /* The common case precomputed: for pass 0 of dimension d < fast_slots, every mask entry with
+     * the key's rotation added, wrap(mask0, c0), wrap(mask1, c1), wrap(mask2, c0): the values
+     * the general path computes, read instead of recomputed (the same bits). */
+    float *shifted; /* fast_slots * 32 * 32 * 3 floats */
+    /* keys[d] for d < fast_slots, inside the object: one dependent load less on the lookups'
+     * critical path (key -> hash -> point -> table read) */
     uint64_t fast_key[DPC_SAMPLER_FAST_SLOTS];
 };
 
@@ -67,21 +67,32 @@ static inline uint64_t dpc_sampler_key(uint64_t base, uint32_t dim, uint32_t pas
 /* 24 bits of a key as a float in [0, 1), exact. */
 static inline float dpc_sampler_unit(uint64_t bits) { return (float)(bits & 0xFFFFFFu) * (1.0f / 16777216.0f); }
 
-/* What a key gives: the mask offset (ox, oy) and the rotation (c0, c1) of every value. */
-struct dpc_sampler_keyed {
-    uint64_t key;
-    uint32_t ox, oy;
-    float c[2];
-};
+/* The rotation (c0, c1) of every value of a key's set-slot lookups. */
+static inline float dpc_sampler_c0(uint64_t key) { return dpc_sampler_unit(key >> 10); }
+static inline float dpc_sampler_c1(uint64_t key) { return dpc_sampler_unit(key >> 34); }
 
-static inline struct dpc_sampler_keyed dpc_sampler_keyed_of(uint64_t key) {
-    struct dpc_sampler_keyed k;
-    k.key = key;
-    k.ox = (uint32_t)key & (DPC_SAMPLER_TILE - 1);
-    k.oy = (uint32_t)(key >> 5) & (DPC_SAMPLER_TILE - 1);
-    k.c[0] = dpc_sampler_unit(key >> 10);
-    k.c[1] = dpc_sampler_unit(key >> 34);
-    return k;
+/* What a key gives pixel (x, y) of a set slot through the pixel's 32 x 32 tile: its entry of
+ * the mask moved by the tile's own (ox, oy), and its rotation of the sample index. Each tile
+ * its own offset, so no two tiles (and, in Mitsuba, no two blocks or render seeds) repeat each
+ * other's sets, while inside a tile the mask's relative shifts, its blue noise, are kept. One
+ * hash per lookup: the index rotation is the tile's hash and the pixel's place in the tile
+ * through one multiply. */
+typedef struct dpc_sampler_tiled {
+    uint32_t at;  /* the mask entry: ((y + oy) mod 32) * 32 + (x + ox) mod 32 */
+    uint32_t rot; /* the pixel's rotation of the sample index, in [0, rotate) */
+} dpc_sampler_tiled;
+
+static inline dpc_sampler_tiled dpc_sampler_tile(uint64_t key, uint32_t rotate, uint32_t x, uint32_t y) {
+    const uint64_t tile = (uint64_t)(y / DPC_SAMPLER_TILE) << 32 | (x / DPC_SAMPLER_TILE);
+    const uint64_t kt = dpc_mix64(key ^ tile); /* net slots' pixel hashes use keys of their own */
+    const uint32_t ox = (uint32_t)kt, oy = (uint32_t)(kt >> 5), last = DPC_SAMPLER_TILE - 1;
+    const uint64_t place = (uint64_t)((y & last) * DPC_SAMPLER_TILE + (x & last));
+    /* a bijection of kt for each place (uniform over seeds), its high bits spread over places */
+    const uint64_t spin = (kt ^ (place + 1) * 0x9E3779B97F4A7C15ull) * 0xBF58476D1CE4E5B9ull;
+    dpc_sampler_tiled t;
+    t.at = ((y + oy) & last) * DPC_SAMPLER_TILE + ((x + ox) & last);
+    t.rot = (uint32_t)(((spin >> 32) * rotate) >> 32);
+    return t;
 }
 
 /* a + b - floor(a + b) for a, b in [0, 1): the result of the float addition minus 1 when it
@@ -162,9 +173,9 @@ static inline void dpc_sampler_net_values(const struct dpc_sampler *s, uint32_t 
 typedef struct dpc_sampler_point {
     uint32_t table; /* t = dim mod D */
     uint32_t j;     /* point of table t: k rotated by the pixel's offset */
-    float mask[3];  /* the pixel's mask values, moved by the key's (ox, oy) */
-    float c[2];     /* the key's rotation of every value */
-    uint64_t h;     /* the pixel's hash: its index rotation and, for net slots, its digital shift */
+    float mask[3];  /* set slots: the pixel's mask values, the mask moved by its tile's (ox, oy) */
+    float c[2];     /* set slots: the key's rotation of every value */
+    uint64_t h;     /* net slots: the pixel's hash, its index rotation and digital shift */
 } dpc_sampler_point;
 
 /* Fill a zeroed sampler from checked options: keys, then D tables from the models' sets, each
@@ -181,43 +192,42 @@ static inline dpc_sampler_point dpc_sampler_locate(const struct dpc_sampler *s, 
         k = index - pass * n;
     }
     if (dim >= s->slots) table = dim % s->slots;
-    const struct dpc_sampler_keyed kd =
-        pass == 0 && dim < s->slots ? s->keyed[dim] : dpc_sampler_keyed_of(dpc_sampler_key(s->base, dim, pass));
-    /* the pixel's rotation of the sample index: decorrelates how dimensions pair up (none for
-     * progressive tables, whose order is their point) */
-    const uint64_t h = dpc_mix64(kd.key ^ ((uint64_t)y << 32 | x));
-    uint32_t j = k + (uint32_t)(((h >> 32) * s->rotate) >> 32);
-    j -= j >= n ? n : 0;
-    /* the pixel's mask entry, moved by (ox, oy) for this key */
-    const float *m = dpc_sampler_mask_data + (((y + kd.oy) & (DPC_SAMPLER_TILE - 1)) * DPC_SAMPLER_TILE +
-                                              ((x + kd.ox) & (DPC_SAMPLER_TILE - 1))) *
-                                                 DPC_SAMPLER_MASK_CHANNELS;
+    const uint64_t key = pass == 0 && dim < s->slots ? s->keys[dim] : dpc_sampler_key(s->base, dim, pass);
+    /* the pixel's rotation of the sample index decorrelates how dimensions pair up (none for
+     * progressive tables, whose order is their point); a net slot takes it, and its digital
+     * shift, from the pixel's own hash */
     dpc_sampler_point p;
+    uint32_t rot;
     p.table = table;
-    p.j = j;
-    p.mask[0] = m[0];
-    p.mask[1] = m[1];
-    p.mask[2] = m[2];
-    p.c[0] = kd.c[0];
-    p.c[1] = kd.c[1];
-    p.h = h;
+    if (table < s->net_slots) {
+        p.h = dpc_mix64(key ^ ((uint64_t)y << 32 | x));
+        rot = (uint32_t)(((p.h >> 32) * s->rotate) >> 32);
+        p.mask[0] = p.mask[1] = p.mask[2] = p.c[0] = p.c[1] = 0.0f;
+    } else {
+        const dpc_sampler_tiled tiled = dpc_sampler_tile(key, s->rotate, x, y);
+        const float *m = dpc_sampler_mask_data + (size_t)tiled.at * DPC_SAMPLER_MASK_CHANNELS;
+        p.h = 0;
+        rot = tiled.rot;
+        p.mask[0] = m[0];
+        p.mask[1] = m[1];
+        p.mask[2] = m[2];
+        p.c[0] = dpc_sampler_c0(key);
+        p.c[1] = dpc_sampler_c1(key);
+    }
+    p.j = k + rot;
+    p.j -= p.j >= n ? n : 0;
     return p;
 }
 
-/* The pixel's entry of the precomputed shifted mask of slot dim (dim < fast_slots, pass 0). */
-static inline const float *dpc_sampler_shifted_at(const struct dpc_sampler *s, uint32_t x, uint32_t y, uint32_t dim) {
-    return s->shifted + (((size_t)dim * DPC_SAMPLER_TILE + (y & (DPC_SAMPLER_TILE - 1))) * DPC_SAMPLER_TILE +
-                         (x & (DPC_SAMPLER_TILE - 1))) *
-                            DPC_SAMPLER_MASK_CHANNELS;
+/* Entry at of the rotated mask of fast slot dim (pass 0). */
+static inline const float *dpc_sampler_shifted_at(const struct dpc_sampler *s, uint32_t dim, uint32_t at) {
+    return s->shifted + ((size_t)dim * DPC_SAMPLER_TILE * DPC_SAMPLER_TILE + at) * DPC_SAMPLER_MASK_CHANNELS;
 }
 
-/* The pass-0 point of a fast slot: k rotated by the pixel's offset (as in dpc_sampler_locate). */
-static inline uint32_t dpc_sampler_fast_j(const struct dpc_sampler *s, uint32_t x, uint32_t y, uint32_t k,
-                                          uint32_t dim) {
-    const uint32_t n = s->spp;
-    const uint64_t h = dpc_mix64(s->fast_key[dim] ^ ((uint64_t)y << 32 | x));
-    uint32_t j = k + (uint32_t)(((h >> 32) * s->rotate) >> 32);
-    return j - (j >= n ? n : 0);
+/* Point k rotated by rot (as in dpc_sampler_locate). */
+static inline uint32_t dpc_sampler_rotated(const struct dpc_sampler *s, uint32_t k, uint32_t rot) {
+    const uint32_t j = k + rot;
+    return j - (j >= s->spp ? s->spp : 0);
 }
 
 /* Later passes and dimensions past fast_slots (sampler.c): out of line, so that the common case
@@ -243,8 +253,9 @@ static inline dpc_status dpc_sampler_lookup_2d(const struct dpc_sampler *s, uint
         return DPC_OK;
     }
     /* the common case: one hash, two reads */
-    const float *m = dpc_sampler_shifted_at(s, x, y, dim);
-    const float *t = s->tables + ((size_t)dim * s->spp + dpc_sampler_fast_j(s, x, y, index, dim)) * 2;
+    const dpc_sampler_tiled tiled = dpc_sampler_tile(s->fast_key[dim], s->rotate, x, y);
+    const float *m = dpc_sampler_shifted_at(s, dim, tiled.at);
+    const float *t = s->tables + ((size_t)dim * s->spp + dpc_sampler_rotated(s, index, tiled.rot)) * 2;
     out[0] = dpc_sampler_out(s, dim, dpc_sampler_wrap(t[0], m[0]));
     out[1] = dpc_sampler_out(s, dim, dpc_sampler_wrap(t[1], m[1]));
     return DPC_OK;
@@ -266,9 +277,11 @@ static inline dpc_status dpc_sampler_lookup_1d(const struct dpc_sampler *s, uint
                                                uint32_t dim, float *out) {
     if (index >= s->spp || dim >= s->fast_slots || dim < s->net_slots)
         return dpc_sampler_lookup_1d_general(s, x, y, index, dim, out);
-    const uint32_t j = dpc_sampler_fast_j(s, x, y, index, dim);
-    *out = dpc_sampler_out(s, dim,
-                           dpc_sampler_lattice(s, dim, j, dpc_sampler_shifted_at(s, x, y, dim)[2], s->keyed[dim].c[1]));
+    const dpc_sampler_tiled tiled = dpc_sampler_tile(s->fast_key[dim], s->rotate, x, y);
+    const uint32_t j = dpc_sampler_rotated(s, index, tiled.rot);
+    *out = dpc_sampler_out(
+        s, dim,
+        dpc_sampler_lattice(s, dim, j, dpc_sampler_shifted_at(s, dim, tiled.at)[2], dpc_sampler_c1(s->fast_key[dim])));
     return DPC_OK;
 }
 

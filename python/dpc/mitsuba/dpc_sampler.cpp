@@ -7,9 +7,12 @@
 //   render_seed * width * height + block_id * block_size^2 + morton_index(pixel in block)
 // and renders each block's pixels in Morton order on one forked sampler. The first seed a fork
 // sees starts a block, so (seed - first seed) mod block_size^2 is the Morton index: the pixel's
-// position inside its block. With the 32-pixel mask tile dividing the block size (32 unless the
-// integrator's block_size says otherwise), block-local positions tile the mask seamlessly across
-// blocks without knowing where a block lies.
+// position inside its block, and seed - morton index (the block's first seed) names the block.
+// The plugin asks libdpc for pixel (bx * block_size + x, by * block_size + y), (bx, by) the low
+// and high 16 bits of that name: every block, and every mi.render seed, gets values of its own,
+// and with the 32-pixel mask tile dividing the block size (32 unless the integrator's
+// block_size says otherwise) the mask tiles seamlessly across blocks without knowing where a
+// block lies in the image.
 #include <cstdlib>
 #include <memory>
 #include <string>
@@ -129,6 +132,7 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
         int net_dims = props.get<int>("net_dims", 1);
         if (net_dims < 0) Throw("property \"net_dims\" is %d: a dimension count (>= 0)", net_dims);
         m_net_dims = (uint32_t)net_dims;
+        m_block_side = (uint32_t)block;
         m_block_pixels = (uint32_t)block * (uint32_t)block;
         rebuild();
     }
@@ -154,9 +158,13 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
                 m_phase = seed;
                 m_phase_known = true;
             }
-            uint32_t i = (uint32_t)(seed - m_phase) & (m_block_pixels - 1);
-            m_x = dpc_plugin::compact_bits(i);
-            m_y = dpc_plugin::compact_bits(i >> 1);
+            const uint32_t i = (uint32_t)(seed - m_phase) & (m_block_pixels - 1);
+            // the block's first seed names the block (and the render's seed): it places the
+            // block at its own tile of the sampler's pixel plane, so every block (and every
+            // mi.render seed) draws its own values; the mask tiles across blocks all the same
+            const uint32_t start = (uint32_t)seed - i, block = m_block_side;
+            m_x = (start & 0xFFFFu) * block + dpc_plugin::compact_bits(i);
+            m_y = (start >> 16) * block + dpc_plugin::compact_bits(i >> 1);
         }
     }
 
@@ -200,6 +208,7 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
         m_models = other.m_models;
         m_dims = other.m_dims;
         m_block_pixels = other.m_block_pixels;
+        m_block_side = other.m_block_side;
         m_table = other.m_table;
         m_phase = other.m_phase;
         m_phase_known = other.m_phase_known;
@@ -216,7 +225,7 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
     }
 
     std::vector<std::string> m_models;
-    uint32_t m_dims = 16, m_block_pixels = 1024, m_fold_from = 1, m_net_dims = 1;
+    uint32_t m_dims = 16, m_block_side = 32, m_block_pixels = 1024, m_fold_from = 1, m_net_dims = 1;
     std::shared_ptr<dpc_plugin::Table> m_table;
     uint32_t m_phase = 0;
     bool m_phase_known = false;
