@@ -1,7 +1,7 @@
 /* The renderer-facing sampler (dpc_sampler_*): per dimension slot, a dpc point set of spp points
- * generated once on the CPU backend; per pixel, a toroidal shift from a screen-space mask, moved
- * and rotated per 32 x 32 tile, and a rotation of the sample index. A lookup is a few integer hashes, two table reads and two
- * float additions: no allocation, no lock, the same bits on every machine.
+ * generated once on the CPU backend; per pixel, a toroidal shift from a screen-space mask (moved
+ * per 32 x 32 tile) and a rotation of the sample index. A lookup is an integer hash, two table
+ * reads and two float additions: no allocation, no lock, the same bits on every machine.
  * The definition is written out in docs/rendering.md ("Definition"); tests/python/
  * reference_sampler.py is an independent transcription of it. */
 #ifndef DPC_SAMPLER_SAMPLER_H
@@ -84,7 +84,7 @@ typedef struct dpc_sampler_tiled {
 
 static inline dpc_sampler_tiled dpc_sampler_tile(uint64_t key, uint32_t rotate, uint32_t x, uint32_t y) {
     const uint64_t tile = (uint64_t)(y / DPC_SAMPLER_TILE) << 32 | (x / DPC_SAMPLER_TILE);
-    const uint64_t kt = dpc_mix64(key ^ tile); /* net slots' pixel hashes use keys of their own */
+    const uint64_t kt = dpc_mix64(key ^ tile); /* a key serves set or net slots, never both */
     const uint32_t ox = (uint32_t)kt, oy = (uint32_t)(kt >> 5), last = DPC_SAMPLER_TILE - 1;
     const uint64_t place = (uint64_t)((y & last) * DPC_SAMPLER_TILE + (x & last));
     /* a bijection of kt for each place (uniform over seeds), its high bits spread over places */
