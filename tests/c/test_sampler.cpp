@@ -199,44 +199,6 @@ TEST(SamplerDeterminism, ModelsMayBeFreedAfterCreate) {
     EXPECT_EQ(dpc_sampler_get_2d(s.get(), 3, 4, 5, 1, v), DPC_OK);
 }
 
-TEST(SamplerStructure, EachPixelGetsItsTableShiftedAndALattice) {
-    ModelPtr m = load(model_path("model_2d"));
-    const uint32_t n = 16;
-    SamplerPtr s = make({m.get()}, n, 4, 3, DPC_SAMPLER_NO_FOLD, 0);
-    for (uint32_t d = 0; d < 6; d++) { // d >= 4 reuses table d mod 4
-        std::vector<float> tab = table_of(s.get(), d % 4, n);
-        for (uint32_t p = 0; p < 5; p++) {
-            const uint32_t x = p * 37 + 1, y = p * 11;
-            float first[2];
-            dpc_sampler_get_2d(s.get(), x, y, 0, d, first);
-            // value i - table point j = one shift for all i; find j for i = 0 by trying all
-            bool found = false;
-            for (uint32_t j0 = 0; j0 < n && !found; j0++) {
-                const double sx = first[0] - tab[2 * j0], sy = first[1] - tab[2 * j0 + 1];
-                bool all = true;
-                for (uint32_t i = 0; i < n && all; i++) {
-                    float v[2];
-                    dpc_sampler_get_2d(s.get(), x, y, i, d, v);
-                    bool hit = false;
-                    for (uint32_t j = 0; j < n && !hit; j++)
-                        hit = torus_diff(v[0], tab[2 * j] + sx) < 1e-6 && torus_diff(v[1], tab[2 * j + 1] + sy) < 1e-6;
-                    all = hit;
-                }
-                found = all;
-            }
-            EXPECT_TRUE(found) << "pixel (" << x << ", " << y << ") dimension " << d;
-            std::vector<float> one;
-            for (uint32_t i = 0; i < n; i++) {
-                float w;
-                dpc_sampler_get_1d(s.get(), x, y, i, d, &w);
-                one.push_back(w);
-            }
-            std::sort(one.begin(), one.end());
-            for (uint32_t i = 1; i < n; i++) EXPECT_NEAR(one[i] - one[i - 1], 1.0 / n, 1e-6);
-        }
-    }
-}
-
 // The shift of pixel (x, y) in dimension d: value - table point, for the table point that
 // sample 0 reads (found as the j that makes every sample a shifted table point).
 static bool shift_of(const dpc_sampler *s, const std::vector<float> &tab, uint32_t n, uint32_t x, uint32_t y,
@@ -261,6 +223,30 @@ static bool shift_of(const dpc_sampler *s, const std::vector<float> &tab, uint32
         }
     }
     return false;
+}
+
+TEST(SamplerStructure, EachPixelGetsItsTableShiftedAndALattice) {
+    ModelPtr m = load(model_path("model_2d"));
+    const uint32_t n = 16;
+    SamplerPtr s = make({m.get()}, n, 4, 3, DPC_SAMPLER_NO_FOLD, 0);
+    for (uint32_t d = 0; d < 6; d++) { // d >= 4 reuses table d mod 4
+        std::vector<float> tab = table_of(s.get(), d % 4, n);
+        for (uint32_t p = 0; p < 5; p++) {
+            const uint32_t x = p * 37 + 1, y = p * 11;
+            // value i - table point j = one shift for all i
+            double shift[2];
+            EXPECT_TRUE(shift_of(s.get(), tab, n, x, y, d, shift))
+                << "pixel (" << x << ", " << y << ") dimension " << d;
+            std::vector<float> one;
+            for (uint32_t i = 0; i < n; i++) {
+                float w;
+                dpc_sampler_get_1d(s.get(), x, y, i, d, &w);
+                one.push_back(w);
+            }
+            std::sort(one.begin(), one.end());
+            for (uint32_t i = 1; i < n; i++) EXPECT_NEAR(one[i] - one[i - 1], 1.0 / n, 1e-6);
+        }
+    }
 }
 
 // The mask's offset and rotation are the 32 x 32 tile's own: two pixels of one tile keep the

@@ -66,9 +66,10 @@ dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
         for (uint32_t at = 0; at < DPC_SAMPLER_TILE * DPC_SAMPLER_TILE; at++) {
             const float *m = dpc_sampler_mask_data + (size_t)at * DPC_SAMPLER_MASK_CHANNELS;
             float *e = s->shifted + ((size_t)d * DPC_SAMPLER_TILE * DPC_SAMPLER_TILE + at) * DPC_SAMPLER_MASK_CHANNELS;
-            e[0] = dpc_sampler_wrap(m[0], dpc_sampler_c0(s->keys[d]));
-            e[1] = dpc_sampler_wrap(m[1], dpc_sampler_c1(s->keys[d]));
-            e[2] = dpc_sampler_wrap(m[2], dpc_sampler_c0(s->keys[d]));
+            const float c0 = dpc_sampler_c0(s->keys[d]), c1 = dpc_sampler_c1(s->keys[d]);
+            e[0] = dpc_sampler_wrap(m[0], c0);
+            e[1] = dpc_sampler_wrap(m[1], c1);
+            e[2] = dpc_sampler_wrap(m[2], c0);
         }
     /* Fill the slots in order: the next model in turn gives a set, its dimension pairs fill slots. */
     uint32_t t = 0;

@@ -71,6 +71,17 @@ static inline float dpc_sampler_unit(uint64_t bits) { return (float)(bits & 0xFF
 static inline float dpc_sampler_c0(uint64_t key) { return dpc_sampler_unit(key >> 10); }
 static inline float dpc_sampler_c1(uint64_t key) { return dpc_sampler_unit(key >> 34); }
 
+/* A pixel's rotation of the sample index, in [0, rotate): the high half of its hash scaled. */
+static inline uint32_t dpc_sampler_rotation(uint64_t hash, uint32_t rotate) {
+    return (uint32_t)(((hash >> 32) * rotate) >> 32);
+}
+
+/* Point k of n rotated by rot < n. */
+static inline uint32_t dpc_sampler_rotated(uint32_t n, uint32_t k, uint32_t rot) {
+    const uint32_t j = k + rot;
+    return j - (j >= n ? n : 0);
+}
+
 /* What a key gives pixel (x, y) of a set slot through the pixel's 32 x 32 tile: its entry of
  * the mask moved by the tile's own (ox, oy), and its rotation of the sample index. Each tile
  * its own offset, so no two tiles (and, in Mitsuba, no two blocks or render seeds) repeat each
@@ -91,7 +102,7 @@ static inline dpc_sampler_tiled dpc_sampler_tile(uint64_t key, uint32_t rotate, 
     const uint64_t spin = (kt ^ (place + 1) * 0x9E3779B97F4A7C15ull) * 0xBF58476D1CE4E5B9ull;
     dpc_sampler_tiled t;
     t.at = ((y + oy) & last) * DPC_SAMPLER_TILE + ((x + ox) & last);
-    t.rot = (uint32_t)(((spin >> 32) * rotate) >> 32);
+    t.rot = dpc_sampler_rotation(spin, rotate);
     return t;
 }
 
@@ -201,7 +212,7 @@ static inline dpc_sampler_point dpc_sampler_locate(const struct dpc_sampler *s, 
     p.table = table;
     if (table < s->net_slots) {
         p.h = dpc_mix64(key ^ ((uint64_t)y << 32 | x));
-        rot = (uint32_t)(((p.h >> 32) * s->rotate) >> 32);
+        rot = dpc_sampler_rotation(p.h, s->rotate);
         p.mask[0] = p.mask[1] = p.mask[2] = p.c[0] = p.c[1] = 0.0f;
     } else {
         const dpc_sampler_tiled tiled = dpc_sampler_tile(key, s->rotate, x, y);
@@ -214,20 +225,13 @@ static inline dpc_sampler_point dpc_sampler_locate(const struct dpc_sampler *s, 
         p.c[0] = dpc_sampler_c0(key);
         p.c[1] = dpc_sampler_c1(key);
     }
-    p.j = k + rot;
-    p.j -= p.j >= n ? n : 0;
+    p.j = dpc_sampler_rotated(n, k, rot);
     return p;
 }
 
 /* Entry at of the rotated mask of fast slot dim (pass 0). */
 static inline const float *dpc_sampler_shifted_at(const struct dpc_sampler *s, uint32_t dim, uint32_t at) {
     return s->shifted + ((size_t)dim * DPC_SAMPLER_TILE * DPC_SAMPLER_TILE + at) * DPC_SAMPLER_MASK_CHANNELS;
-}
-
-/* Point k rotated by rot (as in dpc_sampler_locate). */
-static inline uint32_t dpc_sampler_rotated(const struct dpc_sampler *s, uint32_t k, uint32_t rot) {
-    const uint32_t j = k + rot;
-    return j - (j >= s->spp ? s->spp : 0);
 }
 
 /* Later passes and dimensions past fast_slots (sampler.c): out of line, so that the common case
@@ -244,8 +248,7 @@ static inline dpc_status dpc_sampler_lookup_2d(const struct dpc_sampler *s, uint
     if (index >= s->spp || dim >= s->fast_slots) return dpc_sampler_lookup_2d_general(s, x, y, index, dim, out);
     if (dim < s->net_slots) { /* a net slot's pass 0: one hash, one read, one multiply */
         const uint64_t h = dpc_mix64(s->fast_key[dim] ^ ((uint64_t)y << 32 | x));
-        uint32_t j = index + (uint32_t)(((h >> 32) * s->rotate) >> 32);
-        j -= j >= s->spp ? s->spp : 0;
+        const uint32_t j = dpc_sampler_rotated(s->spp, index, dpc_sampler_rotation(h, s->rotate));
         float v[2];
         dpc_sampler_net_values(s, dim, j, h, v);
         out[0] = dpc_sampler_out(s, dim, v[0]);
@@ -255,7 +258,7 @@ static inline dpc_status dpc_sampler_lookup_2d(const struct dpc_sampler *s, uint
     /* the common case: one hash, two reads */
     const dpc_sampler_tiled tiled = dpc_sampler_tile(s->fast_key[dim], s->rotate, x, y);
     const float *m = dpc_sampler_shifted_at(s, dim, tiled.at);
-    const float *t = s->tables + ((size_t)dim * s->spp + dpc_sampler_rotated(s, index, tiled.rot)) * 2;
+    const float *t = s->tables + ((size_t)dim * s->spp + dpc_sampler_rotated(s->spp, index, tiled.rot)) * 2;
     out[0] = dpc_sampler_out(s, dim, dpc_sampler_wrap(t[0], m[0]));
     out[1] = dpc_sampler_out(s, dim, dpc_sampler_wrap(t[1], m[1]));
     return DPC_OK;
@@ -278,7 +281,7 @@ static inline dpc_status dpc_sampler_lookup_1d(const struct dpc_sampler *s, uint
     if (index >= s->spp || dim >= s->fast_slots || dim < s->net_slots)
         return dpc_sampler_lookup_1d_general(s, x, y, index, dim, out);
     const dpc_sampler_tiled tiled = dpc_sampler_tile(s->fast_key[dim], s->rotate, x, y);
-    const uint32_t j = dpc_sampler_rotated(s, index, tiled.rot);
+    const uint32_t j = dpc_sampler_rotated(s->spp, index, tiled.rot);
     *out = dpc_sampler_out(
         s, dim,
         dpc_sampler_lattice(s, dim, j, dpc_sampler_shifted_at(s, dim, tiled.at)[2], dpc_sampler_c1(s->fast_key[dim])));
