@@ -152,7 +152,15 @@ class ReferenceSampler:
         # net slots: only when spp is a power of two >= 2
         self.m = spp.bit_length() - 1
         self.net_slots = min(net_dims, dims) if spp >= 2 and spp == 1 << self.m else 0
-        self.nets = [make_net(self.m, mix64(self.base ^ mix64(t + NET_SEED))) for t in range(self.net_slots)]
+        self.nets = []
+        for t in range(self.net_slots):
+            seed_t = mix64(self.base ^ mix64(t + NET_SEED))
+            net = make_net(self.m, seed_t)
+            if t > 0 and self.rotate:  # later nets in a seeded random order (Fisher-Yates)
+                for i in range(spp - 1, 0, -1):
+                    j = ((mix64((seed_t + i * 0xD1342543DE82EF95) & M64) >> 32) * (i + 1)) >> 32
+                    net[[i, j]] = net[[j, i]]
+            self.nets.append(net)
 
     def key(self, dim: int, pass_: int) -> int:
         return mix64(self.base ^ mix64(((pass_ << 32) | dim) + GOLDEN))

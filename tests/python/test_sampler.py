@@ -4,6 +4,7 @@ arguments, unbiasedness over seeds, and the screen-space property it is designed
 
 from __future__ import annotations
 
+import math
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -38,6 +39,8 @@ PROGRESSIVE = dpc.model_path("progressive-2d")
         ([BNOT], 4, 70, 5, 66, 67),  # net slots past them too
         ([PROGRESSIVE], 64, 4, 3, 1, 1),  # progressive: tables in order, 1-D strata by x rank
         ([PROGRESSIVE], 48, 70, 8, None, 1),
+        ([PROGRESSIVE], 64, 4, 3, 1, 2),  # progressive nets are read in order, none reordered
+        ([BNOT], 256, 3, 9, None, 3),  # nets after the first reordered
     ],
 )
 def test_lookups_match_the_reference_bit_for_bit(models, spp, dims, seed, fold_from, net_dims):
@@ -57,6 +60,26 @@ def test_lookups_match_the_reference_bit_for_bit(models, spp, dims, seed, fold_f
         want1 = ref.get_1d(int(x[a]), int(y[a]), int(index[a]), int(dim[a]))
         assert np.array_equal(v2[a], want2), (x[a], y[a], index[a], dim[a], v2[a], want2)
         assert v1[a] == want1, (x[a], y[a], index[a], dim[a], v1[a], want1)
+
+
+def test_net_slots_pair_up_like_a_random_pairing():
+    """Two net slots, their samples paired by index, integrate a product of one coordinate of
+    each as well as the same points paired at random. Nets in Sobol' order rotated against each
+    other did not (16 times the error at 256 spp): later nets are stored in a random order."""
+    n, side = 256, 32
+    s = dpc.Sampler(samples_per_pixel=n, dimensions=3, seed=1, fold_from=None, net_dims=3)
+    x, y = (a.ravel() for a in np.meshgrid(np.arange(side), np.arange(side)))
+    v = {d: np.stack([s.get_2d(x, y, np.full(x.size, i), d) for i in range(n)], 1) for d in range(3)}
+    bump = lambda u: np.exp(-((u - 0.4) ** 2) / (2 * 0.15**2))  # noqa: E731
+    exact = (math.erf(0.6 / (0.15 * math.sqrt(2))) + math.erf(0.4 / (0.15 * math.sqrt(2)))) / 2
+    exact = (exact * 0.15 * math.sqrt(2 * math.pi)) ** 2
+    rng = np.random.default_rng(0)
+    for a, b in ((0, 1), (1, 2)):
+        paired = (bump(v[a][..., 0]) * bump(v[b][..., 0])).mean(1)
+        shuffled = np.take_along_axis(v[b][..., 0], rng.permuted(np.tile(np.arange(n), (x.size, 1)), axis=1), 1)
+        random = (bump(v[a][..., 0]) * bump(shuffled)).mean(1)
+        ratio = ((paired - exact) ** 2).mean() / ((random - exact) ** 2).mean()
+        assert ratio < 1.5, (a, b, ratio)
 
 
 def test_shapes_broadcast_and_range():

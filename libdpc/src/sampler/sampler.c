@@ -91,9 +91,20 @@ dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
      * same whatever net_dims is. */
     for (t = 0; t < s->net_slots; t++) {
         uint32_t *cells = s->nets + (size_t)t * n;
-        if ((st = dpc_sampler_make_net(log_n, dpc_mix64(s->base ^ dpc_mix64(t + 0x243F6A8885A308D3ull)), cells)) !=
-            DPC_OK)
-            goto done;
+        const uint64_t net_seed = dpc_mix64(s->base ^ dpc_mix64(t + 0x243F6A8885A308D3ull));
+        if ((st = dpc_sampler_make_net(log_n, net_seed, cells)) != DPC_OK) goto done;
+        /* Every net after the first in a seeded random order (Fisher-Yates): two nets in Sobol'
+         * order, rotated against each other, pair their points in a lattice-like pattern (a
+         * cross-slot 2-D projection had 16 times the error of a random pairing at 256 spp). The
+         * first keeps Sobol' order, and with it the values of net_dims = 1; progressive samplers
+         * read every net in order, so that its prefixes stay (0,2)-nets. */
+        if (t > 0 && s->rotate)
+            for (uint32_t i = n - 1; i > 0; i--) {
+                const uint64_t r = dpc_mix64(net_seed + (uint64_t)i * 0xD1342543DE82EF95ull);
+                const uint32_t j = (uint32_t)(((r >> 32) * (i + 1)) >> 32), c = cells[i];
+                cells[i] = cells[j];
+                cells[j] = c;
+            }
         float *table = s->tables + (size_t)t * n * 2;
         for (uint32_t i = 0; i < n; i++) {
             table[(size_t)i * 2] = ((float)(cells[i] >> 16) + 0.5f) / (float)n;
