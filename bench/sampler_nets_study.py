@@ -1,0 +1,74 @@
+"""Nets in every slot against the default sampler, in Mitsuba 3 (a development study).
+
+    python bench/sampler_nets_study.py            # about 10 minutes on 2 cores
+
+The default sampler has a (0,m,2)-net in dimension 0 (the pixel position) and folded
+blue-noise sets in the other slots. This renders bench_rendering's soft-shadow scene and
+path-traced Cornell box with it and with nets in all 16 slots, unfolded (`net_dims = 16`,
+`fold_from = -1`), 32 seeds each (the sampler's `seed` property 0 ... 31), against
+bench_rendering's cached references (run `python bench/bench_rendering.py` first): image MSE,
+the ratio with its standard error, and the screen-space low-frequency error energy (white = 1).
+Writes the section `nets_study` of docs/rendering.md.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+import bench_rendering as br
+from doc_sections import replace_section
+
+SEEDS = 32
+SCENES = ("soft-shadow", "cornell-path")
+COUNTS = (2, 4, 16, 64, 256)
+NETS = {"net_dims": 16, "fold_from": -1}
+
+
+def render(mi, scene: str, extra: dict, spp: int, seed: int) -> np.ndarray:
+    d = br.scene_dict(mi, scene, 128)
+    d["sensor"]["sampler"] = {"type": "dpc", "sample_count": spp, "seed": seed, **extra}
+    return np.array(mi.render(mi.load_dict(d)), dtype=np.float64)
+
+
+def main() -> None:
+    import mitsuba as mi
+
+    mi.set_variant("scalar_rgb")
+    import dpc.mitsuba  # noqa: F401  (registers the plugin)
+
+    t0 = time.time()
+    lines = [
+        f"Measured by `python bench/sampler_nets_study.py` (Mitsuba {mi.__version__} `scalar_rgb`, 128 x 128 "
+        f"pixels, {SEEDS} seeds; {{seconds}} s): dpc's default sampler against nets in all 16 slots, unfolded "
+        "(`net_dims = 16`, `fold_from = -1`).",
+        "",
+        "| scene | spp | MSE: default | MSE: nets everywhere | nets / default | E_low: default | E_low: nets |",
+        "|---|---:|---:|---:|---:|---:|---:|",
+    ]
+    for scene in SCENES:
+        ref = np.load(br.CACHE / f"ref-{scene}-128-{br.REF_SPP}.npz")["ref"]
+        for spp in COUNTS:
+            stats = []
+            for extra in ({}, NETS):
+                mse, el = [], []
+                for seed in range(SEEDS):
+                    err = render(mi, scene, extra, spp, seed) - ref
+                    mse.append(float((err**2).mean()))
+                    el.append(br.low_band_energy(err.mean(-1)))
+                stats.append({"mse": float(np.mean(mse)), "mse_se": float(np.std(mse, ddof=1) / np.sqrt(SEEDS)),
+                              "elow": float(np.mean(el))})
+            a, b = stats
+            r, se = b["mse"] / a["mse"], br.ratio_se(b, a)
+            line = (f"| {scene} | {spp} | {a['mse']:.3e} | {b['mse']:.3e} | x{r:.3f} ± {se:.3f} | "
+                    f"{a['elow']:.3f} | {b['elow']:.3f} |")
+            lines.append(line)
+            print(line, flush=True)
+    body = "\n".join(lines).replace("{seconds}", f"{time.time() - t0:.0f}")
+    replace_section(br.DOC, "nets_study", body)
+    print("wrote docs/rendering.md (nets_study)")
+
+
+if __name__ == "__main__":
+    main()
