@@ -5,7 +5,8 @@
 A sampler pixel estimates the integral of f over [0,1)^2 with its table shifted toroidally
 (docs/rendering.md). Folded dimensions (fold_from) return fold(v) = 1 - |2v - 1| of each value
 instead. Net slots (net_dims, the default for dimension 0 at power-of-two counts) are measured
-too: a blue-noise (0,m,2)-net, digitally shifted, unfolded. For three kinds of integrand on the
+too: a blue-noise (0,m,2)-net, digitally shifted, unfolded, and the same values put through
+the fold (which the sampler never applies to a net slot: this column is why). For three kinds of integrand on the
 unit square, none of them periodic, this measures the per-pixel mean squared error of the
 sampler's 2-D values (one pixel, the sampler's seed varied) with and without folding, next to
 PMJ02BN (dpc.baselines.pmj02 with 10 candidates) and Owen-scrambled Sobol' (scipy.stats.qmc),
@@ -65,19 +66,30 @@ def integrands(rng: np.random.Generator):
     }
 
 
+def tent(v: np.ndarray) -> np.ndarray:
+    """The baker's transform as the sampler's fold (docs/rendering.md, "Definition"), applied to
+    values the sampler does not fold: what folding would do to a net slot (it never folds one)."""
+    v = v.astype(np.float32)
+    hi = np.float32(2) * (np.float32(1) - v) - np.float32(2.0**-24)
+    return np.where(v < 0.5, np.float32(2) * v, hi).astype(np.float64)
+
+
 def point_sets(n: int, seeds: int) -> dict[str, np.ndarray]:
     """(seeds, n, 2) point sets of each sampler compared here, seed s for realisation s: one pixel
-    of dpc.Sampler (dimension 0: the shifted set unfolded and folded, and the net slot), PMJ02BN
+    of dpc.Sampler (dimension 0: the shifted set unfolded and folded, and the net slot, also with the
+    fold applied), PMJ02BN
     and Owen-scrambled Sobol'."""
 
     def pixel(seed, fold_from, net_dims):
         s = dpc.Sampler(MODEL, samples_per_pixel=n, dimensions=1, seed=seed, fold_from=fold_from, net_dims=net_dims)
         return s.get_2d(0, 0, np.arange(n), 0).astype(np.float64)
 
+    net = np.stack([pixel(s, None, 1) for s in range(seeds)])
     return {
         "dpc set": np.stack([pixel(s, None, 0) for s in range(seeds)]),
         "dpc set, folded": np.stack([pixel(s, 0, 0) for s in range(seeds)]),
-        "dpc net": np.stack([pixel(s, None, 1) for s in range(seeds)]),
+        "dpc net": net,
+        "dpc net, folded": tent(net),
         "PMJ02BN": np.stack([baselines.pmj02(n, np.random.default_rng(s), candidates=10) for s in range(seeds)]),
         "Sobol' (Owen)": np.stack([qmc.Sobol(2, scramble=True, seed=s).random(n) for s in range(seeds)]),
     }
@@ -98,7 +110,7 @@ def main() -> None:
                 mse = float(((est - exact[name][:, None]) ** 2).mean())
                 results.setdefault((name, sampler), []).append(mse)
         print(f"n = {n} done ({time.time() - t0:.0f} s)", flush=True)
-    samplers = ["dpc set", "dpc set, folded", "dpc net", "PMJ02BN", "Sobol' (Owen)"]
+    samplers = ["dpc set", "dpc set, folded", "dpc net", "dpc net, folded", "PMJ02BN", "Sobol' (Owen)"]
     lines = [
         f"Measured by `python bench/sampler_fold_study.py` (one pixel of `dpc.Sampler` with {MODEL}, "
         f"{SEEDS} seeds, {K} random integrands of each kind; mean squared error of the pixel's estimate; "
@@ -109,7 +121,7 @@ def main() -> None:
         lines += [
             f"**{name}**",
             "",
-            "| spp | " + " | ".join(samplers) + " | folded / unfolded |",
+            "| spp | " + " | ".join(samplers) + " | set: folded / unfolded |",
             "|---:|" + "---:|" * (len(samplers) + 1),
         ]
         for i, n in enumerate(COUNTS):

@@ -49,7 +49,7 @@ class Sampler:
     errors cancel at low screen frequencies. Dimensions from ``fold_from``
     on (default 1: all but dimension 0, the pixel position) are folded by the baker's transform
     ``1 - |2v - 1|``, which makes smooth integrands periodic over the shifted table; ``None``
-    folds none. Slots below ``net_dims`` (default 1: the pixel position) hold blue-noise
+    folds none; net slots are never folded. Slots below ``net_dims`` (default 1: the pixel position) hold blue-noise
     (0,m,2)-nets, each pixel's a digital shift of its own, when ``samples_per_pixel`` is a power
     of two >= 2: every elementary interval of a pixel's samples holds one, which integrates
     geometry edges nearly along the pixel axes like a Sobol' net; 0 for none.

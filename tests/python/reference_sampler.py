@@ -186,8 +186,8 @@ class ReferenceSampler:
 
     def get_2d(self, x: int, y: int, index: int, dim: int) -> np.ndarray:
         t, j, m, c, h = self._locate(x, y, index, dim)
-        if t < self.net_slots:
-            v = net_values(self.nets[t][j], j, h, self.m)
+        if t < self.net_slots:  # never folded
+            return np.array(net_values(self.nets[t][j], j, h, self.m), dtype=F32)
         else:
             p = self.tables[t][j]
             v = [wrap(p[0], wrap(m[0], c[0])), wrap(p[1], wrap(m[1], c[1]))]
@@ -201,8 +201,7 @@ class ReferenceSampler:
     def get_1d(self, x: int, y: int, index: int, dim: int) -> np.float32:
         t, j, m, c, h = self._locate(x, y, index, dim)
         if t < self.net_slots:
-            v = net_values(self.nets[t][j], j, h, self.m)[0]
-            return fold(v) if self._folds(dim) else v
+            return net_values(self.nets[t][j], j, h, self.m)[0]  # never folded
         u = wrap(m[2], c[0])
         i = int(F32(self.tables[t][j][0] * F32(self.n))) if self.progressive else j
         lattice = F32(F32(F32(i) + u) * F32(F32(1.0) / F32(self.n)))

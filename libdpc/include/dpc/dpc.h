@@ -340,7 +340,8 @@ DPC_API dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, f
  *   mask value), get_2d from the model's set; dimension d of get_1d and of get_2d share their
  *   index rotation and shift, so use each dimension for one of them.
  * - Dimensions from options.fold_from on (default 1: all but the pixel position, dimension 0)
- *   are folded by the baker's transform, which makes smooth integrands periodic over the table.
+ *   are folded by the baker's transform, which makes smooth integrands periodic over the table;
+ *   net slots (options.net_dims) are never folded.
  * - A created sampler is immutable: lookups take no lock, allocate nothing and may run on any
  *   number of threads. It does not keep the models: they may be freed after dpc_sampler_create.
  *   To stay within a few nanoseconds, lookups leave the thread's error message alone unless
@@ -378,8 +379,9 @@ typedef struct dpc_sampler_options {
      * the points must integrate. Folded, every continuous integrand is periodic (on the
      * soft-shadow scene of docs/rendering.md the MSE halves from 16 spp on); the cost is twice
      * the length of the integrand's own discontinuities, which is why dimension 0, the pixel
-     * position (geometry edges), is left as it is. Default 1; DPC_SAMPLER_NO_FOLD for none, 0
-     * for all. */
+     * position (geometry edges), is left as it is. Net slots (net_dims) are never folded: the
+     * tent map would undo their stratification. Default 1; DPC_SAMPLER_NO_FOLD for none, 0
+     * for all set slots. */
     uint32_t fold_from;
     /* Slots t < net_dims hold (0,m,2)-nets instead of the models' sets when spp = 2^m >= 2
      * (docs/rendering.md, "Net dimensions"): every elementary interval of the pixel's samples

@@ -121,10 +121,7 @@ dpc_status dpc_sampler_lookup_2d_general(const dpc_sampler *s, uint32_t x, uint3
                                          float out[2]) {
     const dpc_sampler_point p = dpc_sampler_locate(s, x, y, index, dim);
     if (p.table < s->net_slots) {
-        float v[2];
-        dpc_sampler_net_values(s, p.table, p.j, p.h, v);
-        out[0] = dpc_sampler_out(s, dim, v[0]);
-        out[1] = dpc_sampler_out(s, dim, v[1]);
+        dpc_sampler_net_values(s, p.table, p.j, p.h, out); /* never folded */
         return DPC_OK;
     }
     const float *t = s->tables + ((size_t)p.table * s->spp + p.j) * 2;
@@ -139,7 +136,7 @@ dpc_status dpc_sampler_lookup_1d_general(const dpc_sampler *s, uint32_t x, uint3
     if (p.table < s->net_slots) { /* the net's x: one value per stratum, as the lattice */
         float v[2];
         dpc_sampler_net_values(s, p.table, p.j, p.h, v);
-        *out = dpc_sampler_out(s, dim, v[0]);
+        *out = v[0]; /* never folded */
         return DPC_OK;
     }
     *out = dpc_sampler_out(s, dim, dpc_sampler_lattice(s, p.table, p.j, dpc_sampler_wrap(p.mask[2], p.c[0]), p.c[1]));
