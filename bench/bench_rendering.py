@@ -71,9 +71,11 @@ SCENES = ["cornell-direct", "soft-shadow", "cornell-path"]
 DIRECT_SCENES = ["cornell-direct", "soft-shadow"]
 
 
-def render(mi, scene: str, sampler: str, spp: int, seed: int, width: int):
+def render(mi, scene: str, sampler: str, spp: int, seed: int, width: int, props: dict | None = None):
+    """One render: (image, seconds, samples per pixel the sampler used); props: the sampler's other
+    properties."""
     d = scene_dict(mi, scene, width)
-    d["sensor"]["sampler"] = {"type": sampler, "sample_count": spp, "seed": seed}
+    d["sensor"]["sampler"] = {"type": sampler, "sample_count": spp, "seed": seed, **(props or {})}
     sc = mi.load_dict(d)
     used = sc.sensors()[0].sampler().sample_count()
     t = time.perf_counter()

@@ -26,12 +26,6 @@ COUNTS = (2, 4, 16, 64, 256)
 NETS = {"net_dims": 16, "fold_from": -1}
 
 
-def render(mi, scene: str, extra: dict, spp: int, seed: int) -> np.ndarray:
-    d = br.scene_dict(mi, scene, 128)
-    d["sensor"]["sampler"] = {"type": "dpc", "sample_count": spp, "seed": seed, **extra}
-    return np.array(mi.render(mi.load_dict(d)), dtype=np.float64)
-
-
 def main() -> None:
     import mitsuba as mi
 
@@ -54,7 +48,7 @@ def main() -> None:
             for extra in ({}, NETS):
                 mse, el = [], []
                 for seed in range(SEEDS):
-                    err = render(mi, scene, extra, spp, seed) - ref
+                    err = br.render(mi, scene, "dpc", spp, seed, 128, extra)[0] - ref
                     mse.append(float((err**2).mean()))
                     el.append(br.low_band_energy(err.mean(-1)))
                 stats.append({"mse": float(np.mean(mse)), "mse_se": float(np.std(mse, ddof=1) / np.sqrt(SEEDS)),

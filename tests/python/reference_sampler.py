@@ -188,9 +188,8 @@ class ReferenceSampler:
         t, j, m, c, h = self._locate(x, y, index, dim)
         if t < self.net_slots:  # never folded
             return np.array(net_values(self.nets[t][j], j, h, self.m), dtype=F32)
-        else:
-            p = self.tables[t][j]
-            v = [wrap(p[0], wrap(m[0], c[0])), wrap(p[1], wrap(m[1], c[1]))]
+        p = self.tables[t][j]
+        v = [wrap(p[0], wrap(m[0], c[0])), wrap(p[1], wrap(m[1], c[1]))]
         if self._folds(dim):
             v = [fold(a) for a in v]
         return np.array(v, dtype=F32)
