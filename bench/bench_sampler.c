@@ -2,8 +2,9 @@
  *   dpc_bench_sampler MODEL SPP:DIMS [SPP:DIMS ...]
  * create: dpc_sampler_create of SPP samples per pixel and DIMS dimensions, median over repeats
  * (at least 3, until 1.5 s or 25); lookups: ns per get_2d / get_1d value over a renderer-style
- * loop (256 x 256 pixels, every sample index, 8 dimensions), median of 11 passes; and get_2d
- * of dimension 0 alone (a net slot where spp is a power of two >= 2: net_dims = 1). */
+ * loop (256 x 256 pixels, every sample index, 8 dimensions), median of 11 passes, with the
+ * default options (from 64 spp every slot a net) and with net_dims = 1 (the sets' path in
+ * dimensions 1-7); and get_2d of dimension 0 alone (a net slot where spp is a power of two >= 2). */
 #define _POSIX_C_SOURCE 200809L
 #include <stdio.h>
 #include <stdlib.h>
@@ -94,9 +95,17 @@ int main(int argc, char **argv) {
         const double create = median(times, runs);
         const unsigned k = spp < 64 ? spp : 64;
         const double ns2 = lookup_ns(s, k, 1, 8), ns1 = lookup_ns(s, k, 0, 8), ns0 = lookup_ns(s, k, 1, 1);
+        dpc_sampler *sets = NULL; /* dimension 0 a net, the others sets: their lookup path */
+        o.net_dims = 1;
+        if (dpc_sampler_create(&o, &sets) != DPC_OK) {
+            fprintf(stderr, "create failed: %s\n", dpc_last_error());
+            return 1;
+        }
+        const double ns_sets = lookup_ns(sets, k, 1, 8);
         printf("{\"spp\": %u, \"dims\": %u, \"create_ms\": %.3f, \"runs\": %d, \"get_2d_ns\": %.2f, "
-               "\"get_1d_ns\": %.2f, \"get_2d_dim0_ns\": %.2f, \"table_bytes\": %zu}\n",
-               spp, dims, create * 1e3, runs, ns2, ns1, ns0, (size_t)8 * spp * dims);
+               "\"get_1d_ns\": %.2f, \"get_2d_dim0_ns\": %.2f, \"get_2d_sets_ns\": %.2f, \"table_bytes\": %zu}\n",
+               spp, dims, create * 1e3, runs, ns2, ns1, ns0, ns_sets, (size_t)8 * spp * dims);
+        dpc_sampler_free(sets);
         dpc_sampler_free(s);
     }
     dpc_model_free(model);

@@ -489,6 +489,8 @@ PYBIND11_MODULE(_core, mod) {
     mod.attr("SAMPLER_MAX_SPP") = DPC_SAMPLER_MAX_SPP;
     mod.attr("SAMPLER_MAX_DIMENSIONS") = DPC_SAMPLER_MAX_DIMENSIONS;
     mod.attr("SAMPLER_NO_FOLD") = DPC_SAMPLER_NO_FOLD;
+    mod.attr("SAMPLER_NET_DIMS_AUTO") = DPC_SAMPLER_NET_DIMS_AUTO;
+    mod.attr("SAMPLER_AUTO_NETS_SPP") = DPC_SAMPLER_AUTO_NETS_SPP;
     py::class_<Sampler>(mod, "Sampler")
         .def(py::init<const std::vector<const Model *> &, uint32_t, uint32_t, uint64_t, uint32_t, uint32_t>(),
              py::arg("models"), py::arg("spp"), py::arg("dims"), py::arg("seed"), py::arg("fold_from"),

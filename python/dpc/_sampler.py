@@ -14,6 +14,8 @@ DEFAULT_MODEL = "bnot-2d-stratified"
 MAX_SPP = int(_core.SAMPLER_MAX_SPP)  # DPC_SAMPLER_MAX_SPP
 MAX_DIMENSIONS = int(_core.SAMPLER_MAX_DIMENSIONS)  # DPC_SAMPLER_MAX_DIMENSIONS
 NO_FOLD = int(_core.SAMPLER_NO_FOLD)  # DPC_SAMPLER_NO_FOLD
+NET_DIMS_AUTO = int(_core.SAMPLER_NET_DIMS_AUTO)  # DPC_SAMPLER_NET_DIMS_AUTO
+AUTO_NETS_SPP = int(_core.SAMPLER_AUTO_NETS_SPP)  # DPC_SAMPLER_AUTO_NETS_SPP
 
 
 def _integer(value, name: str, low: int, high: int) -> int:
@@ -49,10 +51,13 @@ class Sampler:
     errors cancel at low screen frequencies. Dimensions from ``fold_from``
     on (default 1: all but dimension 0, the pixel position) are folded by the baker's transform
     ``1 - |2v - 1|``, which makes smooth integrands periodic over the shifted table; ``None``
-    folds none; net slots are never folded. Slots below ``net_dims`` (default 1: the pixel position) hold blue-noise
+    folds none; net slots are never folded. Slots below ``net_dims`` hold blue-noise
     (0,m,2)-nets, each pixel's a digital shift of its own, when ``samples_per_pixel`` is a power
     of two >= 2: every elementary interval of a pixel's samples holds one, which integrates
-    geometry edges nearly along the pixel axes like a Sobol' net; 0 for none.
+    geometry edges nearly along the pixel axes like a Sobol' net; 0 for none. The default,
+    ``"auto"``, is every slot from 64 samples per pixel on (set models: there nets beat the
+    folded sets on a renderer's per-pixel error) and 1 (the pixel position) otherwise;
+    ``net_slots`` says how many slots are nets.
     docs/rendering.md defines every step. Values are float32 in [0, 1); the same C object backs
     the C API, the Mitsuba plugin and this class, so all three give the same bits.
 
@@ -68,7 +73,7 @@ class Sampler:
         dimensions: int = 16,
         seed: int = 0,
         fold_from: int | None = 1,
-        net_dims: int = 1,
+        net_dims: int | str = "auto",
     ):
         if isinstance(models, (str, bytes)) or isinstance(models, Model) or hasattr(models, "__fspath__"):
             models = [models]
@@ -80,21 +85,26 @@ class Sampler:
         self.dimensions = _integer(dimensions, "dimensions", 1, MAX_DIMENSIONS)
         self.seed = _integer(seed, "seed", 0, (1 << 64) - 1)
         self.fold_from = None if fold_from is None else _integer(fold_from, "fold_from", 0, NO_FOLD - 1)
-        self.net_dims = _integer(net_dims, "net_dims", 0, (1 << 32) - 1)
+        if isinstance(net_dims, str) and net_dims == "auto":
+            self.net_dims = "auto"
+        elif isinstance(net_dims, str):
+            raise InvalidArgumentError(f'net_dims must be an integer or "auto", got {net_dims!r}')
+        else:
+            self.net_dims = _integer(net_dims, "net_dims", 0, NET_DIMS_AUTO - 1)
         self._h = _core.Sampler(
             [m._h for m in self.models],
             self.samples_per_pixel,
             self.dimensions,
             self.seed,
             NO_FOLD if self.fold_from is None else self.fold_from,
-            self.net_dims,
+            NET_DIMS_AUTO if self.net_dims == "auto" else self.net_dims,
         )
 
     def __repr__(self) -> str:
         names = ", ".join(m.name for m in self.models)
         return (
             f"dpc.Sampler([{names}], samples_per_pixel={self.samples_per_pixel}, "
-            f"dimensions={self.dimensions}, seed={self.seed}, fold_from={self.fold_from}, net_dims={self.net_dims})"
+            f"dimensions={self.dimensions}, seed={self.seed}, fold_from={self.fold_from}, net_dims={self.net_dims!r})"
         )
 
     def _lookup(self, x, y, index, dimension, width: int) -> np.ndarray:
@@ -116,6 +126,17 @@ class Sampler:
     def get_2d(self, x, y, index, dimension) -> np.ndarray:
         """Points in [0, 1)^2 from the model's set: shape ``broadcast shape + (2,)``."""
         return self._lookup(x, y, index, dimension, 2)
+
+    @property
+    def net_slots(self) -> int:
+        """How many slots (the first ones) hold nets: ``net_dims`` resolved as libdpc does."""
+        n, d = self.samples_per_pixel, self.dimensions
+        if n < 2 or n & (n - 1):
+            return 0
+        if self.net_dims == "auto":
+            progressive = self.models[0].order == "progressive"
+            return d if n >= AUTO_NETS_SPP and not progressive else 1
+        return min(self.net_dims, d)
 
     def table(self, t: int) -> np.ndarray:
         """The (samples_per_pixel, 2) point set of table ``t`` (0 <= t < dimensions)."""

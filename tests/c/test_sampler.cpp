@@ -54,7 +54,7 @@ TEST(SamplerOptions, InitSetsDocumentedDefaults) {
     EXPECT_EQ(o.samples_per_pixel, 16u);
     EXPECT_EQ(o.dimensions, 16u);
     EXPECT_EQ(o.fold_from, 1u);
-    EXPECT_EQ(o.net_dims, 1u);
+    EXPECT_EQ(o.net_dims, DPC_SAMPLER_NET_DIMS_AUTO);
     EXPECT_EQ(o.seed, 0u);
     dpc_sampler_options_init(nullptr); // no-op
 }
@@ -332,6 +332,27 @@ TEST(SamplerStructure, NetSlotsGiveEachPixelANet) {
         dpc_sampler_get_2d(odd_plain.get(), 3, 4, i, 0, b);
         EXPECT_EQ(a[0], b[0]);
         EXPECT_EQ(a[1], b[1]);
+    }
+}
+
+// The default net_dims (DPC_SAMPLER_NET_DIMS_AUTO) is every slot from 64 spp on, dimension 0
+// below: tables and lookups equal those of the explicit count.
+TEST(SamplerStructure, DefaultNetsEverySlotFrom64Spp) {
+    ModelPtr m = load(model_path("model_2d"));
+    for (uint32_t n : {32u, 64u, 128u}) {
+        SamplerPtr autos = make({m.get()}, n, 3, 4, 1, DPC_SAMPLER_NET_DIMS_AUTO);
+        SamplerPtr all = make({m.get()}, n, 3, 4, 1, 3), one = make({m.get()}, n, 3, 4, 1, 1);
+        const dpc_sampler *want = n >= DPC_SAMPLER_AUTO_NETS_SPP ? all.get() : one.get();
+        EXPECT_NE(table_of(all.get(), 2, n), table_of(one.get(), 2, n));
+        for (uint32_t t = 0; t < 3; t++) EXPECT_EQ(table_of(autos.get(), t, n), table_of(want, t, n)) << n << " " << t;
+        for (uint32_t d = 0; d < 6; d++)
+            for (uint32_t i : {0u, 5u, n + 3}) {
+                float a[2], b[2];
+                ASSERT_EQ(dpc_sampler_get_2d(autos.get(), 7, 40, i, d, a), DPC_OK);
+                ASSERT_EQ(dpc_sampler_get_2d(want, 7, 40, i, d, b), DPC_OK);
+                EXPECT_EQ(a[0], b[0]) << n << " " << d << " " << i;
+                EXPECT_EQ(a[1], b[1]) << n << " " << d << " " << i;
+            }
     }
 }
 

@@ -60,6 +60,7 @@ def test_loads_from_xml_with_every_property():
     assert sampler.sample_count() == 8
     assert "bnot-2d-stratified,bnot-4d" in str(sampler) and "fold_from = none" in str(sampler)
     assert "net_dims = 2" in str(sampler)
+    assert "net_dims = auto" in str(mi.load_dict({"type": "dpc"}))
     img = np.array(mi.render(scene))
     assert img.shape == (16, 16, 3) and np.all(np.isfinite(img))
 
@@ -155,7 +156,7 @@ def test_bad_properties_say_what_is_wrong():
         ({"dimensions": 0}, "dimensions"),
         ({"block_size": 48}, "block_size"),
         ({"fold_from": -2}, "fold_from"),
-        ({"net_dims": -1}, "net_dims"),
+        ({"net_dims": -2}, "net_dims"),
         ({"sample_count": 0}, "samples_per_pixel"),
     ]:
         with pytest.raises(Exception, match=says):

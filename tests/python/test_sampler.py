@@ -24,7 +24,7 @@ PROGRESSIVE = dpc.model_path("progressive-2d")
 @pytest.mark.parametrize(
     "models,spp,dims,seed,fold_from,net_dims",
     [
-        ([BNOT], 16, 4, 0, 1, 1),  # dimension 0 a net (the default)
+        ([BNOT], 16, 4, 0, 1, 1),  # dimension 0 a net (the default below 64 spp)
         ([BNOT], 16, 4, 0, None, 0),  # no dimension folded, no nets
         ([BNOT], 16, 4, 0, 0, 3),  # three net slots, folded
         ([BNOT], 5, 3, 12345, 0, 1),  # spp not a power of two (no nets); every dimension folded
@@ -41,6 +41,9 @@ PROGRESSIVE = dpc.model_path("progressive-2d")
         ([PROGRESSIVE], 48, 70, 8, None, 1),
         ([PROGRESSIVE], 64, 4, 3, 1, 2),  # progressive nets are read in order, none reordered
         ([BNOT], 256, 3, 9, None, 3),  # nets after the first reordered
+        ([BNOT], 64, 5, 21, 1, "auto"),  # the default from 64 spp on: every slot a net
+        ([BNOT], 32, 3, 21, 1, "auto"),  # below 64 spp: dimension 0 only
+        ([PROGRESSIVE], 64, 3, 3, 1, "auto"),  # progressive: dimension 0 only
     ],
 )
 def test_lookups_match_the_reference_bit_for_bit(models, spp, dims, seed, fold_from, net_dims):
@@ -125,11 +128,25 @@ def test_structure_each_pixel_gets_the_table_shifted_and_a_stratified_lattice():
 
 @pytest.mark.parametrize("n", [2, 4, 16, 64, 256])
 def test_net_slots_give_every_pixel_a_02_net(n):
-    s = dpc.Sampler(samples_per_pixel=n, dimensions=2, seed=3)  # net_dims=1: dimension 0
+    s = dpc.Sampler(samples_per_pixel=n, dimensions=2, seed=3, net_dims=1)  # dimension 0
     for x, y, first in [(0, 0, 0), (17, 3, n), (-5, 40, 5 * n)]:
         assert is_02_net(s.get_2d(x, y, first + np.arange(n), 0).astype(np.float64))
     assert is_02_net(s.table(0).astype(np.float64))
     assert not is_02_net(s.get_2d(0, 0, np.arange(n), 1).astype(np.float64)) or n <= 4  # the set is not one
+
+
+def test_default_nets_every_slot_from_64_spp_for_set_models():
+    """net_dims "auto" (the default) is every slot from 64 spp on for set models and dimension 0
+    otherwise (progressive models, fewer samples); net_slots says so, and the values are those
+    of the explicit count."""
+    x, y, index = np.arange(50) % 9, np.arange(50) // 9, np.arange(50) % 8
+    for models, n, want in [(BNOT, 64, 5), (BNOT, 256, 5), (BNOT, 32, 1), (BNOT, 48, 0), (PROGRESSIVE, 64, 1)]:
+        auto = dpc.Sampler(models, samples_per_pixel=n, dimensions=5, seed=2)
+        explicit = dpc.Sampler(models, samples_per_pixel=n, dimensions=5, seed=2, net_dims=max(want, 1))
+        assert auto.net_dims == "auto" and auto.net_slots == want, (models, n, auto.net_slots)
+        for d in range(7):
+            assert np.array_equal(auto.get_2d(x, y, index, d), explicit.get_2d(x, y, index, d)), (n, d)
+    assert all(is_02_net(dpc.Sampler(samples_per_pixel=64).table(t).astype(np.float64)) for t in range(16))
 
 
 def test_net_slots_integrate_nearly_axis_aligned_edges_better():
@@ -269,6 +286,10 @@ def test_same_options_same_values_and_threads_agree():
         dict(fold_from=-1),
         dict(fold_from=2**32 - 1),
         dict(fold_from=1.0),
+        dict(net_dims=-1),
+        dict(net_dims="all"),
+        dict(net_dims=2**32 - 1),  # DPC_SAMPLER_NET_DIMS_AUTO: pass "auto"
+        dict(net_dims=None),
     ],
 )
 def test_bad_options_are_invalid_argument_errors(kwargs):

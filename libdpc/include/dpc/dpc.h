@@ -347,13 +347,15 @@ DPC_API dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, f
  *   To stay within a few nanoseconds, lookups leave the thread's error message alone unless
  *   they fail (the one exception to the convention at the top of this header).
  * - Memory: sizeof(dpc_sampler) + D * (8 * spp + 8) + min(D, 64) * 12,288 bytes, plus
- *   min(net_dims, D) * 4 * spp for the nets when spp is a power of two (64 spp, 16 dimensions,
- *   one net: 201.0 KiB; the third term holds each of the first 64 dimensions' mask with its
+ *   N * 4 * spp for the nets, N the net slots (below) (64 spp, 16 dimensions, the default's 16
+ *   nets: 204.7 KiB; the third term holds each of the first 64 dimensions' mask with its
  *   rotation added, so that a lookup reads it instead of computing it), plus a 12 KiB mask
  *   shared by all samplers.
- * - Slots t < options.net_dims (default 1: dimension 0, the pixel position) hold blue-noise
- *   (0,m,2)-nets instead when spp = 2^m >= 2, each pixel's digitally shifted rather than
- *   toroidally: every elementary interval of a pixel's samples holds one sample.
+ * - Net slots: when spp = 2^m >= 2, slots t < N hold blue-noise (0,m,2)-nets instead of the
+ *   models' sets, each pixel's digitally shifted rather than toroidally: every elementary
+ *   interval of a pixel's samples holds one sample. N = min(options.net_dims, D); the default,
+ *   DPC_SAMPLER_NET_DIMS_AUTO, is N = D (every slot) from DPC_SAMPLER_AUTO_NETS_SPP = 64 spp on
+ *   for set models and N = 1 (dimension 0, the pixel position) otherwise.
  * ------------------------------------------------------------------------------------------- */
 
 typedef struct dpc_sampler dpc_sampler;
@@ -390,12 +392,21 @@ typedef struct dpc_sampler_options {
      * digital shift of its own (the mask's toroidal shift would undo the intervals), plus a
      * uniform offset inside each sample's cell. For dimension 0, the pixel position: geometry
      * edges nearly along the pixel axes (a light's rim) are integrated like a (0,2)-sequence's,
-     * where the sets' 1 x n strata alone trail it. Default 1; 0 for none. */
+     * where the sets' 1 x n strata alone trail it. In the other dimensions nets beat the folded
+     * sets on a renderer's per-pixel error from 64 spp on, and the sets keep the mask's
+     * screen-space structure below (docs/rendering.md, "Nets in every slot"). Default
+     * DPC_SAMPLER_NET_DIMS_AUTO: every slot from DPC_SAMPLER_AUTO_NETS_SPP on (set models;
+     * progressive samplers read their nets past the first in Sobol' order, which pairs them
+     * by index), else 1; 0 for none. */
     uint32_t net_dims;
     uint64_t seed; /* default 0 */
 } dpc_sampler_options;
 
 #define DPC_SAMPLER_NO_FOLD 0xFFFFFFFFu
+/* options.net_dims: every slot from DPC_SAMPLER_AUTO_NETS_SPP samples per pixel on (set
+ * models), else 1 (dimension 0). */
+#define DPC_SAMPLER_NET_DIMS_AUTO 0xFFFFFFFFu
+#define DPC_SAMPLER_AUTO_NETS_SPP 64u
 
 /* Fill *options with the defaults (no models: set models and n_models). */
 DPC_API void dpc_sampler_options_init(dpc_sampler_options *options);

@@ -15,7 +15,7 @@ void dpc_sampler_options_init(dpc_sampler_options *options) {
     options->samples_per_pixel = 16;
     options->dimensions = 16;
     options->fold_from = 1;
-    options->net_dims = 1;
+    options->net_dims = DPC_SAMPLER_NET_DIMS_AUTO;
 }
 
 static dpc_status check_options(const dpc_sampler_options *o) {

@@ -45,7 +45,12 @@ dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
     s->rotate = o->models[0]->cascade.progressive_base ? 0 : n; /* all progressive or none (api_sampler.c) */
     uint32_t log_n = 0;
     while ((1u << log_n) < n) log_n++;
-    s->net_slots = n >= 2 && (1u << log_n) == n ? (o->net_dims < D ? o->net_dims : D) : 0;
+    /* The default: nets in every slot from DPC_SAMPLER_AUTO_NETS_SPP on, where they beat the
+     * folded sets on a renderer's per-pixel error (docs/rendering.md, "Nets in every slot");
+     * progressive samplers keep one, since they read later nets in order, paired by index. */
+    uint32_t net_dims = o->net_dims;
+    if (net_dims == DPC_SAMPLER_NET_DIMS_AUTO) net_dims = s->rotate && n >= DPC_SAMPLER_AUTO_NETS_SPP ? D : 1;
+    s->net_slots = n >= 2 && (1u << log_n) == n ? (net_dims < D ? net_dims : D) : 0;
     s->net_shift = 24 - log_n;
     s->tables = (float *)malloc((size_t)D * n * 2 * sizeof(float));
     s->keys = (uint64_t *)malloc((size_t)D * sizeof *s->keys);

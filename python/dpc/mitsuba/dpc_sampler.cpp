@@ -128,10 +128,12 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
         int fold_from = props.get<int>("fold_from", 1);
         if (fold_from < -1) Throw("property \"fold_from\" is %d: a dimension (>= 0), or -1 to fold none", fold_from);
         m_fold_from = fold_from < 0 ? DPC_SAMPLER_NO_FOLD : (uint32_t)fold_from;
-        // the film position (dimension 0) is a net when sample_count is a power of two
-        int net_dims = props.get<int>("net_dims", 1);
-        if (net_dims < 0) Throw("property \"net_dims\" is %d: a dimension count (>= 0)", net_dims);
-        m_net_dims = (uint32_t)net_dims;
+        // -1, the default: the film position (dimension 0) is a net when sample_count is a
+        // power of two, and every dimension from DPC_SAMPLER_AUTO_NETS_SPP on
+        int net_dims = props.get<int>("net_dims", -1);
+        if (net_dims < -1)
+            Throw("property \"net_dims\" is %d: a dimension count (>= 0), or -1 for the default", net_dims);
+        m_net_dims = net_dims < 0 ? DPC_SAMPLER_NET_DIMS_AUTO : (uint32_t)net_dims;
         m_block_side = (uint32_t)block;
         m_block_pixels = (uint32_t)block * (uint32_t)block;
         rebuild();
@@ -198,7 +200,9 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
         return "DpcSampler[model = " + models + ", sample_count = " + std::to_string(m_sample_count) +
                ", dimensions = " + std::to_string(m_dims) + ", fold_from = " +
                (m_fold_from == DPC_SAMPLER_NO_FOLD ? std::string("none") : std::to_string(m_fold_from)) +
-               ", net_dims = " + std::to_string(m_net_dims) + ", seed = " + std::to_string(m_base_seed) + "]";
+               ", net_dims = " +
+               (m_net_dims == DPC_SAMPLER_NET_DIMS_AUTO ? std::string("auto") : std::to_string(m_net_dims)) +
+               ", seed = " + std::to_string(m_base_seed) + "]";
     }
 
     MI_DECLARE_CLASS(DpcSampler)
@@ -225,7 +229,8 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
     }
 
     std::vector<std::string> m_models;
-    uint32_t m_dims = 16, m_block_side = 32, m_block_pixels = 1024, m_fold_from = 1, m_net_dims = 1;
+    uint32_t m_dims = 16, m_block_side = 32, m_block_pixels = 1024, m_fold_from = 1,
+             m_net_dims = DPC_SAMPLER_NET_DIMS_AUTO;
     std::shared_ptr<dpc_plugin::Table> m_table;
     uint32_t m_phase = 0;
     bool m_phase_known = false;
