@@ -18,7 +18,13 @@ measure) and the per-pixel MSE, for:
 - a per-pixel choice among 16 tables of 4 points (in the spirit of Heitz et al. 2019, who choose
   per pixel among scramblings of one sequence): the same optimiser swaps (shift, table) pairs
   between pixels, the shipped mask's shifts paired with tables 0 .. 15 in turn;
-- white-noise shifts.
+- white-noise shifts;
+- Z-ordered pieces of one sequence (Ahmed and Wonka 2020; pbrt-v4's ZSobol sampler): pixel p's n
+  samples are points z(p) n .. z(p) n + n - 1 of one scrambled 2-D Sobol' sequence (scipy's, LMS
+  and digital shift, which keep it a (0,2)-sequence), z(p) the pixel's Morton index with each
+  base-4 digit permuted by a random permutation chosen per prefix: every pixel gets a (0,m,2)-net
+  and every aligned 2^k x 2^k block of pixels a larger one, so neighbours fill each other's gaps
+  at every sample count (no table and no mask).
 Writes the section `mask_study` of docs/rendering.md.
 """
 
@@ -26,6 +32,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import itertools
 import sys
 import time
 from pathlib import Path
@@ -33,6 +40,7 @@ from pathlib import Path
 import numpy as np
 from bench_rendering import low_band_energy  # the renderer bench's measure, the same band
 from doc_sections import replace_section
+from scipy.stats import qmc
 
 import dpc
 
@@ -47,8 +55,8 @@ MODEL = "bnot-2d-stratified"
 
 
 def table(n: int, seed: int) -> np.ndarray:
-    """The sampler's own table of n points (its first slot) for that seed."""
-    return dpc.Sampler(MODEL, samples_per_pixel=n, dimensions=1, seed=seed).table(0).astype(np.float64)
+    """The sampler's own table of n points (its first slot, the model's set: no net) for that seed."""
+    return dpc.Sampler(MODEL, samples_per_pixel=n, dimensions=1, seed=seed, net_dims=0).table(0).astype(np.float64)
 
 
 def half_planes(rng: np.random.Generator, k: int):
@@ -83,6 +91,28 @@ def screen_blocks(mask: np.ndarray, b: int, rng: np.random.Generator) -> np.ndar
     yy, xx = np.mgrid[0 : SCREEN * b, 0 : SCREEN * b]
     v = (mask[(yy + oy) % size, (xx + ox) % size] + c) % 1.0
     return v.reshape(SCREEN, b, SCREEN, b, 2).transpose(0, 2, 1, 3, 4).reshape(SCREEN, SCREEN, b * b, 2)
+
+
+def morton_ordered(rng: np.random.Generator) -> np.ndarray:
+    """(SCREEN, SCREEN) distinct indices: each pixel's Morton index, its base-4 digits from the
+    top permuted by a random permutation of 4 per prefix (ZSobol's randomised Z order)."""
+    perms = np.array(list(itertools.permutations(range(4))))
+    yy, xx = np.mgrid[0:SCREEN, 0:SCREEN]
+    levels = SCREEN.bit_length() - 1
+    code = np.zeros_like(xx)
+    for b in range(levels):
+        code |= ((xx >> b) & 1) << (2 * b) | ((yy >> b) & 1) << (2 * b + 1)
+    out = np.zeros_like(code)
+    for k in range(levels - 1, -1, -1):
+        prefix, digit = code >> (2 * k + 2), (code >> (2 * k)) & 3
+        out |= perms[rng.integers(0, len(perms), 4 ** (levels - 1 - k))[prefix], digit] << (2 * k)
+    return out
+
+
+def screen_zordered(n: int, rng: np.random.Generator) -> np.ndarray:
+    """Pixel p's n samples: points z(p) n .. z(p) n + n - 1 of one scrambled Sobol' sequence."""
+    seq = qmc.Sobol(2, scramble=True, seed=rng).random(SCREEN * SCREEN * n).reshape(SCREEN * SCREEN, n, 2)
+    return seq[morton_ordered(rng)]
 
 
 def measure(make) -> tuple[float, float]:
@@ -182,6 +212,8 @@ def main() -> None:
         row("shipped mask (optimised for 1 spp)", n, lambda r, s, n=n: screen_shifted(shipped, n, r, s))
     for n in (1, 4):
         row("white-noise shifts", n, lambda r, s, n=n: screen_shifted(white, n, r, s))
+    for n in (1, 4, 16):
+        row("Z-ordered pieces of one Sobol' sequence (ZSobol; no table)", n, lambda r, s, n=n: screen_zordered(n, r))
     opt4 = optimise_for_tables(shipped.reshape(-1, 2), 4)
     for n in (1, 4, 8):
         row("mask optimised for 4-spp tables", n, lambda r, s, n=n: screen_shifted(opt4, n, r, s))
