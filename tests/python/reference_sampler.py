@@ -158,9 +158,10 @@ class ReferenceSampler:
         for t in range(self.net_slots):
             seed_t = mix64(self.base ^ mix64(t + NET_SEED))
             net = make_net(self.m, seed_t)
-            if t > 0 and self.rotate:  # later nets in a seeded random order (Fisher-Yates)
+            if t > 0:  # later nets in a seeded random order (Fisher-Yates), progressive: per octave
                 for i in range(spp - 1, 0, -1):
-                    j = ((mix64((seed_t + i * 0xD1342543DE82EF95) & M64) >> 32) * (i + 1)) >> 32
+                    low = 0 if self.rotate else 1 << (i.bit_length() - 1)
+                    j = low + (((mix64((seed_t + i * 0xD1342543DE82EF95) & M64) >> 32) * (i - low + 1)) >> 32)
                     net[[i, j]] = net[[j, i]]
             self.nets.append(net)
 

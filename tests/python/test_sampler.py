@@ -39,7 +39,7 @@ PROGRESSIVE = dpc.model_path("progressive-2d")
         ([BNOT], 4, 70, 5, 66, 67),  # net slots past them too
         ([PROGRESSIVE], 64, 4, 3, 1, 1),  # progressive: tables in order, 1-D strata by x rank
         ([PROGRESSIVE], 48, 70, 8, None, 1),
-        ([PROGRESSIVE], 64, 4, 3, 1, 2),  # progressive nets are read in order, none reordered
+        ([PROGRESSIVE], 64, 4, 3, 1, 2),  # progressive nets: later ones shuffled within octaves
         ([BNOT], 256, 3, 9, None, 3),  # nets after the first reordered
         ([BNOT], 64, 5, 21, 1, "auto"),  # the default from 64 spp on: every slot a net
         ([BNOT], 32, 3, 21, 1, "auto"),  # below 64 spp: dimension 0 only
@@ -78,24 +78,32 @@ def test_net_slots_are_never_folded():
     assert not np.array_equal(folded.get_2d(x, y, index, 2), plain.get_2d(x, y, index, 2))
 
 
-def test_net_slots_pair_up_like_a_random_pairing():
+@pytest.mark.parametrize("models,prefixes", [(BNOT, (256,)), (PROGRESSIVE, (64, 256))])
+def test_net_slots_pair_up_like_a_random_pairing(models, prefixes):
     """Two net slots, their samples paired by index, integrate a product of one coordinate of
     each as well as the same points paired at random. Nets in Sobol' order rotated against each
-    other did not (16 times the error at 256 spp): later nets are stored in a random order."""
+    other did not (16 times the error at 256 spp): later nets are stored in a random order. A
+    progressive sampler's prefixes too (read in Sobol' order, 4-40 times the error from 64 on):
+    its later nets are shuffled within each octave, and every prefix stays a (0,k,2)-net."""
     n, side = 256, 32
-    s = dpc.Sampler(samples_per_pixel=n, dimensions=3, seed=1, fold_from=None, net_dims=3)
+    s = dpc.Sampler(models, samples_per_pixel=n, dimensions=3, seed=1, fold_from=None, net_dims=3)
     x, y = (a.ravel() for a in np.meshgrid(np.arange(side), np.arange(side)))
     v = {d: np.stack([s.get_2d(x, y, np.full(x.size, i), d) for i in range(n)], 1) for d in range(3)}
     bump = lambda u: np.exp(-((u - 0.4) ** 2) / (2 * 0.15**2))  # noqa: E731
     exact = (math.erf(0.6 / (0.15 * math.sqrt(2))) + math.erf(0.4 / (0.15 * math.sqrt(2)))) / 2
     exact = (exact * 0.15 * math.sqrt(2 * math.pi)) ** 2
     rng = np.random.default_rng(0)
-    for a, b in ((0, 1), (1, 2)):
-        paired = (bump(v[a][..., 0]) * bump(v[b][..., 0])).mean(1)
-        shuffled = np.take_along_axis(v[b][..., 0], rng.permuted(np.tile(np.arange(n), (x.size, 1)), axis=1), 1)
-        random = (bump(v[a][..., 0]) * bump(shuffled)).mean(1)
-        ratio = ((paired - exact) ** 2).mean() / ((random - exact) ** 2).mean()
-        assert ratio < 1.5, (a, b, ratio)
+    for k in prefixes:
+        for a, b in ((0, 1), (1, 2)):
+            va, vb = v[a][:, :k, 0], v[b][:, :k, 0]
+            paired = (bump(va) * bump(vb)).mean(1)
+            shuffled = np.take_along_axis(vb, rng.permuted(np.tile(np.arange(k), (x.size, 1)), axis=1), 1)
+            random = (bump(va) * bump(shuffled)).mean(1)
+            ratio = ((paired - exact) ** 2).mean() / ((random - exact) ** 2).mean()
+            assert ratio < 1.5, (k, a, b, ratio)
+    if models == PROGRESSIVE:
+        for d in range(3):
+            assert all(is_02_net(v[d][p, : 1 << j].astype(np.float64)) for p in (0, 77) for j in range(9)), d
 
 
 def test_shapes_broadcast_and_range():

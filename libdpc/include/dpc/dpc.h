@@ -333,8 +333,9 @@ DPC_API dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, f
  *   sampler's models or none): tables are read in order, not rotated per pixel, so a pixel's
  *   first 2^k samples (k >= 4) are a blue-noise set of their own and an adaptive renderer may
  *   stop at any of them; get_1d then uses the stratum of point i's x rank
- *   (docs/progressive.md). Net slots are then read in the net's Sobol' order, so their first
- *   2^k samples are a (0,k,2)-net.
+ *   (docs/progressive.md). Net slots are then read in order (the first in the net's Sobol'
+ *   order, later ones shuffled within each octave [2^(k-1), 2^k)), so their first 2^k samples
+ *   are a (0,k,2)-net.
  * - Each value, over seeds, is uniformly distributed on a grid of 2^-24: estimates are unbiased.
  * - get_1d draws from the stratified lattice (j + u) / spp (one value per stratum, u the pixel's
  *   mask value), get_2d from the model's set; dimension d of get_1d and of get_2d share their
@@ -396,8 +397,7 @@ typedef struct dpc_sampler_options {
      * sets on a renderer's per-pixel error from 64 spp on, and the sets keep the mask's
      * screen-space structure below (docs/rendering.md, "Nets in every slot"). Default
      * DPC_SAMPLER_NET_DIMS_AUTO: every slot from DPC_SAMPLER_AUTO_NETS_SPP on (set models;
-     * progressive samplers read their nets past the first in Sobol' order, which pairs them
-     * by index), else 1; 0 for none. */
+     * progressive samplers keep 1: more were not measured in a renderer), else 1; 0 for none. */
     uint32_t net_dims;
     uint64_t seed; /* default 0 */
 } dpc_sampler_options;
