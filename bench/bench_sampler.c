@@ -3,7 +3,7 @@
  * create: dpc_sampler_create of SPP samples per pixel and DIMS dimensions, median over repeats
  * (at least 3, until 1.5 s or 25); lookups: ns per get_2d / get_1d value over a renderer-style
  * loop (256 x 256 pixels, every sample index, 8 dimensions), median of 11 passes, with the
- * default options (from 64 spp every slot a net) and with net_dims = 1 (the sets' path in
+ * default options (from 32 spp every slot a net) and with net_dims = 1 (the sets' path in
  * dimensions 1-7); and get_2d of dimension 0 alone (a net slot where spp is a power of two >= 2). */
 #define _POSIX_C_SOURCE 200809L
 #include <stdio.h>

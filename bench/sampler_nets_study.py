@@ -3,7 +3,7 @@
     python bench/sampler_nets_study.py            # about 10 minutes on 2 cores
 
 Below 64 spp the default sampler has a (0,m,2)-net in dimension 0 (the pixel position) and
-folded blue-noise sets in the other slots (`net_dims = 1`); from 64 spp on it has nets in every
+folded blue-noise sets in the other slots (`net_dims = 1`); from 32 spp on it has nets in every
 slot, the choice this study measures. It renders bench_rendering's soft-shadow scene and
 path-traced Cornell box with `net_dims = 1` and with nets in all 16 slots, unfolded
 (`net_dims = 16`, `fold_from = -1`), 32 seeds each (the sampler's `seed` property 0 ... 31), against
@@ -23,7 +23,7 @@ from doc_sections import replace_section
 
 SEEDS = 32
 SCENES = ("soft-shadow", "cornell-path")
-COUNTS = (2, 4, 16, 64, 256)
+COUNTS = (2, 4, 16, 32, 64, 256)
 SETS = {"net_dims": 1}
 NETS = {"net_dims": 16, "fold_from": -1}
 
@@ -38,8 +38,8 @@ def main() -> None:
     lines = [
         f"Measured by `python bench/sampler_nets_study.py` (Mitsuba {mi.__version__} `scalar_rgb`, 128 x 128 "
         f"pixels, {SEEDS} seeds; {{seconds}} s): dpc with sets in every slot but dimension 0 (`net_dims = 1`, "
-        "the default below 64 spp) against nets in all 16 slots, unfolded (`net_dims = 16`, `fold_from = -1`, "
-        "the default from 64 spp on).",
+        "the default below 32 spp) against nets in all 16 slots, unfolded (`net_dims = 16`, `fold_from = -1`, "
+        "the default from 32 spp on).",
         "",
         "| scene | spp | MSE: sets | MSE: nets everywhere | nets / sets | E_low: sets | E_low: nets |",
         "|---|---:|---:|---:|---:|---:|---:|",

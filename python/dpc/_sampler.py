@@ -55,7 +55,7 @@ class Sampler:
     (0,m,2)-nets, each pixel's a digital shift of its own, when ``samples_per_pixel`` is a power
     of two >= 2: every elementary interval of a pixel's samples holds one, which integrates
     geometry edges nearly along the pixel axes like a Sobol' net; 0 for none. The default,
-    ``"auto"``, is every slot from 64 samples per pixel on (set models: there nets beat the
+    ``"auto"``, is every slot from 32 samples per pixel on (set models: there nets beat the
     folded sets on a renderer's per-pixel error) and 1 (the pixel position) otherwise;
     ``net_slots`` says how many slots are nets.
     docs/rendering.md defines every step. Values are float32 in [0, 1); the same C object backs

@@ -151,8 +151,8 @@ class ReferenceSampler:
         self.mask = dpc.Sampler.mask()
         # net slots: only when spp is a power of two >= 2
         self.m = spp.bit_length() - 1
-        if net_dims == "auto":  # every slot from 64 spp on for set models, else dimension 0
-            net_dims = dims if spp >= 64 and not self.progressive else 1
+        if net_dims == "auto":  # every slot from 32 spp on for set models, else dimension 0
+            net_dims = dims if spp >= 32 and not self.progressive else 1
         self.net_slots = min(net_dims, dims) if spp >= 2 and spp == 1 << self.m else 0
         self.nets = []
         for t in range(self.net_slots):

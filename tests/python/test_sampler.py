@@ -24,7 +24,7 @@ PROGRESSIVE = dpc.model_path("progressive-2d")
 @pytest.mark.parametrize(
     "models,spp,dims,seed,fold_from,net_dims",
     [
-        ([BNOT], 16, 4, 0, 1, 1),  # dimension 0 a net (the default below 64 spp)
+        ([BNOT], 16, 4, 0, 1, 1),  # dimension 0 a net (the default below 32 spp)
         ([BNOT], 16, 4, 0, None, 0),  # no dimension folded, no nets
         ([BNOT], 16, 4, 0, 0, 3),  # three net slots, folded
         ([BNOT], 5, 3, 12345, 0, 1),  # spp not a power of two (no nets); every dimension folded
@@ -41,8 +41,8 @@ PROGRESSIVE = dpc.model_path("progressive-2d")
         ([PROGRESSIVE], 48, 70, 8, None, 1),
         ([PROGRESSIVE], 64, 4, 3, 1, 2),  # progressive nets: later ones shuffled within octaves
         ([BNOT], 256, 3, 9, None, 3),  # nets after the first reordered
-        ([BNOT], 64, 5, 21, 1, "auto"),  # the default from 64 spp on: every slot a net
-        ([BNOT], 32, 3, 21, 1, "auto"),  # below 64 spp: dimension 0 only
+        ([BNOT], 32, 5, 21, 1, "auto"),  # the default from 32 spp on: every slot a net
+        ([BNOT], 16, 3, 21, 1, "auto"),  # below 32 spp: dimension 0 only
         ([PROGRESSIVE], 64, 3, 3, 1, "auto"),  # progressive: dimension 0 only
     ],
 )
@@ -144,17 +144,17 @@ def test_net_slots_give_every_pixel_a_02_net(n):
 
 
 def test_default_nets_every_slot_from_64_spp_for_set_models():
-    """net_dims "auto" (the default) is every slot from 64 spp on for set models and dimension 0
+    """net_dims "auto" (the default) is every slot from 32 spp on for set models and dimension 0
     otherwise (progressive models, fewer samples); net_slots says so, and the values are those
     of the explicit count."""
     x, y, index = np.arange(50) % 9, np.arange(50) // 9, np.arange(50) % 8
-    for models, n, want in [(BNOT, 64, 5), (BNOT, 256, 5), (BNOT, 32, 1), (BNOT, 48, 0), (PROGRESSIVE, 64, 1)]:
+    for models, n, want in [(BNOT, 32, 5), (BNOT, 256, 5), (BNOT, 16, 1), (BNOT, 48, 0), (PROGRESSIVE, 64, 1)]:
         auto = dpc.Sampler(models, samples_per_pixel=n, dimensions=5, seed=2)
         explicit = dpc.Sampler(models, samples_per_pixel=n, dimensions=5, seed=2, net_dims=max(want, 1))
         assert auto.net_dims == "auto" and auto.net_slots == want, (models, n, auto.net_slots)
         for d in range(7):
             assert np.array_equal(auto.get_2d(x, y, index, d), explicit.get_2d(x, y, index, d)), (n, d)
-    assert all(is_02_net(dpc.Sampler(samples_per_pixel=64).table(t).astype(np.float64)) for t in range(16))
+    assert all(is_02_net(dpc.Sampler(samples_per_pixel=32).table(t).astype(np.float64)) for t in range(16))
 
 
 def test_net_slots_integrate_nearly_axis_aligned_edges_better():

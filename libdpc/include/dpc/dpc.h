@@ -355,7 +355,7 @@ DPC_API dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, f
  * - Net slots: when spp = 2^m >= 2, slots t < N hold blue-noise (0,m,2)-nets instead of the
  *   models' sets, each pixel's digitally shifted rather than toroidally: every elementary
  *   interval of a pixel's samples holds one sample. N = min(options.net_dims, D); the default,
- *   DPC_SAMPLER_NET_DIMS_AUTO, is N = D (every slot) from DPC_SAMPLER_AUTO_NETS_SPP = 64 spp on
+ *   DPC_SAMPLER_NET_DIMS_AUTO, is N = D (every slot) from DPC_SAMPLER_AUTO_NETS_SPP = 32 spp on
  *   for set models and N = 1 (dimension 0, the pixel position) otherwise.
  * ------------------------------------------------------------------------------------------- */
 
@@ -394,7 +394,7 @@ typedef struct dpc_sampler_options {
      * uniform offset inside each sample's cell. For dimension 0, the pixel position: geometry
      * edges nearly along the pixel axes (a light's rim) are integrated like a (0,2)-sequence's,
      * where the sets' 1 x n strata alone trail it. In the other dimensions nets beat the folded
-     * sets on a renderer's per-pixel error from 64 spp on, and the sets keep the mask's
+     * sets on a renderer's per-pixel error from 32 spp on, and the sets keep the mask's
      * screen-space structure below (docs/rendering.md, "Nets in every slot"). Default
      * DPC_SAMPLER_NET_DIMS_AUTO: every slot from DPC_SAMPLER_AUTO_NETS_SPP on (set models;
      * progressive samplers keep 1: more were not measured in a renderer), else 1; 0 for none. */
@@ -406,7 +406,7 @@ typedef struct dpc_sampler_options {
 /* options.net_dims: every slot from DPC_SAMPLER_AUTO_NETS_SPP samples per pixel on (set
  * models), else 1 (dimension 0). */
 #define DPC_SAMPLER_NET_DIMS_AUTO 0xFFFFFFFFu
-#define DPC_SAMPLER_AUTO_NETS_SPP 64u
+#define DPC_SAMPLER_AUTO_NETS_SPP 32u
 
 /* Fill *options with the defaults (no models: set models and n_models). */
 DPC_API void dpc_sampler_options_init(dpc_sampler_options *options);

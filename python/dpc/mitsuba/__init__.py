@@ -12,7 +12,7 @@ several separated by commas), ``dimensions`` (tables, default 16), ``block_size`
 integrator's block size when it is not Mitsuba's default 32), ``fold_from`` (the first dimension
 folded by the baker's transform, default 1: all but Mitsuba's film position; -1 folds none;
 docs/rendering.md) and ``net_dims`` (the first dimensions served by blue-noise (0,m,2)-nets when
-``sample_count`` is a power of two; default -1: every dimension from 64 spp on, else the film
+``sample_count`` is a power of two; default -1: every dimension from 32 spp on, else the film
 position; 0 for none). In XML::
 
     <sampler type="dpc"><integer name="sample_count" value="16"/></sampler>
