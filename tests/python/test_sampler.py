@@ -143,7 +143,7 @@ def test_net_slots_give_every_pixel_a_02_net(n):
     assert not is_02_net(s.get_2d(0, 0, np.arange(n), 1).astype(np.float64)) or n <= 4  # the set is not one
 
 
-def test_default_nets_every_slot_from_64_spp_for_set_models():
+def test_default_nets_every_slot_from_32_spp_for_set_models():
     """net_dims "auto" (the default) is every slot from 32 spp on for set models and dimension 0
     otherwise (progressive models, fewer samples); net_slots says so, and the values are those
     of the explicit count."""
