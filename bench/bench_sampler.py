@@ -42,7 +42,7 @@ def main() -> None:
     cpu = cpu_name()
     lines = ["## Sampler", "",
              f"`python bench/bench_sampler.py` on {cpu}, one thread, `bnot-2d-stratified`. Construction: "
-             "`dpc_sampler_create` (the model's cascade on the scalar path for every table, then the "
+             "`dpc_sampler_create` (the model's cascade on the scalar path for every table that is not a net, then the "
              "projections' ranks, and the nets where spp is a power of two >= 2: dimension 0's, and from "
              "32 spp on every slot's), median over repeats. Lookups: ns per value in a renderer-style loop "
              "(256 x 256 pixels, sample indices up to 64, 8 dimensions), median of 11 passes, with the "

@@ -2,7 +2,7 @@
 
     python bench/sampler_nets_study.py            # about 10 minutes on 2 cores
 
-Below 64 spp the default sampler has a (0,m,2)-net in dimension 0 (the pixel position) and
+Below 32 spp the default sampler has a (0,m,2)-net in dimension 0 (the pixel position) and
 folded blue-noise sets in the other slots (`net_dims = 1`); from 32 spp on it has nets in every
 slot, the choice this study measures. It renders bench_rendering's soft-shadow scene and
 path-traced Cornell box with `net_dims = 1` and with nets in all 16 slots, unfolded

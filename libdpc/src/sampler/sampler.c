@@ -76,11 +76,17 @@ dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
             e[1] = dpc_sampler_wrap(m[1], c1);
             e[2] = dpc_sampler_wrap(m[2], c0);
         }
-    /* Fill the slots in order: the next model in turn gives a set, its dimension pairs fill slots. */
+    /* Fill the slots in order: the next model in turn gives a set, its dimension pairs fill slots.
+     * A set whose slots are all nets is not made (they are overwritten below); set k keeps its
+     * seed either way, so every other slot's table is the same whatever net_dims is. */
     uint32_t t = 0;
     for (uint64_t k = 0; t < D; k++) {
         const dpc_model *m = o->models[k % o->n_models];
         const uint32_t dims = m->cascade.dims;
+        if (t + dims / 2 <= s->net_slots) {
+            t += dims / 2;
+            continue;
+        }
         if ((st = dpc_model_generate_cpu(m, set_seed(s->base, k), n, set)) != DPC_OK) goto done;
         for (uint32_t a = 0; a + 1 < dims && t < D; a += 2, t++) {
             float *table = s->tables + (size_t)t * n * 2;
@@ -91,9 +97,8 @@ dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
             stratify_projections(table, n, scratch);
         }
     }
-    /* Net slots: the net's cells replace the set, as cell centres (what dpc_sampler_table shows;
-     * the lookups read the cells). The sets are still made, so every other slot's table is the
-     * same whatever net_dims is. */
+    /* Net slots: the net's cells, as cell centres (what dpc_sampler_table shows; the lookups
+     * read the cells). */
     for (t = 0; t < s->net_slots; t++) {
         uint32_t *cells = s->nets + (size_t)t * n;
         const uint64_t net_seed = dpc_mix64(s->base ^ dpc_mix64(t + 0x243F6A8885A308D3ull));
