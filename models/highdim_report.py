@@ -1,0 +1,238 @@
+"""Projective and high-dimensional blue noise: issue #14 items 2 and 3, measured.
+
+    python models/highdim_report.py            # writes docs/high-dimensions.md (about 15 minutes)
+    python models/highdim_report.py --quick    # 16 sets, prints only (dart throwing in 10-D skipped)
+
+For each goal the bundled model, the file it replaced (models/previous/, where there is one) and
+the classic reference: E_low below nu = 0.5 / 0.75 (exact over the integer frequencies,
+dpc.analysis.low_frequency_energy; white noise = 1), per 2-D projection and in the full space;
+delta_min (minimum toroidal distance over the densest packing's, mean over the sets and worst
+set); the radial spectrum's peak and rel. L1 to the authors' BNOT target (Monte Carlo, 128
+frequencies per ring, as the model cards); relaxed dart throwing on the torus
+(dpc.baselines) for the delta_min to reach. Sets c = seeds 0 ... count-1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+import dpc
+from dpc import analysis, baselines
+from dpc.analysis.spectrum import low_frequency_energy
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import model_cards as MC  # noqa: E402  (targets and rel. L1, as on the cards)
+
+ROOT = Path(__file__).resolve().parents[1]
+PAGE = ROOT / "docs" / "high-dimensions.md"
+PREVIOUS = ROOT / "models" / "previous"
+AXES = "xyzw"
+
+
+def load(name: str, previous: bool = False):
+    return dpc.load(PREVIOUS / f"{name}.onnx" if previous else name, backend="cpu")
+
+
+def seconds_per_set(model, m: int, rounds: int = 5) -> float:
+    model.generate(0, m)  # warm-up
+    t = []
+    for r in range(rounds):
+        t0 = time.perf_counter()
+        model.generate(r, m)
+        t.append(time.perf_counter() - t0)
+    return float(np.median(t))
+
+
+def projections(sets: np.ndarray) -> dict[str, float]:
+    n = sets.shape[2]
+    return {
+        AXES[a] + AXES[b]: low_frequency_energy(sets, 0.5, dims=(a, b)) for a, b in itertools.combinations(range(n), 2)
+    }
+
+
+def projective_rows(name: str, count: int) -> tuple[list[str], dict]:
+    rows = []
+    got = {}
+    labels = [(f"**{name}**", load(name)), (f"{name} (previous)", load(name, previous=True))]
+    for label, model in labels:
+        sets = model.generate_batch(count, seed=0)
+        p = projections(sets)
+        full = low_frequency_energy(sets, 0.5)
+        md = analysis.min_distance(sets)
+        sec = seconds_per_set(model, model.n_points)
+        rows.append(
+            f"| {label} | {count} | {np.mean(list(p.values())):.4f} | {max(p.values()):.4f} "
+            f"({max(p, key=p.get)}) | {full:.4f} | {md.mean_ratio:.3f} | {model.layers} | {1000 * sec:.1f} |"
+        )
+        got[label] = (p, full)
+    n = labels[0][1].dims
+    for b in ("sobol", "white"):
+        sets = baselines.generate(b, 1024, n, count=count, seed=0)
+        p = projections(sets)
+        rows.append(
+            f"| {b} | {count} | {np.mean(list(p.values())):.4f} | {max(p.values()):.4f} ({max(p, key=p.get)}) | "
+            f"{low_frequency_energy(sets, 0.5):.4f} | {analysis.min_distance(sets).mean_ratio:.3f} | — | — |"
+        )
+    return rows, got
+
+
+def iso_row(label: str, sets: np.ndarray, m: int, n: int, layers="—", sec=None) -> tuple[str, dict]:
+    t = MC.target("bnot", min(m, 1024), n)  # the authors' 10-D file is for 1,024 points: in nu
+    r = analysis.radial_spectrum(sets, nu_max=4.0, directions=128)
+    peak, pnu = r.peak()
+    md = analysis.min_distance(sets)
+    l1 = MC.rel_l1(r, t, (0.25, 3.0))
+    out = {"dmin": md.mean_ratio, "peak": peak, "l1": l1, "e75": r.low_frequency_energy(0.75)}
+    row = (
+        f"| {label} | {m:,} | {len(sets)} | {MC.elow_text(r, 0.5)} | {MC.elow_text(r, 0.75)} | "
+        f"{peak:.2f} (ν = {pnu:.2f}) | {l1:.3f} | {md.mean_ratio:.3f} / {md.min_ratio:.3f} | {layers} | "
+        + ("—" if sec is None else f"{1000 * sec:.1f}")
+        + " |"
+    )
+    return row, out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="16 sets, no 10-D dart throwing, print only")
+    args = ap.parse_args()
+    count = 16 if args.quick else 100
+    goals = []
+    lines = []
+
+    # ---- item 2: projections ----
+    for name in ("projective-3d", "projective-4d"):
+        rows, got = projective_rows(name, count)
+        head = [
+            f"### {name}",
+            "",
+            "| point sets | sets | projections: E_low ν<0.5 mean | worst projection | full space: E_low ν<0.5 "
+            "| δ_min (full space) | layers | ms per set (m = 1,024, 1 thread) |",
+            "|---|---:|---:|---:|---:|---:|---:|---:|",
+        ]
+        lines += head + rows + [""]
+        print("\n".join(head + rows))
+        p, full = got[f"**{name}**"]
+        if name == "projective-3d":
+            goals.append(("each 2-D projection's E_low ν<0.5 ≤ 0.01 (projective-3d, m = 1,024)",
+                          f"worst {max(p.values()):.4f}", max(p.values()) <= 0.01))
+            goals.append(("3-D E_low ν<0.5 ≤ 0.02 (projective-3d)", f"{full:.4f}", full <= 0.02))
+        else:
+            goals.append(("all six projections of a 4-D model, measured the same way (against the 3-D goal's 0.01)",
+                          f"worst {max(p.values()):.4f} (previous file: "
+                          f"{max(got[f'{name} (previous)'][0].values()):.4f})", max(p.values()) <= 0.01))
+
+    # ---- item 3: isotropic n-D ----
+    head = [
+        "| point sets | m | sets | E_low ν<0.5 | E_low ν<0.75 | peak | rel. L1 to BNOT target | δ_min mean / worst "
+        "| layers | ms per set (1 thread) |",
+        "|---|---:|---:|---:|---:|---|---:|---|---:|---:|",
+    ]
+    for name in ("bnot-4d", "bnot-5d"):
+        rows = []
+        res = {}
+        for label, model in ((f"**{name}**", load(name)), (f"{name} (previous)", load(name, previous=True))):
+            row, res[label] = iso_row(label, model.generate_batch(count, seed=0), model.n_points, model.dims,
+                                      model.layers, seconds_per_set(model, model.n_points))
+            rows.append(row)
+        n = int(name[5])
+        row, dart = iso_row("relaxed dart throwing", baselines.generate("dart-throwing", 1024, n, count=count, seed=0),
+                            1024, n)
+        rows.append(row)
+        lines += [f"### {name}", "", *head, *rows, ""]
+        print("\n".join([f"### {name}", *head, *rows]))
+        new = res[f"**{name}**"]
+        goals.append((f"{name}: δ_min ≥ dart throwing's (m = 1,024)",
+                      f"{new['dmin']:.3f} against {dart['dmin']:.3f} (previous file "
+                      f"{res[f'{name} (previous)']['dmin']:.3f})", new["dmin"] >= dart["dmin"]))
+        if name == "bnot-5d":
+            goals.append(("bnot-5d: peak ≥ 2.0", f"{new['peak']:.2f} (previous {res[f'{name} (previous)']['peak']:.2f})",
+                          new["peak"] >= 2.0))
+            goals.append(("bnot-5d: rel. L1 to its target ≤ 0.15",
+                          f"{new['l1']:.3f} (previous {res[f'{name} (previous)']['l1']:.3f})", new["l1"] <= 0.15))
+
+    # ---- item 3: 10-D at m = 8,192 ----
+    rows = []
+    model = load("blue-10d")
+    m = model.n_points
+    row, ten = iso_row("**blue-10d**", model.generate_batch(count, seed=0), m, 10, model.layers,
+                       seconds_per_set(model, m))
+    rows.append(row)
+    old = load("bnot-10d")
+    row, _ = iso_row("bnot-10d (trained at 1,024, scale-aware radius)", old.generate_batch(count, seed=0, n_points=m),
+                     m, 10, old.layers, seconds_per_set(old, m))
+    rows.append(row)
+    dart10 = None
+    if not args.quick:  # about 4 minutes per set on the shared 2-core machine
+        row, dart10 = iso_row("relaxed dart throwing", baselines.generate("dart-throwing", m, 10, count=2, seed=0), m, 10)
+        rows.append(row)
+    lines += ["### blue-10d", "", *head, *rows, ""]
+    print("\n".join(["### blue-10d", *head, *rows]))
+    goals.append(("10-D model at m = 8,192: E_low ν<0.75 ≤ 0.1 (the 1,024-point BNOT target's: 0.0145)",
+                  f"{ten['e75']:.4f}", ten["e75"] <= 0.1))
+    if dart10 is not None:
+        goals.append(("10-D model: δ_min against dart throwing at the same m (2 dart-throwing sets)",
+                      f"{ten['dmin']:.3f} against {dart10['dmin']:.3f}", ten["dmin"] >= dart10["dmin"]))
+
+    table = ["| goal (issue #14) | measured | met |", "|---|---|---|"] + [
+        f"| {g} | {v} | {'yes' if ok else '**no**'} |" for g, v, ok in goals
+    ]
+    print("\n".join(table))
+    if args.quick:
+        return
+    PAGE.write_text("\n".join([*INTRO, *table, "", *lines, *OUTRO]) + "\n")
+    print(f"wrote {PAGE}")
+
+
+INTRO = [
+    "# Projective and high-dimensional blue noise",
+    "",
+    "`python models/highdim_report.py` (this page is its output; about 15 minutes, a quarter of it "
+    "dart throwing in 10-D): issue #14 items 2 and 3, measured with 100 sets (seeds 0 … 99) unless stated. "
+    "E_low(ν) = mean P over the integer frequencies with 0 < |q|/m^(1/n) < ν, exact "
+    "(`dpc.analysis.low_frequency_energy`; white noise = 1); δ_min = minimum toroidal distance over the "
+    "densest packing's (mean over sets / worst set); peak and rel. L1 (0.25 ≤ ν ≤ 3) of the Monte Carlo "
+    "radial spectrum (128 frequencies per ring) against the authors' BNOT target, as on the model cards. "
+    "\"(previous)\": the file the model replaced, kept in `models/previous/` (not bundled). Times: median "
+    "of 5 calls on one thread of this machine (shared, so compare within a table).",
+    "",
+]
+OUTRO = [
+    "## What the models are",
+    "",
+    "- `projective-3d`, `projective-4d`, `blue-10d`: hand-designed Gaussian repulsion cascades with a "
+    "schedule over depth (`python models/make_highdim.py`; its docstring gives the schedules). Every "
+    "kernel is repulsive (≤ 0, tested), so no layer can pull a pair together: the close pairs "
+    "that trained attraction made in bnot-10d cannot occur.",
+    "- `bnot-4d`, `bnot-5d`: trained as before against the authors' BNOT radial spectrum, now from a "
+    "Gaussian repulsion start, on stratified input, with kernels continuous at the radius and a "
+    "hard-core term on the pair correlation (`training/configs/bnot-4d.toml`, `bnot-5d.toml`; "
+    "about 4 minutes each on this machine).",
+    "",
+    "## Where a local cascade falls short, and what would lift it",
+    "",
+    "- **bnot-5d's peak** stays near 1.3–1.4 against the target's 2.69, whatever was tried: "
+    "the trained file, a repulsion cascade of 40–120 layers (1.27–1.29), linear and quadratic "
+    "hard-core kernels (1.14–1.48), an 80-layer cascade trained with the peak band weighted 10× (1.41; "
+    "development runs of this session, 32 sets). A peak that high is the short-range order of a "
+    "nearly crystalline packing, which local moves of 1,024 points in 5-D do not find; an optimiser over "
+    "the whole set (BNOT's own optimal transport, or gradient descent on the spectrum loss per set) "
+    "or far more layers with annealed kernels are what would lift it.",
+    "- **projective-4d's projections** level off at about 0.035 (repulsion in the six projections, "
+    "160–280 layers, any amplitude that stays stable); every 4-D term tried made them worse. Each "
+    "axis is in three projections, and the moves that fix one disturb the other two. Input points "
+    "whose 2-D projections are already stratified (an Owen-scrambled (0,m,2)-net in each pair, as "
+    "the sampler's nets) would start the cascade where it now has to get to; libdpc's inputs are "
+    "uniform or stratified in the full space only (docs/model-format.md §5).",
+    "",
+]
+
+
+if __name__ == "__main__":
+    main()
