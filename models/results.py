@@ -140,7 +140,7 @@ def fig9() -> None:
     rows = ["| dims | model | m | E_low ν<0.5: model / BNOT target / white | E_low ν<0.75: model / BNOT target / white | rel. L1 to target (0.25 ≤ ν ≤ 3) | peak: model / target | δ_min mean / worst |",
             "|---:|---|---:|---:|---:|---:|---:|---|"]
     for ax, names in zip(axs[0], panels):
-        for name, style in zip(names, (":", "--")):
+        for name, style, color in zip(names, (":", "--"), ("tab:blue", "tab:green")):
             model = load_model(name)
             n, m = model.dims, model.n_points
             t = MC.target("bnot", min(m, 1024), n)  # the authors' 10-D file is for 1,024 points: compared in ν
@@ -151,7 +151,7 @@ def fig9() -> None:
             ok = r.samples > 0
             if style == ":":
                 ax.plot(t.nu, t.power, color="tab:orange", lw=1.6, label=f"BNOT target (m = {t.n_points:,})")
-            ax.plot(r.nu[ok], r.mean[ok], style, lw=1.4, label=f"{name} (m = {m:,})")
+            ax.plot(r.nu[ok], r.mean[ok], style, color=color, lw=1.4, label=f"{name} (m = {m:,})")
             ax.set(xlim=(0, 4), ylim=(0, max(3.0, 1.1 * float(np.max(t.power)))), xlabel="ν", title=f"{n}-D")
             ax.legend(fontsize=6)
             peak, pnu = r.peak()
