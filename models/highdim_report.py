@@ -22,7 +22,6 @@ from pathlib import Path
 
 import numpy as np
 
-import dpc
 from dpc import analysis, baselines
 from dpc.analysis.spectrum import low_frequency_energy
 
@@ -31,12 +30,10 @@ import model_cards as MC  # noqa: E402  (targets and rel. L1, as on the cards)
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGE = ROOT / "docs" / "high-dimensions.md"
-PREVIOUS = ROOT / "models" / "previous"
-AXES = "xyzw"
 
 
 def load(name: str, previous: bool = False):
-    return dpc.load(PREVIOUS / f"{name}.onnx" if previous else name, backend="cpu")
+    return MC.load_model(name + (MC.PREVIOUS if previous else ""), backend="cpu")
 
 
 def seconds_per_set(model, m: int, rounds: int = 5) -> float:
@@ -52,14 +49,14 @@ def seconds_per_set(model, m: int, rounds: int = 5) -> float:
 def projections(sets: np.ndarray) -> dict[str, float]:
     n = sets.shape[2]
     return {
-        AXES[a] + AXES[b]: low_frequency_energy(sets, 0.5, dims=(a, b)) for a, b in itertools.combinations(range(n), 2)
+        MC.AXES[a] + MC.AXES[b]: low_frequency_energy(sets, 0.5, dims=(a, b)) for a, b in itertools.combinations(range(n), 2)
     }
 
 
 def projective_rows(name: str, count: int) -> tuple[list[str], dict]:
     rows = []
     got = {}
-    labels = [(f"**{name}**", load(name)), (f"{name} (previous)", load(name, previous=True))]
+    labels = [(f"**{name}**", load(name)), (name + MC.PREVIOUS, load(name, previous=True))]
     for label, model in labels:
         sets = model.generate_batch(count, seed=0)
         p = projections(sets)
@@ -83,7 +80,7 @@ def projective_rows(name: str, count: int) -> tuple[list[str], dict]:
 
 
 def iso_row(label: str, sets: np.ndarray, m: int, n: int, layers="—", sec=None) -> tuple[str, dict]:
-    t = MC.target("bnot", min(m, 1024), n)  # the authors' 10-D file is for 1,024 points: in nu
+    t = MC.bnot_target(m, n)
     r = analysis.radial_spectrum(sets, nu_max=4.0, directions=128)
     peak, pnu = r.peak()
     md = analysis.min_distance(sets)
@@ -126,7 +123,7 @@ def main() -> None:
         else:
             goals.append(("all six projections of a 4-D model, measured the same way (against the 3-D goal's 0.01)",
                           f"worst {max(p.values()):.4f} (previous file: "
-                          f"{max(got[f'{name} (previous)'][0].values()):.4f})", max(p.values()) <= 0.01))
+                          f"{max(got[name + MC.PREVIOUS][0].values()):.4f})", max(p.values()) <= 0.01))
 
     # ---- item 3: isotropic n-D ----
     head = [
@@ -137,7 +134,7 @@ def main() -> None:
     for name in ("bnot-4d", "bnot-5d"):
         rows = []
         res = {}
-        for label, model in ((f"**{name}**", load(name)), (f"{name} (previous)", load(name, previous=True))):
+        for label, model in ((f"**{name}**", load(name)), (name + MC.PREVIOUS, load(name, previous=True))):
             row, res[label] = iso_row(label, model.generate_batch(count, seed=0), model.n_points, model.dims,
                                       model.layers, seconds_per_set(model, model.n_points))
             rows.append(row)
@@ -150,12 +147,12 @@ def main() -> None:
         new = res[f"**{name}**"]
         goals.append((f"{name}: δ_min ≥ dart throwing's (m = 1,024)",
                       f"{new['dmin']:.3f} against {dart['dmin']:.3f} (previous file "
-                      f"{res[f'{name} (previous)']['dmin']:.3f})", new["dmin"] >= dart["dmin"]))
+                      f"{res[name + MC.PREVIOUS]['dmin']:.3f})", new["dmin"] >= dart["dmin"]))
         if name == "bnot-5d":
-            goals.append(("bnot-5d: peak ≥ 2.0", f"{new['peak']:.2f} (previous {res[f'{name} (previous)']['peak']:.2f})",
+            goals.append(("bnot-5d: peak ≥ 2.0", f"{new['peak']:.2f} (previous {res[name + MC.PREVIOUS]['peak']:.2f})",
                           new["peak"] >= 2.0))
             goals.append(("bnot-5d: rel. L1 to its target ≤ 0.15",
-                          f"{new['l1']:.3f} (previous {res[f'{name} (previous)']['l1']:.3f})", new["l1"] <= 0.15))
+                          f"{new['l1']:.3f} (previous {res[name + MC.PREVIOUS]['l1']:.3f})", new["l1"] <= 0.15))
 
     # ---- item 3: 10-D at m = 8,192 ----
     rows = []

@@ -55,16 +55,6 @@ def write_section(key: str, lines: list[str]) -> None:
     print(f"updated {PAGE} ({key})")
 
 
-PREVIOUS = " (previous)"  # a model name with this suffix: the file it replaced, models/previous/NAME.onnx
-
-
-def load_model(name: str, **kw):
-    """A bundled model, or with the PREVIOUS suffix the file it replaced (kept for comparison)."""
-    if name.endswith(PREVIOUS):
-        return dpc.load(ROOT / "models" / "previous" / f"{name.removesuffix(PREVIOUS)}.onnx", **kw)
-    return dpc.load(name, **kw)
-
-
 def savefig(fig, name: str) -> str:
     FIG.mkdir(parents=True, exist_ok=True)
     fig.tight_layout()
@@ -134,19 +124,22 @@ def fig8() -> None:
 
 def fig9() -> None:
     # one panel per dimension: the bundled model(s) and the file it replaced (models/previous/)
-    panels = [["bnot-2d"], ["bnot-3d"], ["bnot-4d", "bnot-4d" + PREVIOUS], ["bnot-5d", "bnot-5d" + PREVIOUS],
+    panels = [["bnot-2d"], ["bnot-3d"], ["bnot-4d", "bnot-4d" + MC.PREVIOUS], ["bnot-5d", "bnot-5d" + MC.PREVIOUS],
               ["bnot-10d", "blue-10d"]]
     fig, axs = plt.subplots(1, len(panels), figsize=(3.3 * len(panels), 3.0), squeeze=False)
     rows = ["| dims | model | m | E_low ν<0.5: model / BNOT target / white | E_low ν<0.75: model / BNOT target / white | rel. L1 to target (0.25 ≤ ν ≤ 3) | peak: model / target | δ_min mean / worst |",
             "|---:|---|---:|---:|---:|---:|---:|---|"]
+    white = {}  # (m, n) -> white noise's spectrum, once per point count and dimension
     for ax, names in zip(axs[0], panels):
         for name, style, color in zip(names, (":", "--"), ("tab:blue", "tab:green")):
-            model = load_model(name)
+            model = MC.load_model(name)
             n, m = model.dims, model.n_points
-            t = MC.target("bnot", min(m, 1024), n)  # the authors' 10-D file is for 1,024 points: compared in ν
+            t = MC.bnot_target(m, n)
             sets = model.generate_batch(SETS, seed=0)
             r = analysis.radial_spectrum(sets, nu_max=4.0, directions=128)
-            w = analysis.radial_spectrum(MC.classic_sets("white", m, n), nu_max=4.0, directions=128)
+            if (m, n) not in white:
+                white[m, n] = analysis.radial_spectrum(MC.classic_sets("white", m, n), nu_max=4.0, directions=128)
+            w = white[m, n]
             md = analysis.min_distance(sets)
             ok = r.samples > 0
             if style == ":":
@@ -157,7 +150,7 @@ def fig9() -> None:
             peak, pnu = r.peak()
             elows = []
             for nu in (0.5, 0.75):
-                te = target_elow(t, nu)  # in ν: for blue-10d the 1,024-point target's
+                te = target_elow(t, nu)
                 elows.append(f"{MC.elow_text(r, nu)} / {'—' if math.isnan(te) else f'{te:.4f}'} / "
                              f"{MC.elow_text(w, nu)}")
             rows.append(f"| {n} | {name} | {m:,} | {elows[0]} | {elows[1]} | {MC.rel_l1(r, t, (0.25, 3.0)):.3f} | "
@@ -187,12 +180,12 @@ def fig9() -> None:
 # ---- Fig. 10 -------------------------------------------------------------------------------
 
 def fig10() -> None:
-    names = ["projective-3d", "projective-3d" + PREVIOUS, "mixed-3d"]
+    names = ["projective-3d", "projective-3d" + MC.PREVIOUS, "mixed-3d"]
     fig, axs = plt.subplots(len(names), 4, figsize=(13, 3.1 * len(names)), squeeze=False)
     rows = ["| model | subspace | target | rel. L1 (0.25 ≤ ν ≤ 3) | E_low ν<0.5: model / target | anisotropy (dB) |",
             "|---|---|---|---:|---:|---:|"]
     for ax, name in zip(axs, names):
-        model, card = load_model(name), MC.CARDS[name.removesuffix(PREVIOUS)]
+        model, card = MC.load_model(name), MC.CARDS[name.removesuffix(MC.PREVIOUS)]
         sets = model.generate_batch(SETS, seed=0)
         for a, (axes, key) in zip(ax[:3], card.targets.items()):
             d = MC.axes_of(axes, model.dims)
@@ -236,8 +229,8 @@ def _sampler(name: str, dims: int):
     """(count, m, seed) -> sets, for a bundled model (scale-aware radius; NAME + STRATIFIED for
     stratified input) or a baseline."""
     base = name.removesuffix(STRATIFIED)
-    if base in dpc.available_models() or base.endswith(PREVIOUS):
-        model = load_model(base, input="stratified" if name != base else "auto")
+    if base in dpc.available_models() or base.endswith(MC.PREVIOUS):
+        model = MC.load_model(base, input="stratified" if name != base else "auto")
         return lambda count, m, seed: model.generate_batch(count, seed=seed, n_points=m)
     return lambda count, m, seed: baselines.generate(name, m, dims, count=count, seed=seed)
 
@@ -276,7 +269,7 @@ def fig11() -> None:
 def fig12() -> None:
     cases = [(2, ["white", "jitter", "sobol", "halton", "rank1", "bnot-2d", "bnot-2d" + STRATIFIED, "bnot-2d-wide",
                   "bnot-2d-stratified", "blue-2d", "step-2d"], [64, 256, 1024, 4096]),
-             (3, ["white", "jitter", "sobol", "halton", "rank1", "bnot-3d", "projective-3d", "projective-3d" + PREVIOUS],
+             (3, ["white", "jitter", "sobol", "halton", "rank1", "bnot-3d", "projective-3d", "projective-3d" + MC.PREVIOUS],
               [64, 512, 4096])]
     fams = ("gaussian", "heaviside")
     fig, axs = plt.subplots(2, 2, figsize=(10, 7.2))

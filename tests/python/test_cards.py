@@ -34,7 +34,8 @@ def test_repulsion_2d_card():
 
 def test_bnot_4d_card_elow_is_the_mean_over_the_integer_ball():
     """The n-D E_low is the stated definition (every integer frequency with 0 < nu < nu0), not a
-    ring average (which counted the whole ring straddling nu0: 0.054 instead of 0.020)."""
+    ring average (which counted the whole ring straddling nu0: 0.054 instead of 0.020 for the first
+    file, now models/previous/bnot-4d.onnx)."""
     cells = card_row("bnot-4d", "**bnot-4d**")
     sets = dpc.load("bnot-4d", backend="cpu").generate_batch(100, seed=0)
     md = analysis.min_distance(sets)
