@@ -230,6 +230,9 @@ def model_header(name: str, model) -> list[str]:
            + (f", gridded axes {list(model.grid_axes)}" if model.grid_axes else "")
            + (f", {model.input} input points (metadata `dpc.input`; libdpc's default input, AUTO, "
               "feeds it these)" if model.input != "uniform" else "")]
+    if model.balance:
+        out.append(f"- output balanced at the frequencies 0 < |q| ≤ {model.balance} (metadata `dpc.balance`, "
+                   "docs/model-format.md §5.1): the generator's last step, after the cascade")
     if "dpc.train.steps" not in meta:
         out.append(f"- made by: `python {meta.get('dpc.source', '?')}` (hand-designed, not trained)")
         return out
@@ -314,6 +317,8 @@ def scale_section(name: str, model, t: Target) -> list[str]:
              "fluctuations on scales far beyond the receptive field relax slowly: E_low stays within "
              "a small factor of its trained value, but the torus-scale frequencies (last column) keep "
              "more and more of their white-noise power as m grows." if model.input == "uniform" else
+             "The input points are stratified (one per grid cell) and the output balanced at the "
+             "torus-scale frequencies (model-format.md §5.1): the last column is 0 at every m." if model.balance else
              "The input points are stratified (one per grid cell), so there are no large-scale density "
              "fluctuations for the local filters to leave behind: the torus-scale frequencies (last "
              "column) stay near 0 at every m."), ""]

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdlib>
+#include <cstring>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -122,6 +123,7 @@ class Model {
         call([&] { return dpc_model_get_info(raw, &info_); });
         call([&] { return dpc_model_get_backend(raw, &backend_); });
         call([&] { return dpc_model_get_input(raw, &input_); });
+        call([&] { return dpc_model_get_balance(raw, &balance_); });
         call([&] { return dpc_model_neighbours(raw, &neighbours_); });
     }
     Model(const Model &) = delete;
@@ -143,6 +145,7 @@ class Model {
         d["threads"] = info_.threads;
         d["backend"] = backend_;
         d["input"] = input_;
+        d["balance"] = balance_;
         d["device"] = std::string(dpc_model_device(model_.get()));
         d["neighbours"] = neighbours_;
         return d;
@@ -241,6 +244,7 @@ class Model {
     dpc_model_info info_{};
     dpc_backend backend_ = DPC_BACKEND_CPU;
     dpc_input input_ = DPC_INPUT_UNIFORM;
+    uint32_t balance_ = 0;
     double neighbours_ = 0.0;
 };
 
@@ -508,5 +512,17 @@ PYBIND11_MODULE(_core, mod) {
         "stratified",
         [](uint64_t seed, size_t m, size_t n, double max_bytes) { return input_points(seed, m, n, max_bytes, true); },
         py::arg("seed"), py::arg("m"), py::arg("n"), py::arg("max_bytes"));
+    mod.def(
+        "balance",
+        [](py::array_t<float, py::array::c_style | py::array::forcecast> points, uint32_t radius) {
+            if (points.ndim() != 2) raise_status(DPC_ERROR_INVALID_ARGUMENT, "points must be (m, n)");
+            py::array_t<float> out({points.shape(0), points.shape(1)});
+            std::memcpy(out.mutable_data(), points.data(), sizeof(float) * points.size());
+            float *p = out.mutable_data();
+            const size_t m = points.shape(0), n = points.shape(1);
+            call([&] { return dpc_balance(p, m, n, radius); });
+            return out;
+        },
+        py::arg("points"), py::arg("radius"));
     register_layer_training(mod);
 }

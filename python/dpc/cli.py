@@ -391,7 +391,9 @@ def list_cmd():
             continue
         click.echo(
             f"  {name:22s} {m.dims}-D, trained m={m.n_points}, {m.layers} layers, "
-            f"{m.input} input" + (f", grid {'x'.join(map(str, m.grid_shape))}" if m.grid_shape else "")
+            f"{m.input} input"
+            + (f", grid {'x'.join(map(str, m.grid_shape))}" if m.grid_shape else "")
+            + (f", output balanced at |q| <= {m.balance}" if m.balance else "")
         )
         desc = " ".join(m.metadata.get("dpc.description", "").split())
         if desc:

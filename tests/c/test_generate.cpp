@@ -417,3 +417,121 @@ TEST(Progressive, RunsOnTheCpuAndVulkanSaysWhy) {
     EXPECT_EQ(b, DPC_BACKEND_CPU);
     dpc_model_free(m);
 }
+
+// ---- the output balance (docs/model-format.md §5.1) -------------------------------------------
+
+namespace {
+// max over 0 < |q|^2 <= k2 of |sum_j exp(-2 pi i q.x_j)|^2 / m, in long double
+double low_power(const std::vector<float> &x, int k2) {
+    const size_t m = x.size() / 2;
+    double worst = 0.0;
+    for (int a = 0; a * a <= k2; a++)
+        for (int b = -8; b <= 8; b++) {
+            if (a * a + b * b == 0 || a * a + b * b > k2 || (a == 0 && b < 0)) continue;
+            long double re = 0, im = 0;
+            for (size_t j = 0; j < m; j++) {
+                const long double ph =
+                    2 * 3.14159265358979323846L * (a * (long double)x[2 * j] + b * (long double)x[2 * j + 1]);
+                re += std::cos(ph);
+                im -= std::sin(ph);
+            }
+            worst = std::max(worst, (double)((re * re + im * im) / m));
+        }
+    return worst;
+}
+} // namespace
+
+TEST(Balance, GenerateIsTheCascadeThenTheBalance) {
+    ModelPtr m = load(model_path("model_2d_balanced"));
+    ModelPtr plain = load(model_path("model_2d"));
+    ASSERT_TRUE(m && plain);
+    uint32_t k = 0;
+    ASSERT_EQ(dpc_model_get_balance(m.get(), &k), DPC_OK);
+    EXPECT_EQ(k, 3u);
+    ASSERT_EQ(dpc_model_get_balance(plain.get(), &k), DPC_OK);
+    EXPECT_EQ(k, 0u);
+    for (uint64_t seed : {0ull, 5ull, ~0ull}) {
+        std::vector<float> want = generate(plain.get(), seed, 1024);
+        const double before = low_power(want, 9);
+        ASSERT_EQ(dpc_balance(want.data(), 1024, 2, 3), DPC_OK) << dpc_last_error();
+        const std::vector<float> got = generate(m.get(), seed, 1024);
+        EXPECT_EQ(got, want) << "seed " << seed;
+        // model_2d is no blue noise (about 1 there, as white noise): three steps still take 1e-6 of it
+        EXPECT_GT(before, 0.1);
+        EXPECT_LT(low_power(got, 9), 1e-6 * before) << "seed " << seed;
+        // dpc_filter is the cascade alone
+        std::vector<float> x = input_points(info_of(m.get()), seed, 1024);
+        ASSERT_EQ(dpc_filter(m.get(), 1024, x.data()), DPC_OK) << dpc_last_error();
+        EXPECT_EQ(x, generate(plain.get(), seed, 1024));
+    }
+}
+
+TEST(Balance, ThreadsIsasAndBatchesGiveTheSameBits) {
+    ModelPtr ref = load(model_path("model_2d_balanced"), DPC_ISA_SCALAR, 1);
+    ASSERT_TRUE(ref);
+    const std::vector<float> want = generate(ref.get(), 4, 20000);
+    std::vector<dpc_isa> isas = {DPC_ISA_SCALAR};
+    for (dpc_isa v : vector_isas()) isas.push_back(v);
+    for (dpc_isa isa : isas)
+        for (uint32_t threads : {1u, 3u}) {
+            ModelPtr m = load(model_path("model_2d_balanced"), isa, threads);
+            ASSERT_TRUE(m);
+            EXPECT_EQ(generate(m.get(), 4, 20000), want) << isa_name(isa) << ", " << threads << " threads";
+            std::vector<float> batch(3 * 500 * 2);
+            ASSERT_EQ(dpc_generate_batch(m.get(), 7, 3, 500, batch.data()), DPC_OK) << dpc_last_error();
+            EXPECT_EQ(std::vector<float>(batch.begin() + 1000, batch.begin() + 2000), generate(ref.get(), 8, 500));
+        }
+}
+
+TEST(Balance, RadiusShrinksWithTheSetAndPointsStayInTheTorus) {
+    // K = min(radius, largest j with (4 j)^dims <= m): 15 points get none, 64 points |q| <= 2
+    std::vector<float> x(15 * 2), y;
+    dpc_uniform(1, 15, 2, x.data());
+    y = x;
+    ASSERT_EQ(dpc_balance(y.data(), 15, 2, 3), DPC_OK);
+    EXPECT_EQ(x, y);
+    x.resize(64 * 2);
+    dpc_uniform(2, 64, 2, x.data());
+    const double white = low_power(x, 4);
+    ASSERT_EQ(dpc_balance(x.data(), 64, 2, 3), DPC_OK);
+    EXPECT_LT(low_power(x, 4), 1e-3 * white); // 64 white-noise points: the steps' first-order model is rough
+    EXPECT_GT(low_power(x, 9), 1e-2);         // |q| = sqrt(5), 3: beyond K = 2
+    // points at the seam stay in [0, 1)
+    std::vector<float> seam(1024 * 2);
+    dpc_stratified(3, 1024, 2, seam.data());
+    for (size_t i = 0; i < 40; i++) seam[2 * i] = i % 2 ? 0.0f : 0.99999994f;
+    ASSERT_EQ(dpc_balance(seam.data(), 1024, 2, 3), DPC_OK);
+    for (float v : seam) EXPECT_TRUE(v >= 0.0f && v < 1.0f) << v;
+    // 3-D and 1-D too
+    std::vector<float> z(4096 * 3);
+    dpc_stratified(4, 4096, 3, z.data());
+    ASSERT_EQ(dpc_balance(z.data(), 4096, 3, 2), DPC_OK);
+    std::vector<float> w(200);
+    dpc_stratified(5, 200, 1, w.data());
+    ASSERT_EQ(dpc_balance(w.data(), 200, 1, 3), DPC_OK);
+}
+
+TEST(Balance, BadArgumentsAreRefusedAndLeaveThePointsAlone) {
+    std::vector<float> x(256 * 2);
+    dpc_uniform(1, 256, 2, x.data());
+    const std::vector<float> keep = x;
+    EXPECT_EQ(dpc_balance(nullptr, 256, 2, 3), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(dpc_balance(x.data(), 0, 2, 3), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(dpc_balance(x.data(), 256, 0, 3), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(dpc_balance(x.data(), 2, 65, 3), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(dpc_balance(x.data(), 256, 2, 33), DPC_ERROR_INVALID_ARGUMENT);
+    x[77] = 1.0f;
+    EXPECT_EQ(dpc_balance(x.data(), 256, 2, 3), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(dpc_last_error()).find("[0, 1)"), std::string::npos) << dpc_last_error();
+    x[77] = std::nanf("");
+    EXPECT_EQ(dpc_balance(x.data(), 256, 2, 3), DPC_ERROR_INVALID_ARGUMENT);
+    x[77] = keep[77];
+    EXPECT_EQ(x, keep);
+    // radius 13 in 3-D holds more than 4,096 frequencies: (4 * 13)^3 = 140,608 points reach it
+    std::vector<float> big(140608 * 3, 0.5f);
+    EXPECT_EQ(dpc_balance(big.data(), 140608, 3, 13), DPC_ERROR_LIMIT);
+    EXPECT_NE(std::string(dpc_last_error()).find("4096"), std::string::npos) << dpc_last_error();
+    EXPECT_EQ(big, std::vector<float>(140608 * 3, 0.5f));
+    uint32_t k = 0;
+    EXPECT_EQ(dpc_model_get_balance(nullptr, &k), DPC_ERROR_INVALID_ARGUMENT);
+}

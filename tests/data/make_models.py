@@ -20,6 +20,7 @@ Models (docs/model-format.md):
   model_grid_3to1.onnx 3-D, x and y gridded 32x32 (fixed), value z, 3 layers, 1024 points
   model_10d.onnx       10-D, five 2-D pairs, two 1-D, one 3-D and the full space, 3 layers
   model_2d_progressive.onnx  model_2d's layers as a progressive model (dpc.order, base 16: §6)
+  model_2d_balanced.onnx     model_2d's layers with the output balance (dpc.balance = 3: §5.1)
 
 The metadata entries are stored with the optional keys first and the required keys last
 (dpc.n_points is the very last field of the file), so that every proper prefix of a file lacks a
@@ -230,9 +231,18 @@ def model_2d_progressive() -> ModelSpec:
     return spec
 
 
+def model_2d_balanced() -> ModelSpec:
+    spec = model_2d()
+    spec.name = "test-2d-balanced"
+    spec.description = "Test model: model_2d's cascade, its output balanced at 0 < |q| <= 3 (format §5.1)."
+    spec.metadata.update({"dpc.balance": "3"})
+    return spec
+
+
 MODELS = {
     "model_2d.onnx": model_2d,
     "model_2d_progressive.onnx": model_2d_progressive,
+    "model_2d_balanced.onnx": model_2d_balanced,
     "model_3d_proj.onnx": model_3d_proj,
     "model_3d_mixed.onnx": model_3d_mixed,
     "model_grid_3to1.onnx": model_grid_3to1,

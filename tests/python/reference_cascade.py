@@ -244,6 +244,34 @@ def generate_progressive(model: RefModel, seed: int, m: int, base: int) -> np.nd
     return y
 
 
+def balance_frequencies(k: int, n: int) -> np.ndarray:
+    """The integer q in n dimensions with 0 < |q|^2 <= k^2 and first nonzero component > 0."""
+    import itertools
+
+    qs = [q for q in itertools.product(range(-k, k + 1), repeat=n) if 0 < sum(v * v for v in q) <= k * k]
+    return np.array([q for q in qs if q[next(i for i, v in enumerate(q) if v)] > 0], dtype=np.float64).reshape(-1, n)
+
+
+def balance(x: np.ndarray, radius: int, steps: int = 3) -> np.ndarray:
+    """The output balance (§5.1) in float64: K = min(radius, the largest j with (4 j)^n <= m);
+    each step moves every point by sum_q q Im(c_q exp(2 pi i q.x)) / (pi |q|^2 m), with
+    c_q = sum_j exp(-2 pi i q.x_j) of the points before the step."""
+    y = np.array(x, dtype=np.float64)
+    m, n = y.shape
+    k = 0
+    while k < radius and (4 * (k + 1)) ** n <= m:
+        k += 1
+    if k == 0:
+        return y
+    q = balance_frequencies(k, n)
+    w = 1.0 / (np.pi * (q * q).sum(1) * m)
+    for _ in range(steps):
+        z = np.exp(2j * np.pi * (y @ q.T))  # (m, F)
+        c = np.conj(z).sum(0)
+        y = (y + (np.imag(c[None, :] * z) * w[None, :]) @ q) % 1.0
+    return y
+
+
 def torus_diff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Per-coordinate distance on the unit torus: |a - b| with 0.999… and 0.000… close."""
     d = np.abs(np.asarray(a, dtype=np.float64) - np.asarray(b, dtype=np.float64))

@@ -67,6 +67,10 @@ class CascadeSpec:
     # with g(d) = d / 2 makes a pair at that distance meet exactly, inside eps * h, where no later
     # layer sees it (bnot-10d: 1 set in ~3,000; docs/training.md §2). 0: no limit.
     max_attraction: float = 0.0
+    # > 0: the generator's output balance radius (metadata dpc.balance, format §5.1): after the
+    # cascade, libdpc cancels each set's power at the integer frequencies 0 < |q| <= balance.
+    # Not part of training: the loss sees the cascade's output.
+    balance: int = 0
 
     def __post_init__(self):
         if not 1 <= self.dims <= 64:
@@ -106,6 +110,10 @@ class CascadeSpec:
             raise FilterConfigError(f"order must be 'set' or 'progressive', got {self.order!r}")
         if self.order == "progressive" and (self.grid_axes or not 1 <= self.progressive_base <= self.n_points):
             raise FilterConfigError("a progressive cascade has no grid axes and 1 <= progressive_base <= n_points")
+        if isinstance(self.balance, bool) or not (isinstance(self.balance, int) and 0 <= self.balance <= 32):
+            raise FilterConfigError(f"balance must be an integer radius in 0..32, got {self.balance!r}")
+        if self.balance and (self.grid_axes or self.order != "set"):
+            raise FilterConfigError("balance is for set models without grid axes")
         check_layer(self.dims, torch.zeros(len(self.masks), self.bins), self.masks, self.radius, self.eps, self.fixed)
 
     @property

@@ -6,7 +6,8 @@
                model's name or a model file, whose kernels the run starts from), input
                ("uniform" or "stratified": the training inputs), order ("set" or "progressive"), progressive_base,
                continuous (true: every kernel table ends at 0 at the radius), max_attraction (> 0:
-               table values at most max_attraction x the distance in spacings)
+               table values at most max_attraction x the distance in spacings), balance (> 0:
+               the generator's output balance radius, docs/model-format.md §5.1)
     [loss]     name + params (registered) | source (Python code) | file (Python file)
     [train]    steps, batch, lr, lr_final, seed, device, threads, impl, checkpoint_every,
                log_every, eval_sets, run_dir, diverge_factor, diverge_patience
@@ -60,6 +61,7 @@ class ModelConfig:
     progressive_base: int = 16
     continuous: bool = False  # kernel tables end at 0 at the radius (CascadeSpec.continuous)
     max_attraction: float = 0.0  # > 0: table values at most this times d (CascadeSpec.max_attraction)
+    balance: int = 0  # > 0: the generator's output balance radius (CascadeSpec.balance)
 
 
 @dataclass
@@ -116,6 +118,7 @@ class Config:
             progressive_base=m.progressive_base,
             continuous=m.continuous,
             max_attraction=float(m.max_attraction),
+            balance=m.balance,
         )
 
     def to_dict(self) -> dict:

@@ -36,6 +36,8 @@ def model_spec_from_checkpoint(st: dict, quality: dict | None = None, name: str 
         "dpc.quality": json.dumps(quality, sort_keys=True),
         "dpc.input": sp.input,  # the input points it was trained on: load it with that input
     }
+    if sp.balance:  # the generator's last step (format §5.1)
+        meta["dpc.balance"] = str(sp.balance)
     if sp.order == "progressive":  # libdpc generates it level by level (format §6)
         meta["dpc.order"] = "progressive"
         meta["dpc.progressive_base"] = str(sp.progressive_base)

@@ -19,6 +19,7 @@
 #include "common/error.h"
 #include "cpu/cpu_cascade.h"
 #include "cpu/cpu_layer_train.h"
+#include "model/balance.h"
 #include "model/input.h"
 #include "model/plan.h"
 
@@ -326,6 +327,13 @@ void dpc_model_free(dpc_model *model) {
 
 /* ---- information ------------------------------------------------------------------------- */
 
+dpc_status dpc_model_get_balance(const dpc_model *model, uint32_t *out_radius) {
+    dpc_clear_error();
+    if (!model || !out_radius) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "model or out_radius is NULL");
+    *out_radius = model->cascade.balance;
+    return DPC_OK;
+}
+
 dpc_status dpc_model_get_info(const dpc_model *model, dpc_model_info *out_info) {
     dpc_clear_error();
     if (!model || !out_info) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "model or out_info is NULL");
@@ -424,6 +432,26 @@ dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, float *ou
     return DPC_OK;
 }
 
+dpc_status dpc_balance(float *points, size_t n_points, size_t dims, uint32_t radius) {
+    dpc_clear_error();
+    if (!points) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "points is NULL");
+    if (n_points == 0 || dims == 0 || dims > DPC_MAX_DIMS)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "n_points must be positive and dims in 1..%u", DPC_MAX_DIMS);
+    if (n_points > DPC_MAX_POINTS)
+        return dpc_fail(DPC_ERROR_LIMIT, "%zu points, at most %u per set", n_points, DPC_MAX_POINTS);
+    if (radius > DPC_BALANCE_MAX_K)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "radius is %u, at most %u", radius, DPC_BALANCE_MAX_K);
+    const uint32_t k = dpc_balance_radius(radius, n_points, dims);
+    if (k && !dpc_balance_frequencies(k, dims))
+        return dpc_fail(DPC_ERROR_LIMIT, "radius %u holds more than %u frequencies in %zu dimensions", k,
+                        DPC_BALANCE_MAX_FREQS, dims);
+    for (size_t i = 0; i < n_points * dims; i++)
+        if (!(points[i] >= 0.0f && points[i] < 1.0f))
+            return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "point %zu, dimension %zu is %g: points must lie in [0, 1)",
+                            i / dims, i % dims, (double)points[i]);
+    return dpc_balance_points(points, n_points, dims, k);
+}
+
 static double model_max_radius(const dpc_cascade *c) {
     double r = 0.0;
     for (uint32_t l = 0; l < c->n_layers; l++)
@@ -513,7 +541,12 @@ static void vk_fill(void *ctx, size_t set, float *x) {
 
 static dpc_status vk_generate(const dpc_model *model, uint64_t seed, size_t count, size_t m, float *out) {
     vk_inputs in = {model, seed, m, NULL};
-    return dpc_vk_run(model->vk, &model->cascade, count, m, vk_fill, &in, out);
+    const dpc_cascade *c = &model->cascade;
+    dpc_status st = dpc_vk_run(model->vk, c, count, m, vk_fill, &in, out);
+    const uint32_t k = dpc_balance_radius(c->balance, m, c->dims); /* the generator's last step, on the host */
+    for (size_t s = 0; st == DPC_OK && k && s < count; s++)
+        st = dpc_balance_points(out + s * m * c->dims, m, c->dims, k);
+    return st;
 }
 #endif
 

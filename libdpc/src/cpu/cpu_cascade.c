@@ -18,6 +18,7 @@
 #include "common/threads.h"
 #include "cpu/cpu_grid.h"
 #include "cpu/cpu_lists.h"
+#include "model/balance.h"
 #include "model/input.h"
 #include "model/plan.h"
 
@@ -468,7 +469,8 @@ static dpc_status generate_one(const dpc_cascade *c, dpc_input input, const dpc_
     if (hook && hook(ctx, 0) != DPC_OK) return DPC_ERROR_CANCELLED;
     if (!c->progressive_base) {
         dpc_input_fill(c, input, seed, m, out);
-        return dpc_cpu_filter_hooked(c, e, m, out, hook, ctx);
+        const dpc_status st = dpc_cpu_filter_hooked(c, e, m, out, hook, ctx);
+        return st == DPC_OK ? dpc_balance_points(out, m, c->dims, dpc_balance_radius(c->balance, m, c->dims)) : st;
     }
     /* Progressive: level j >= 1 adds its input points, of seed + j * 0x9E3779B97F4A7C15, to the
      * n points so far and filters them past those, which stay where they are. */

@@ -37,6 +37,7 @@ typedef struct dpc_cascade {
     uint32_t grid_axis[DPC_MAX_DIMS];
     uint32_t grid_shape[DPC_MAX_DIMS];
     uint32_t progressive_base; /* 0: a set; else generated level by level from this count (format §6) */
+    uint32_t balance;          /* 0: none; else the generator's output balance radius (format §5.1) */
     size_t n_meta;
     char **meta_keys;
     char **meta_values;

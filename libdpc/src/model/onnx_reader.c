@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "common/error.h"
+#include "model/balance.h"
 #include "model/model.h"
 #include "model/protobuf.h"
 
@@ -482,6 +483,18 @@ static dpc_status parse_metadata(const pb_span *entries, size_t n, dpc_cascade *
         c->progressive_base = (uint32_t)x;
     } else if (base) {
         return FAIL("metadata 'dpc.progressive_base' belongs to a model with dpc.order = 'progressive'");
+    }
+    const char *balance = dpc_cascade_meta(c, "dpc.balance");
+    if (balance) {
+        if (!parse_uint(balance, DPC_BALANCE_MAX_K, &x) || x == 0)
+            return FAIL("metadata 'dpc.balance' is '%.40s': an integer radius in 1..%u", balance, DPC_BALANCE_MAX_K);
+        if (c->grid_dims || c->progressive_base)
+            return FAIL("metadata 'dpc.balance' belongs to a set model without grid axes, not a %s model",
+                        c->grid_dims ? "gridded" : "progressive");
+        if (!dpc_balance_frequencies((uint32_t)x, c->dims))
+            return FAIL("metadata 'dpc.balance' = %u holds more than %u frequencies in %u dimensions", (unsigned)x,
+                        DPC_BALANCE_MAX_FREQS, c->dims);
+        c->balance = (uint32_t)x;
     }
     return DPC_OK;
 }
