@@ -490,3 +490,21 @@ TEST(Vulkan, StratifiedInputIsTheCpuBackendsToo) {
         EXPECT_LE(max_torus_diff(generate(cpu.get(), 8, n), x), kParityTol) << n;
     }
 }
+
+TEST(Vulkan, BalancedModelBalancesOnTheHost) {
+    // docs/model-format.md §5.1: the Vulkan backend runs the cascade, the host the balance.
+    LOAD_VULKAN_OR_SKIP(vk, model_path("model_2d_balanced"));
+    ModelPtr cpu = load_cpu(model_path("model_2d_balanced"));
+    ASSERT_TRUE(cpu);
+    for (size_t n : {1024u, 1500u}) {
+        std::vector<float> x(n * 2);
+        ASSERT_EQ(dpc_uniform(3, n, 2, x.data()), DPC_OK);
+        ASSERT_EQ(dpc_filter(vk.get(), n, x.data()), DPC_OK) << dpc_last_error();
+        ASSERT_EQ(dpc_balance(x.data(), n, 2, 3), DPC_OK) << dpc_last_error();
+        EXPECT_EQ(generate(vk.get(), 3, n), x) << "Vulkan generate = its filter, then dpc_balance; n " << n;
+        EXPECT_LE(max_torus_diff(generate(cpu.get(), 3, n), x), kParityTol) << n;
+        std::vector<float> batch(2 * n * 2);
+        ASSERT_EQ(dpc_generate_batch(vk.get(), 2, 2, n, batch.data()), DPC_OK) << dpc_last_error();
+        EXPECT_EQ(std::vector<float>(batch.begin() + (ptrdiff_t)(n * 2), batch.end()), generate(vk.get(), 3, n));
+    }
+}
