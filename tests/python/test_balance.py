@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 import dpc
-from dpc import analysis
 import reference_cascade as rc
 from cpu_isa import VECTOR_ISAS
+from dpc import analysis
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 
