@@ -136,5 +136,14 @@ def test_training_config_and_export():
         with pytest.raises(FilterConfigError):
             CascadeSpec(dims=2, n_points=64, layers=1, unique_kernels=1, **bad)
     with pytest.raises(FilterConfigError):
-        CascadeSpec(dims=3, n_points=64, layers=1, unique_kernels=1, subspaces=["z"], radius=[2.0],
-                    grid_axes=[0, 1], grid_shape=[8, 8], balance=1)
+        CascadeSpec(
+            dims=3,
+            n_points=64,
+            layers=1,
+            unique_kernels=1,
+            subspaces=["z"],
+            radius=[2.0],
+            grid_axes=[0, 1],
+            grid_shape=[8, 8],
+            balance=1,
+        )
