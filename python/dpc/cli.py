@@ -22,6 +22,7 @@ import numpy as np
 
 from . import _atomic, baselines, pointio
 from ._model import _BACKEND, _ISA, DEFAULT_THREADS
+from ._model import balance as balance_set
 from .errors import DpcError, InvalidArgumentError, ModelNotFoundError
 
 _POINT_EXTS = pointio.EXTENSIONS
@@ -478,9 +479,17 @@ def list_cmd():
     "or vulkan (an error where no Vulkan device is usable).",
 )
 @_stratified_option
+@click.option(
+    "--balance",
+    type=click.IntRange(0, 32),
+    default=None,
+    help="Balance every set at the integer frequencies 0 < |q| <= K afterwards (dpc.balance, "
+    "docs/model-format.md §5.1: no power left at the torus scale; float32 output). Models "
+    "with metadata dpc.balance (blue-2d) are balanced already.",
+)
 @_max_output_option
 def generate_cmd(
-    model, n_points, dims, seed, count, output, fmt, bin_dtype, threads, isa, backend, stratified, max_output
+    model, n_points, dims, seed, count, output, fmt, bin_dtype, threads, isa, backend, stratified, balance, max_output
 ):
     """Generate point sets from a model or a baseline. A model's sets are float32 (kept so in
     .npy and float32 .bin files; text has 17 significant digits)."""
@@ -491,6 +500,8 @@ def generate_cmd(
     sets, name, loaded = _generate(
         model, n_points, dims, count, seed, threads, isa, backend, _input_kind(stratified), _max_bytes(max_output)
     )
+    if balance:
+        sets = np.stack([balance_set(s, balance) for s in sets])
     if output is None:
         kind = pointio.resolve_format("-.dat", fmt)
         if kind not in ("dat", "csv"):

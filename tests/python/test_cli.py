@@ -66,6 +66,20 @@ def test_generate_from_a_model(tmp_path, capsys):
     assert got.shape == (2, n, model.dims)
 
 
+def test_generate_balance_option(tmp_path, capsys):
+    f = tmp_path / "b.npy"
+    rc, _, err = run(capsys, "generate", "-m", "bnot-2d-stratified", "-c", 2, "--balance", 3, "-o", f)
+    assert rc == 0, err
+    got = read_points(f)
+    want = dpc.load("bnot-2d-stratified").generate_batch(2, seed=0)
+    np.testing.assert_array_equal(got, np.stack([dpc.balance(s, 3) for s in want]).astype(np.float64))
+    q = np.array([[1, 0], [0, 1], [1, 1], [1, -1], [2, 0], [0, 2]])
+    for x in got:
+        assert (np.abs(np.exp(-2j * np.pi * (x @ q.T)).sum(0)) ** 2 / len(x)).max() < 1e-9
+    rc, _, err = run(capsys, "generate", "-m", "jitter", "-n", 256, "--balance", 40)
+    assert rc != 0 and "--balance" in err
+
+
 def test_generate_with_a_pinned_isa_says_what_ran_it(tmp_path, capsys):
     f = tmp_path / "s.npy"
     rc, _, err = run(capsys, "generate", "-m", "bnot-2d", "--isa", "scalar", "-c", 2, "-s", 4, "-o", f)
