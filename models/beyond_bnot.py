@@ -54,6 +54,27 @@ def model_sampler(model):
     return lambda count, m, seed: model.generate_batch(count, seed=seed, n_points=m).astype(np.float64)
 
 
+def cascade_sampler(model):
+    """The model's cascade without its generator's output balance: Model.filter of its input points."""
+    inputs = dpc.stratified if model.input == "stratified" else dpc.uniform
+    return lambda count, m, seed: np.stack([model.filter(inputs(seed + i, m, 2)) for i in range(count)]).astype(
+        np.float64
+    )
+
+
+def cached(sampler):
+    """The sampler with each (count, m, seed) made once: the integration study, its intervals and
+    the variance sources read the same sets."""
+    made = {}
+
+    def sets(count, m, seed):
+        if (count, m, seed) not in made:
+            made[(count, m, seed)] = sampler(count, m, seed)
+        return made[(count, m, seed)]
+
+    return sets
+
+
 def timing(models: dict, counts=(1024, 65536), rounds: int = 5) -> dict:
     """Median seconds of one generate per model and count, the models timed alternately."""
     out = {(n, m): [] for n in models for m in counts}
@@ -96,23 +117,20 @@ def variance_sources(samplers: dict, m: int = M, sets: int = 64, grid: int = 102
     or q_y = 0: the integrand's jump at the square's edges puts its 1/|q|^2 tail there)."""
     from dpc.analysis.integration import integrands
 
-    kmax = int(2 * np.sqrt(m))
-    k = np.arange(-kmax, kmax + 1)
+    spectra = {  # float64: the balanced sets' torus-scale power is near rounding
+        name: analysis.power_spectrum_2d(sampler(sets, m, 0), nu_max=2.0, stride=1, dtype=np.float64)
+        for name, sampler in samplers.items()
+    }
+    k = next(iter(spectra.values())).freqs
+    kmax = len(k) // 2
     qx, qy = np.meshgrid(k, k, indexing="ij")
     r = np.hypot(qx, qy)
-    axis = (qx == 0) | (qy == 0)
+    inside = r <= 2 * np.sqrt(m)
+    axis = ((qx == 0) | (qy == 0)) & inside
     g = (np.arange(grid) + 0.5) / grid
     pts = np.stack(np.meshgrid(g, g, indexing="ij"), -1)
-    spectra = {}
-    for name, sampler in samplers.items():
-        acc = np.zeros((len(k), len(k)))
-        for x in sampler(sets, m, 0):
-            ex = np.exp(-2j * np.pi * np.outer(x[:, 0], k))
-            ey = np.exp(-2j * np.pi * np.outer(x[:, 1], k))
-            acc += np.abs(ex.T @ ey) ** 2 / m
-        spectra[name] = acc / sets
     bands = [("0 < \\|q\\| ≤ 3", (r > 0) & (r <= 3)), ("\\|q\\| > 3, ν < 0.75", (r > 3) & (r < 0.75 * np.sqrt(m))),
-             ("0.75 ≤ ν ≤ 2", (r >= 0.75 * np.sqrt(m)) & (r > 0))]
+             ("0.75 ≤ ν ≤ 2", (r >= 0.75 * np.sqrt(m)) & inside)]
     out = {}
     for i, fam in enumerate(("gaussian", "heaviside")):
         family = integrands(fam, 10, dims=2, seed=i)  # the integration study's integrands
@@ -124,8 +142,8 @@ def variance_sources(samplers: dict, m: int = M, sets: int = 64, grid: int = 102
         weight /= family.count * m
         weight[kmax, kmax] = 0.0
         out[fam] = {
-            name: {"total": float((S * weight).sum()), "axes": float((S * weight)[axis].sum()),
-                   **{b: (float((S * weight)[sel & axis].sum()), float((S * weight)[sel & ~axis].sum()))
+            name: {"total": float((S.power * weight)[inside].sum()), "axes": float((S.power * weight)[axis].sum()),
+                   **{b: (float((S.power * weight)[sel & axis].sum()), float((S.power * weight)[sel & ~axis].sum()))
                       for b, sel in bands}}
             for name, S in spectra.items()
         }
@@ -163,57 +181,51 @@ def main(argv=None) -> None:
         )
 
     # 3. integration
+    samplers = {
+        name: cached(model_sampler(model)),
+        "bnot-2d-stratified": model_sampler(strat),
+        "sobol": cached(lambda c, m, s: baselines.generate("sobol", m, 2, count=c, seed=s)),
+    }
+    bnot_sets = cached(bnot_shifted)
     study = analysis.integration_study(
-        {
-            name: model_sampler(model),
-            "bnot-2d-stratified": model_sampler(strat),
-            "sobol": lambda c, m, s: baselines.generate("sobol", m, 2, count=c, seed=s),
-        },
+        samplers,
         COUNTS,
         families=("gaussian", "heaviside"),
         realisations=64,
         seed=0,
     )
     bnot = analysis.integration_study(
-        {"authors' BNOT sets": bnot_shifted}, COUNTS[:1], families=("gaussian", "heaviside"), realisations=64, seed=0
+        {"authors' BNOT sets": bnot_sets}, COUNTS[:1], families=("gaussian", "heaviside"), realisations=64, seed=0
     )
 
-    # 3a. bootstrap intervals of the variance goals' numbers (the study's own sets, regenerated)
+    # 3a. bootstrap intervals of the variance goals' numbers (the study's own sets)
     ci = {}
     for fam, fseed in (("gaussian", 0), ("heaviside", 1)):  # integration_study seeds family i with seed + i
         for m in COUNTS:
-            ci[(fam, name, m)] = rel_var_interval(model_sampler(model)(64, m, 0), fam, fseed)
-            ci[(fam, "sobol", m)] = rel_var_interval(baselines.generate("sobol", m, 2, count=64, seed=0), fam, fseed)
-        ci[(fam, "bnot", M)] = rel_var_interval(bnot_shifted(64, M, 0), fam, fseed)
+            ci[(fam, name, m)] = rel_var_interval(samplers[name](64, m, 0), fam, fseed)
+            ci[(fam, "sobol", m)] = rel_var_interval(samplers["sobol"](64, m, 0), fam, fseed)
+        ci[(fam, "bnot", M)] = rel_var_interval(bnot_sets(64, M, 0), fam, fseed)
 
     # 3b. where the variance comes from (the stationary formula), with the cascade alone beside it
     sources = variance_sources(
         {
-            name: model_sampler(model),
-            f"{name}, cascade alone": lambda c, m, s: np.stack(
-                [model.filter(dpc.stratified(s + i, m, 2) if model.input == "stratified" else dpc.uniform(s + i, m, 2))
-                 for i in range(c)]
-            ),
-            "authors' BNOT sets": bnot_shifted,
-            "sobol": lambda c, m, s: baselines.generate("sobol", m, 2, count=c, seed=s),
+            name: samplers[name],
+            f"{name}, cascade alone": cascade_sampler(model),
+            "authors' BNOT sets": bnot_sets,
+            "sobol": samplers["sobol"],
         }
     )
 
     # 3c. what the output balance does to the model's own sets (when it has one)
     balance_rows = []
     if model.balance:
-        alone = np.stack(
-            [model.filter(dpc.stratified(s, M, 2) if model.input == "stratified" else dpc.uniform(s, M, 2))
-             for s in range(100)]
-        ).astype(np.float64)
+        alone = cascade_sampler(model)(100, M, 0)
         bal = np.stack([dpc.balance(x, model.balance) for x in alone]).astype(np.float64)
         q = np.array([(a, b) for a in range(-3, 4) for b in range(-3, 4) if 0 < a * a + b * b <= 9])
-        def torus_power(x):
-            return float(np.mean([np.abs(np.exp(-2j * np.pi * (y @ q.T)).sum(0)) ** 2 / M for y in x]))
         moved = np.hypot(*np.moveaxis(np.abs((bal - alone + 0.5) % 1.0 - 0.5), -1, 0)) * np.sqrt(M)
         for label, x in ((f"{name}, cascade alone", alone), (name, bal)):
             r = analysis.radial_spectrum(x, nu_max=1.0)
-            balance_rows.append((label, torus_power(x), r.low_frequency_energy(0.5), r.low_frequency_energy(0.75),
+            balance_rows.append((label, float(analysis.power_spectrum_direct(x, q).mean()), r.low_frequency_energy(0.5), r.low_frequency_energy(0.75),
                                  analysis.min_distance(x).mean_ratio))
         balance_moved = (float(moved.mean()), float(moved.max()))
 

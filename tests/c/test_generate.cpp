@@ -384,16 +384,18 @@ TEST(Progressive, LevelSizesArePrefixesOfLargerSets) {
     }
 }
 
-TEST(Progressive, ThreadsIsasAndBatchesGiveTheSameBits) {
-    // 20,000 points: the last levels are large enough for the engine's threads inside a set
-    ModelPtr ref = load(model_path("model_2d_progressive"), DPC_ISA_SCALAR, 1);
+namespace {
+// A 2-D model's sets of 20,000 points (large enough for the engine's threads inside a set) on
+// every ISA path with 1 and 3 threads, and set 1 of a batch, are the scalar single-thread bits.
+void expect_same_bits_everywhere(const std::string &name) {
+    ModelPtr ref = load(model_path(name), DPC_ISA_SCALAR, 1);
     ASSERT_TRUE(ref);
     const std::vector<float> want = generate(ref.get(), 4, 20000);
     std::vector<dpc_isa> isas = {DPC_ISA_SCALAR};
     for (dpc_isa v : vector_isas()) isas.push_back(v);
     for (dpc_isa isa : isas)
         for (uint32_t threads : {1u, 3u}) {
-            ModelPtr m = load(model_path("model_2d_progressive"), isa, threads);
+            ModelPtr m = load(model_path(name), isa, threads);
             ASSERT_TRUE(m);
             EXPECT_EQ(generate(m.get(), 4, 20000), want) << isa_name(isa) << ", " << threads << " threads";
             std::vector<float> batch(3 * 500 * 2);
@@ -401,6 +403,9 @@ TEST(Progressive, ThreadsIsasAndBatchesGiveTheSameBits) {
             EXPECT_EQ(std::vector<float>(batch.begin() + 1000, batch.begin() + 2000), generate(ref.get(), 8, 500));
         }
 }
+} // namespace
+
+TEST(Progressive, ThreadsIsasAndBatchesGiveTheSameBits) { expect_same_bits_everywhere("model_2d_progressive"); }
 
 TEST(Progressive, RunsOnTheCpuAndVulkanSaysWhy) {
     dpc_load_options o;
@@ -466,22 +471,7 @@ TEST(Balance, GenerateIsTheCascadeThenTheBalance) {
     }
 }
 
-TEST(Balance, ThreadsIsasAndBatchesGiveTheSameBits) {
-    ModelPtr ref = load(model_path("model_2d_balanced"), DPC_ISA_SCALAR, 1);
-    ASSERT_TRUE(ref);
-    const std::vector<float> want = generate(ref.get(), 4, 20000);
-    std::vector<dpc_isa> isas = {DPC_ISA_SCALAR};
-    for (dpc_isa v : vector_isas()) isas.push_back(v);
-    for (dpc_isa isa : isas)
-        for (uint32_t threads : {1u, 3u}) {
-            ModelPtr m = load(model_path("model_2d_balanced"), isa, threads);
-            ASSERT_TRUE(m);
-            EXPECT_EQ(generate(m.get(), 4, 20000), want) << isa_name(isa) << ", " << threads << " threads";
-            std::vector<float> batch(3 * 500 * 2);
-            ASSERT_EQ(dpc_generate_batch(m.get(), 7, 3, 500, batch.data()), DPC_OK) << dpc_last_error();
-            EXPECT_EQ(std::vector<float>(batch.begin() + 1000, batch.begin() + 2000), generate(ref.get(), 8, 500));
-        }
-}
+TEST(Balance, ThreadsIsasAndBatchesGiveTheSameBits) { expect_same_bits_everywhere("model_2d_balanced"); }
 
 TEST(Balance, RadiusShrinksWithTheSetAndPointsStayInTheTorus) {
     // K = min(radius, largest j with (4 j)^dims <= m): 15 points get none, 64 points |q| <= 2

@@ -20,8 +20,7 @@ DATA = Path(__file__).resolve().parents[1] / "data"
 
 def low_power(x: np.ndarray, k: int) -> np.ndarray:
     """|sum_j exp(-2 pi i q.x_j)|^2 / m at the frequencies 0 < |q| <= k (one half-space)."""
-    q = rc.balance_frequencies(k, x.shape[1])
-    return np.abs(np.exp(-2j * np.pi * (np.asarray(x, np.float64) @ q.T)).sum(0)) ** 2 / len(x)
+    return analysis.power_spectrum_direct(np.asarray(x, np.float64), rc.balance_frequencies(k, x.shape[1]))
 
 
 def test_frequencies_of_the_radius():

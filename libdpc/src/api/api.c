@@ -432,6 +432,15 @@ dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, float *ou
     return DPC_OK;
 }
 
+/* Caller's points for dpc_filter and dpc_balance: every coordinate in [0, 1). */
+static dpc_status check_unit_points(const float *points, size_t n_points, size_t dims) {
+    for (size_t i = 0; i < n_points * dims; i++)
+        if (!(points[i] >= 0.0f && points[i] < 1.0f))
+            return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "point %zu, dimension %zu is %g: points must lie in [0, 1)",
+                            i / dims, i % dims, (double)points[i]);
+    return DPC_OK;
+}
+
 dpc_status dpc_balance(float *points, size_t n_points, size_t dims, uint32_t radius) {
     dpc_clear_error();
     if (!points) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "points is NULL");
@@ -442,14 +451,11 @@ dpc_status dpc_balance(float *points, size_t n_points, size_t dims, uint32_t rad
     if (radius > DPC_BALANCE_MAX_K)
         return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "radius is %u, at most %u", radius, DPC_BALANCE_MAX_K);
     const uint32_t k = dpc_balance_radius(radius, n_points, dims);
-    if (k && !dpc_balance_frequencies(k, dims))
+    if (k && !dpc_balance_frequencies(k, dims)) /* before the scan: LIMIT whatever the points */
         return dpc_fail(DPC_ERROR_LIMIT, "radius %u holds more than %u frequencies in %zu dimensions", k,
                         DPC_BALANCE_MAX_FREQS, dims);
-    for (size_t i = 0; i < n_points * dims; i++)
-        if (!(points[i] >= 0.0f && points[i] < 1.0f))
-            return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "point %zu, dimension %zu is %g: points must lie in [0, 1)",
-                            i / dims, i % dims, (double)points[i]);
-    return dpc_balance_points(points, n_points, dims, k);
+    const dpc_status st = check_unit_points(points, n_points, dims);
+    return st == DPC_OK ? dpc_balance_points(points, n_points, dims, k) : st;
 }
 
 static double model_max_radius(const dpc_cascade *c) {
@@ -648,11 +654,7 @@ dpc_status dpc_filter(const dpc_model *model, size_t n_points, float *points) {
     if (n_points == 0) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "n_points must be positive");
     dpc_status st = check_count(model, &n_points);
     if (st != DPC_OK) return st;
-    const size_t total = n_points * model->cascade.dims;
-    for (size_t i = 0; i < total; i++)
-        if (!(points[i] >= 0.0f && points[i] < 1.0f))
-            return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "point %zu, dimension %zu is %g: points must lie in [0, 1)",
-                            i / model->cascade.dims, i % model->cascade.dims, (double)points[i]);
+    if ((st = check_unit_points(points, n_points, model->cascade.dims)) != DPC_OK) return st;
 #if defined(DPC_HAVE_VULKAN)
     if (model->backend == DPC_BACKEND_VULKAN) {
         vk_inputs in = {model, 0, n_points, points};
