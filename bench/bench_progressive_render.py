@@ -6,7 +6,8 @@
 The soft-shadow scene of bench/bench_rendering.py (direct lighting, a large area light) at
 `--width`^2 pixels, rendered at 1, 2, 4, ..., `--max-spp` samples per pixel over `--seeds` seeds
 with: the dpc plugin on progressive-2d (progressive tables: a pixel's first n samples are
-the table's prefix), the dpc plugin on bnot-2d-stratified (a set made for each count), Mitsuba's
+the table's prefix) and on progressive-2d-balanced (the same, each level balanced: dpc.balance),
+the dpc plugin on bnot-2d-stratified (a set made for each count), Mitsuba's
 ldsampler and independent, and PMJ02BN. Mitsuba has no PMJ sampler, so the bench brings its
 own (`Pmj02bnSampler`, a Python mitsuba.Sampler): pixel p's dimension pair d reads sequence
 h(p, d) mod 32 of a pool of 32 PMJ02BN sequences (dpc.baselines, Christensen et al. 2018) at
@@ -33,7 +34,7 @@ from doc_sections import replace_section  # noqa: E402
 DOC = ROOT / "docs" / "progressive.md"
 FIG = ROOT / "docs" / "figures" / "progressive" / "render-mse.png"
 SCENE = "soft-shadow"
-SAMPLERS = ["dpc progressive", "dpc set", "pmj02bn", "ldsampler", "independent"]
+SAMPLERS = ["dpc progressive", "dpc progressive balanced", "dpc set", "pmj02bn", "ldsampler", "independent"]
 POOL = 32
 M64 = (1 << 64) - 1
 
@@ -98,6 +99,7 @@ def render(mi, sampler: str, spp: int, seed: int, width: int) -> np.ndarray:
     d = BR.scene_dict(mi, SCENE, width)
     kind, extra = {
         "dpc progressive": ("dpc", {"model": "progressive-2d"}),
+        "dpc progressive balanced": ("dpc", {"model": "progressive-2d-balanced"}),
         "dpc set": ("dpc", {"model": "bnot-2d-stratified"}),
         "pmj02bn": ("pmj02bn_bench", {}),
     }.get(sampler, (sampler, {}))
@@ -163,13 +165,18 @@ def section(res: dict) -> str:
     ]
     for s in SAMPLERS:
         lines.append(f"| {s} | " + " | ".join("—" if np.isnan(v) else f"{v:.2e}" for v in res["mse"][s]) + " |")
-    best = {n: np.nanmin([res["mse"][s][i] for s in SAMPLERS if s != "dpc progressive"]) for i, n in enumerate(counts)}
+    others = [s for s in SAMPLERS if not s.startswith("dpc progressive")]
+    best = {n: np.nanmin([res["mse"][s][i] for s in others]) for i, n in enumerate(counts)}
+    bal = [res["mse"]["dpc progressive balanced"][i] / res["mse"]["dpc progressive"][i] for i in range(len(counts))]
     ratio = [res["mse"]["dpc progressive"][i] / res["mse"]["pmj02bn"][i] for i in range(len(counts))]
     lines += [
         "",
         "MSE of progressive dpc over PMJ02BN's: " + ", ".join(f"{n}: x{r:.2f}" for n, r in zip(counts, ratio)) + ".",
         "Over the best of the others at that count (ldsampler renders only 4, 16 and 64): "
         + ", ".join(f"{n}: x{res['mse']['dpc progressive'][i] / best[n]:.2f}" for i, n in enumerate(counts))
+        + ".",
+        "MSE of the balanced levels over progressive dpc's: "
+        + ", ".join(f"{n}: x{r:.2f}" for n, r in zip(counts, bal))
         + ".",
         "",
         f"![MSE against samples per pixel](figures/progressive/{FIG.name})",

@@ -10,7 +10,17 @@ Chosen by the sweep of bench/progressive_alternatives.py: the trained set cascad
 the prefixes (training/configs/bnot-2d-progressive-finetune.toml) all left the prefixes more
 low-frequency energy than this relaxation (docs/progressive.md, "Design").
 
+progressive-2d-balanced is the same cascade with the output balance at radius 8 (dpc.balance,
+docs/model-format.md §5.1): each level ends with its own points cancelling the prefix's Fourier
+coefficients at 0 < |q| <= min(8, sqrt(n)/4), the held points staying. That removes the
+torus-scale power the levels leave (the Gaussian-integrand gap to PMJ02BN) and costs low-band
+energy above it: moving only half of the points against the other half leaks power into the
+band (docs/progressive.md, "Balanced levels"). Radius 8 is the smallest that keeps every prefix's
+Gaussian variance below PMJ02BN's up to 4,096 points in a development sweep (radius 4 missed at
+4,096; 16 and 32 cost more low-band energy).
+
     python models/make_progressive_2d.py            # writes models/progressive-2d.onnx
+    python models/make_progressive_2d.py --balance 8 -o models/progressive-2d-balanced.onnx
 """
 
 import argparse
@@ -35,7 +45,12 @@ def repulsion_layers(amplitude: float, sigma: float, rho: float, layers: int) ->
     return [Layer(subspaces=[0b11], radius=[rho], kernels=kernel[None, :].astype(np.float32)) for _ in range(layers)]
 
 
-def progressive_spec(amplitude=AMPLITUDE, sigma=SIGMA, rho=RHO, layers=LAYERS, name="progressive-2d") -> ModelSpec:
+def progressive_spec(
+    amplitude=AMPLITUDE, sigma=SIGMA, rho=RHO, layers=LAYERS, name="progressive-2d", balance=0
+) -> ModelSpec:
+    meta = {**PROGRESSIVE, "dpc.source": "models/make_progressive_2d.py", "dpc.trained": "no"}
+    if balance:
+        meta["dpc.balance"] = str(balance)
     return ModelSpec(
         dims=2,
         n_points=M,
@@ -45,15 +60,23 @@ def progressive_spec(amplitude=AMPLITUDE, sigma=SIGMA, rho=RHO, layers=LAYERS, n
             "Progressive 2-D blue noise: the first 16 * 2^j points of a set are the set of that size, "
             f"each blue noise. {layers} layers of a Gaussian repulsion kernel (A = {amplitude}, sigma = "
             f"{sigma}, rho = {rho} mean spacings) run level by level, the earlier points held in place. "
-            "Not trained."
+            + (
+                f"Each level's points then cancel the prefix's power at 0 < |q| <= min({balance}, sqrt(n)/4). "
+                if balance
+                else ""
+            )
+            + "Not trained."
         ),
-        metadata={**PROGRESSIVE, "dpc.source": "models/make_progressive_2d.py", "dpc.trained": "no"},
+        metadata=meta,
     )
 
 
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("-o", "--output", default=str(HERE / "progressive-2d.onnx"))
+    ap.add_argument("-o", "--output", default=None, help="default: models/progressive-2d[-balanced].onnx")
+    ap.add_argument("--balance", type=int, default=0, help="output balance radius (dpc.balance; 0: none)")
     args = ap.parse_args()
-    write_model(progressive_spec(), args.output)
+    name = "progressive-2d-balanced" if args.balance else "progressive-2d"
+    args.output = args.output or str(HERE / f"{name}.onnx")
+    write_model(progressive_spec(name=name, balance=args.balance), args.output)
     print(f"wrote {args.output} ({Path(args.output).stat().st_size} bytes)")

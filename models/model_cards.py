@@ -140,6 +140,7 @@ CARDS = {
     "bnot-2d-stratified": Card("plane", {"xy": "bnot"}, scales=True),
     "blue-2d": Card("plane", {"xy": "bnot"}, scales=True),  # aims below BNOT: docs/beyond-bnot.md
     "progressive-2d": Card("plane", {"xy": "bnot"}, scales=True),  # prefixes: docs/progressive.md
+    "progressive-2d-balanced": Card("plane", {"xy": "bnot"}, scales=True),
     "repulsion-2d": Card("plane", {"xy": "bnot"}),
     "jitter-2d": Card("plane", {"xy": "jitter"}),
     "step-2d": Card("plane", {"xy": "step"}),

@@ -485,7 +485,7 @@ def list_cmd():
     default=None,
     help="Balance every set at the integer frequencies 0 < |q| <= K afterwards (dpc.balance, "
     "docs/model-format.md §5.1: no power left at the torus scale; float32 output). Models "
-    "with metadata dpc.balance (blue-2d) are balanced already.",
+    "with metadata dpc.balance (blue-2d) are balanced already; not for progressive models.",
 )
 @_max_output_option
 def generate_cmd(
@@ -501,6 +501,12 @@ def generate_cmd(
         model, n_points, dims, count, seed, threads, isa, backend, _input_kind(stratified), _max_bytes(max_output)
     )
     if balance:
+        if loaded is not None and loaded.order == "progressive":
+            raise click.UsageError(
+                f"--balance moves every point, so {name}'s prefixes would no longer be its smaller sets; "
+                "a progressive model balances level by level through its own dpc.balance "
+                "(progressive-2d-balanced, docs/progressive.md)"
+            )
         sets = np.stack([balance_set(s, balance) for s in sets])
     if output is None:
         kind = pointio.resolve_format("-.dat", fmt)

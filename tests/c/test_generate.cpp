@@ -3,6 +3,7 @@
 #include "test_util.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -406,6 +407,36 @@ void expect_same_bits_everywhere(const std::string &name) {
 } // namespace
 
 TEST(Progressive, ThreadsIsasAndBatchesGiveTheSameBits) { expect_same_bits_everywhere("model_2d_progressive"); }
+
+// dpc.balance on a progressive model (§5.1, §6): each level's own points balance its prefix, so
+// the level sizes stay prefixes and each has (almost) no power at 0 < |q| <= k.
+TEST(Progressive, BalancedLevelsKeepThePrefixesAndCancelTheTorusScale) {
+    ModelPtr m = load(model_path("model_2d_progressive_balanced"));
+    ASSERT_TRUE(m);
+    uint32_t k = 0;
+    ASSERT_EQ(dpc_model_get_balance(m.get(), &k), DPC_OK);
+    EXPECT_EQ(k, 8u);
+    ModelPtr plain = load(model_path("model_2d_progressive"));
+    const std::vector<float> big = generate(m.get(), 3, 300);
+    EXPECT_NE(big, generate(plain.get(), 3, 300));
+    for (size_t n : {16u, 32u, 64u, 128u, 256u}) {
+        const std::vector<float> x = generate(m.get(), 3, n);
+        EXPECT_EQ(head(big, n), x) << "n " << n;
+        const double e = 6.283185307179586;
+        for (size_t axis = 0; axis < 2; axis++) { // q = (1, 0) and (0, 1): balanced at every level size
+            double re = 0.0, im = 0.0;
+            for (size_t i = 0; i < n; i++) {
+                re += std::cos(e * (double)x[2 * i + axis]);
+                im += std::sin(e * (double)x[2 * i + axis]);
+            }
+            EXPECT_LT((re * re + im * im) / (double)n, 1e-5) << "n " << n << ", axis " << axis;
+        }
+    }
+}
+
+TEST(Progressive, BalancedThreadsIsasAndBatchesGiveTheSameBits) {
+    expect_same_bits_everywhere("model_2d_progressive_balanced");
+}
 
 TEST(Progressive, RunsOnTheCpuAndVulkanSaysWhy) {
     dpc_load_options o;

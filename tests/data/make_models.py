@@ -21,6 +21,7 @@ Models (docs/model-format.md):
   model_10d.onnx       10-D, five 2-D pairs, two 1-D, one 3-D and the full space, 3 layers
   model_2d_progressive.onnx  model_2d's layers as a progressive model (dpc.order, base 16: §6)
   model_2d_balanced.onnx     model_2d's layers with the output balance (dpc.balance = 3: §5.1)
+  model_2d_progressive_balanced.onnx  model_2d_progressive, each level balanced (dpc.balance = 8)
 
 The metadata entries are stored with the optional keys first and the required keys last
 (dpc.n_points is the very last field of the file), so that every proper prefix of a file lacks a
@@ -239,10 +240,19 @@ def model_2d_balanced() -> ModelSpec:
     return spec
 
 
+def model_2d_progressive_balanced() -> ModelSpec:
+    spec = model_2d_progressive()
+    spec.name = "test-2d-progressive-balanced"
+    spec.description = "Test model: model_2d_progressive, each level's points balancing its prefix (format §5.1)."
+    spec.metadata.update({"dpc.balance": "8"})
+    return spec
+
+
 MODELS = {
     "model_2d.onnx": model_2d,
     "model_2d_progressive.onnx": model_2d_progressive,
     "model_2d_balanced.onnx": model_2d_balanced,
+    "model_2d_progressive_balanced.onnx": model_2d_progressive_balanced,
     "model_3d_proj.onnx": model_3d_proj,
     "model_3d_mixed.onnx": model_3d_mixed,
     "model_grid_3to1.onnx": model_grid_3to1,

@@ -225,12 +225,16 @@ def generate(model: RefModel, seed: int, m: int | None = None) -> np.ndarray:
     return run_cascade(model, initial_points(model, seed, m))
 
 
-def generate_progressive(model: RefModel, seed: int, m: int, base: int) -> np.ndarray:
+def generate_progressive(model: RefModel, seed: int, m: int, base: int, radius: int = 0) -> np.ndarray:
     """Reference of dpc_generate_n for a progressive model (§6): a set of min(m, base) points,
     then levels that add min(n, m - n) input points of seed + level * golden to the n so far and
-    run every layer on all of them, the first n put back after each layer."""
+    run every layer on all of them, the first n put back after each layer. With a balance radius
+    (§5.1) each level ends with the balance of its prefix, only the level's own points moving
+    (float32 in between, as libdpc)."""
     n = min(m, base)
     y = run_cascade(model, initial_points(model, seed, n))
+    if radius:
+        y = balance(y.astype(np.float32), radius).astype(np.float32).astype(np.float64)
     level = 1
     while n < m:
         add = min(n, m - n)
@@ -240,6 +244,8 @@ def generate_progressive(model: RefModel, seed: int, m: int, base: int) -> np.nd
             z = filter_layer(x, layer)
             z[:n] = x[:n]
             x = z
+        if radius:
+            x = balance(x.astype(np.float32), radius, first=n).astype(np.float32).astype(np.float64)
         y, n, level = x, n + add, level + 1
     return y
 
@@ -252,10 +258,11 @@ def balance_frequencies(k: int, n: int) -> np.ndarray:
     return np.array([q for q in qs if q[next(i for i, v in enumerate(q) if v)] > 0], dtype=np.float64).reshape(-1, n)
 
 
-def balance(x: np.ndarray, radius: int, steps: int = 3) -> np.ndarray:
+def balance(x: np.ndarray, radius: int, steps: int | None = None, first: int = 0) -> np.ndarray:
     """The output balance (§5.1) in float64: K = min(radius, the largest j with (4 j)^n <= m);
-    each step moves every point by sum_q q Im(c_q exp(2 pi i q.x)) / (pi |q|^2 m), with
-    c_q = sum_j exp(-2 pi i q.x_j) of the points before the step."""
+    each step moves every point from index ``first`` on by sum_q q Im(c_q exp(2 pi i q.x)) /
+    (pi |q|^2 (m - first)), with c_q = sum_j exp(-2 pi i q.x_j) over all m points before the step;
+    3 steps, 8 when only some points move (first > 0: slower, the cross terms are larger)."""
     y = np.array(x, dtype=np.float64)
     m, n = y.shape
     k = 0
@@ -264,11 +271,11 @@ def balance(x: np.ndarray, radius: int, steps: int = 3) -> np.ndarray:
     if k == 0:
         return y
     q = balance_frequencies(k, n)
-    w = 1.0 / (np.pi * (q * q).sum(1) * m)
-    for _ in range(steps):
+    w = 1.0 / (np.pi * (q * q).sum(1) * (m - first))
+    for _ in range(steps or (8 if first else 3)):  # libdpc: 3 steps, 8 when only some points move
         z = np.exp(2j * np.pi * (y @ q.T))  # (m, F)
         c = np.conj(z).sum(0)
-        y = (y + (np.imag(c[None, :] * z) * w[None, :]) @ q) % 1.0
+        y[first:] = (y[first:] + (np.imag(c[None, :] * z[first:]) * w[None, :]) @ q) % 1.0
     return y
 
 

@@ -112,11 +112,11 @@ def test_blue_2d_generates_balanced_sets():
 
 @pytest.mark.parametrize(
     "value,why",
-    [("0", "1..32"), ("33", "1..32"), ("x", "1..32"), ("-1", "1..32"), ("3", "progressive"), ("3", "gridded")],
+    [("0", "1..32"), ("33", "1..32"), ("x", "1..32"), ("-1", "1..32"), ("3", "grid axes")],
 )
 def test_bad_balance_metadata_is_a_format_error(tmp_path, value, why):
     onnx = pytest.importorskip("onnx")
-    base = {"progressive": "model_2d_progressive", "gridded": "model_grid_3to1"}.get(why, "model_2d")
+    base = "model_grid_3to1" if why == "grid axes" else "model_2d"  # progressive models take it: test_progressive.py
     proto = onnx.load(str(DATA / f"{base}.onnx"))
     e = proto.metadata_props.add()
     e.key, e.value = "dpc.balance", value

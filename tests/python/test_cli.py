@@ -78,6 +78,10 @@ def test_generate_balance_option(tmp_path, capsys):
         assert analysis.power_spectrum_direct(x, q).max() < 1e-9
     rc, _, err = run(capsys, "generate", "-m", "jitter", "-n", 256, "--balance", 40)
     assert rc != 0 and "--balance" in err
+    # balancing a progressive set afterwards would move its prefixes: refused, nothing written
+    p = tmp_path / "p.npy"
+    rc, _, err = run(capsys, "generate", "-m", "progressive-2d", "-n", 256, "--balance", 3, "-o", p)
+    assert rc != 0 and "prefixes" in err and not p.exists()
 
 
 def test_generate_with_a_pinned_isa_says_what_ran_it(tmp_path, capsys):

@@ -455,7 +455,7 @@ dpc_status dpc_balance(float *points, size_t n_points, size_t dims, uint32_t rad
         return dpc_fail(DPC_ERROR_LIMIT, "radius %u holds more than %u frequencies in %zu dimensions", k,
                         DPC_BALANCE_MAX_FREQS, dims);
     const dpc_status st = check_unit_points(points, n_points, dims);
-    return st == DPC_OK ? dpc_balance_points(points, n_points, dims, k) : st;
+    return st == DPC_OK ? dpc_balance_points(points, n_points, dims, k, 0) : st;
 }
 
 static double model_max_radius(const dpc_cascade *c) {
@@ -551,7 +551,7 @@ static dpc_status vk_generate(const dpc_model *model, uint64_t seed, size_t coun
     dpc_status st = dpc_vk_run(model->vk, c, count, m, vk_fill, &in, out);
     const uint32_t k = dpc_balance_radius(c->balance, m, c->dims); /* the generator's last step, on the host */
     for (size_t s = 0; st == DPC_OK && k && s < count; s++)
-        st = dpc_balance_points(out + s * m * c->dims, m, c->dims, k);
+        st = dpc_balance_points(out + s * m * c->dims, m, c->dims, k, 0);
     return st;
 }
 #endif

@@ -470,17 +470,20 @@ static dpc_status generate_one(const dpc_cascade *c, dpc_input input, const dpc_
     if (!c->progressive_base) {
         dpc_input_fill(c, input, seed, m, out);
         const dpc_status st = dpc_cpu_filter_hooked(c, e, m, out, hook, ctx);
-        return st == DPC_OK ? dpc_balance_points(out, m, c->dims, dpc_balance_radius(c->balance, m, c->dims)) : st;
+        return st == DPC_OK ? dpc_balance_points(out, m, c->dims, dpc_balance_radius(c->balance, m, c->dims), 0) : st;
     }
     /* Progressive: level j >= 1 adds its input points, of seed + j * 0x9E3779B97F4A7C15, to the
      * n points so far and filters them past those, which stay where they are. */
     size_t n = first_level(c, m);
     dpc_input_fill(c, input, seed, n, out);
     dpc_status st = dpc_cpu_filter_hooked(c, e, n, out, hook, ctx);
+    if (st == DPC_OK) st = dpc_balance_points(out, n, c->dims, dpc_balance_radius(c->balance, n, c->dims), 0);
     for (uint64_t level = 1; st == DPC_OK && n < m; level++) {
         const size_t add = level_size(n, m);
         dpc_input_fill(c, input, seed + level * 0x9E3779B97F4A7C15ull, add, out + n * c->dims);
         st = dpc_cpu_filter_frozen(c, e, n + add, n, out, hook, ctx);
+        if (st == DPC_OK) /* the level's new points balance the whole prefix; the held ones stay */
+            st = dpc_balance_points(out, n + add, c->dims, dpc_balance_radius(c->balance, n + add, c->dims), n);
         n += add;
     }
     return st;

@@ -128,8 +128,8 @@ static void powers(const float *x, size_t n, uint32_t k, cplx *p) {
     }
 }
 
-dpc_status dpc_balance_points(float *x, size_t m, size_t n, uint32_t k) {
-    if (!k || !m) return DPC_OK;
+dpc_status dpc_balance_points(float *x, size_t m, size_t n, uint32_t k, size_t first) {
+    if (!k || first >= m) return DPC_OK;
     if (k > DPC_BALANCE_MAX_K || n == 0 || n > DPC_MAX_DIMS)
         return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "balance radius %u in %zu dimensions: at most %u in 1..%u", k, n,
                         DPC_BALANCE_MAX_K, DPC_MAX_DIMS);
@@ -152,9 +152,10 @@ dpc_status dpc_balance_points(float *x, size_t m, size_t n, uint32_t k) {
     for (size_t j = 0; j < f.count; j++) {
         long q2 = 0;
         for (size_t d = 0; d < n; d++) q2 += (long)f.q[j * n + d] * f.q[j * n + d];
-        w[j] = 1.0 / (3.141592653589793 * (double)q2 * (double)m);
+        w[j] = 1.0 / (3.141592653589793 * (double)q2 * (double)(m - first));
     }
-    for (int it = 0; it < DPC_BALANCE_ITERATIONS; it++) {
+    const int iterations = first ? DPC_BALANCE_LEVEL_ITERATIONS : DPC_BALANCE_ITERATIONS;
+    for (int it = 0; it < iterations; it++) {
         for (size_t j = 0; j < f.count; j++) c[j] = (cplx){0.0, 0.0};
         for (size_t i = 0; i < m; i++) { /* c_q = sum_i exp(-2 pi i q.x_i), in point order */
             powers(x + i * n, n, k, p);
@@ -164,7 +165,7 @@ dpc_status dpc_balance_points(float *x, size_t m, size_t n, uint32_t k) {
                 c[j].im -= z.im;
             }
         }
-        for (size_t i = 0; i < m; i++) {
+        for (size_t i = first; i < m; i++) {
             float *xi = x + i * n;
             powers(xi, n, k, p);
             for (size_t d = 0; d < n; d++) step[d] = 0.0;

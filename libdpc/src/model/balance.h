@@ -12,8 +12,9 @@
 #include "dpc/dpc.h"
 
 #define DPC_BALANCE_MAX_K 32u
-#define DPC_BALANCE_MAX_FREQS 4096u /* frequencies of one half-space */
-#define DPC_BALANCE_ITERATIONS 3
+#define DPC_BALANCE_MAX_FREQS 4096u    /* frequencies of one half-space */
+#define DPC_BALANCE_ITERATIONS 3       /* Newton steps when every point moves */
+#define DPC_BALANCE_LEVEL_ITERATIONS 8 /* when only a progressive level's points move: the cross terms are larger */
 
 /* The frequency radius used for a set of m points in n dimensions: min(k, the largest j with
  * (4 j)^n <= m), so the balanced frequencies stay below nu = 1/4 (0: none). */
@@ -24,8 +25,9 @@ uint32_t dpc_balance_radius(uint32_t k, size_t m, size_t n);
 size_t dpc_balance_frequencies(uint32_t k, size_t n);
 
 /* Balance m points in n dimensions (each coordinate in [0, 1)) in place at radius k (already
- * reduced by dpc_balance_radius). DPC_ERROR_LIMIT when the radius holds more than
+ * reduced by dpc_balance_radius): the coefficients are those of all m points, and the points
+ * from index first on are the ones that move (0: all; a progressive level's new points). DPC_ERROR_LIMIT when the radius holds more than
  * DPC_BALANCE_MAX_FREQS frequencies, DPC_ERROR_OUT_OF_MEMORY; the points are unchanged then. */
-dpc_status dpc_balance_points(float *x, size_t m, size_t n, uint32_t k);
+dpc_status dpc_balance_points(float *x, size_t m, size_t n, uint32_t k, size_t first);
 
 #endif

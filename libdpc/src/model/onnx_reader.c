@@ -488,9 +488,7 @@ static dpc_status parse_metadata(const pb_span *entries, size_t n, dpc_cascade *
     if (balance) {
         if (!parse_uint(balance, DPC_BALANCE_MAX_K, &x) || x == 0)
             return FAIL("metadata 'dpc.balance' is '%.40s': an integer radius in 1..%u", balance, DPC_BALANCE_MAX_K);
-        if (c->grid_dims || c->progressive_base)
-            return FAIL("metadata 'dpc.balance' belongs to a set model without grid axes, not a %s model",
-                        c->grid_dims ? "gridded" : "progressive");
+        if (c->grid_dims) return FAIL("metadata 'dpc.balance' belongs to a model without grid axes");
         if (!dpc_balance_frequencies((uint32_t)x, c->dims))
             return FAIL("metadata 'dpc.balance' = %u holds more than %u frequencies in %u dimensions", (unsigned)x,
                         DPC_BALANCE_MAX_FREQS, c->dims);
