@@ -50,7 +50,7 @@ def progressive_spec(
 ) -> ModelSpec:
     meta = {**PROGRESSIVE, "dpc.source": "models/make_progressive_2d.py", "dpc.trained": "no"}
     if balance:
-        meta["dpc.balance"] = str(balance)
+        meta.update({"dpc.balance": str(balance), "dpc.source": f"models/make_progressive_2d.py --balance {balance}"})
     return ModelSpec(
         dims=2,
         n_points=M,

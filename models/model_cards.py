@@ -233,7 +233,8 @@ def model_header(name: str, model) -> list[str]:
               "feeds it these)" if model.input != "uniform" else "")]
     if model.balance:
         out.append(f"- output balanced at the frequencies 0 < |q| ≤ {model.balance} (metadata `dpc.balance`, "
-                   "docs/model-format.md §5.1): the generator's last step, after the cascade")
+                   "docs/model-format.md §5.1): " + ("the last step of every level, only the level's own points "
+                   "moving (§6)" if model.order == "progressive" else "the generator's last step, after the cascade"))
     if "dpc.train.steps" not in meta:
         out.append(f"- made by: `python {meta.get('dpc.source', '?')}` (hand-designed, not trained)")
         return out
@@ -313,7 +314,11 @@ def scale_section(name: str, model, t: Target) -> list[str]:
             ("A progressive model's levels hold their earlier points in place, so whatever imbalance a "
              "level's insertion leaves at the torus scale stays in every larger set: the last column "
              "keeps a small power that the stratified input of a set model would not leave "
-             "(bnot-2d-stratified: at most 0.0008; docs/progressive.md)." if model.order == "progressive" else
+             "(bnot-2d-stratified: at most 0.0008; docs/progressive.md)."
+             if model.order == "progressive" and not model.balance else
+             "Each level of this progressive model ends with the balance of its prefix (model-format.md §5.1, "
+             "§6), so the last column is 0 at every m, at the price of low-band energy above the balanced "
+             "frequencies (docs/progressive.md, \"Balanced levels\")." if model.order == "progressive" else
              "A cascade of local filters moves each point a bounded distance per layer, so density "
              "fluctuations on scales far beyond the receptive field relax slowly: E_low stays within "
              "a small factor of its trained value, but the torus-scale frequencies (last column) keep "

@@ -131,7 +131,9 @@ def test_training_config_and_export():
     from dpc_train.cascade import CascadeSpec, FilterConfigError
 
     assert CascadeSpec(dims=2, n_points=64, layers=1, unique_kernels=1, balance=3).balance == 3
-    for bad in (dict(balance=-1), dict(balance=33), dict(balance=True), dict(balance=2, order="progressive")):
+    progressive = CascadeSpec(dims=2, n_points=64, layers=1, unique_kernels=1, balance=2, order="progressive")
+    assert progressive.balance == 2  # balanced levels (format §6)
+    for bad in (dict(balance=-1), dict(balance=33), dict(balance=True)):
         with pytest.raises(FilterConfigError):
             CascadeSpec(dims=2, n_points=64, layers=1, unique_kernels=1, **bad)
     with pytest.raises(FilterConfigError):

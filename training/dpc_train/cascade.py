@@ -112,8 +112,8 @@ class CascadeSpec:
             raise FilterConfigError("a progressive cascade has no grid axes and 1 <= progressive_base <= n_points")
         if isinstance(self.balance, bool) or not (isinstance(self.balance, int) and 0 <= self.balance <= 32):
             raise FilterConfigError(f"balance must be an integer radius in 0..32, got {self.balance!r}")
-        if self.balance and (self.grid_axes or self.order != "set"):
-            raise FilterConfigError("balance is for set models without grid axes")
+        if self.balance and self.grid_axes:
+            raise FilterConfigError("balance is for models without grid axes (sets, or progressive levels)")
         check_layer(self.dims, torch.zeros(len(self.masks), self.bins), self.masks, self.radius, self.eps, self.fixed)
 
     @property
