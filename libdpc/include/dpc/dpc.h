@@ -220,7 +220,8 @@ DPC_API dpc_status dpc_model_get_backend(const dpc_model *model, dpc_backend *ou
 DPC_API dpc_status dpc_model_get_input(const dpc_model *model, dpc_input *out_input);
 /* The output balance radius K of the model's generator (metadata "dpc.balance"; 0: none): after
  * the cascade, dpc_generate* cancel each set's Fourier coefficients at the integer frequencies
- * 0 < |q| <= K (see dpc_balance). dpc_filter runs the cascade alone and does not balance. */
+ * 0 < |q| <= K (see dpc_balance; a progressive model balances each level with the level's own
+ * points, format §6). dpc_filter runs the cascade alone and does not balance. */
 DPC_API dpc_status dpc_model_get_balance(const dpc_model *model, uint32_t *out_radius);
 /* What runs the cascade, for people: "cpu", or the Vulkan device's name (e.g. "NVIDIA H100 PCIe",
  * "llvmpipe (LLVM 15.0.6, 256 bits)"). "" for NULL. Valid while the model lives. */
