@@ -147,6 +147,44 @@ def goals(results: dict[int, dict]) -> list[tuple[str, bool, str]]:
     return out
 
 
+def timings(sizes: list[int], repeats: int = 5) -> dict[str, dict[int, float]]:
+    """Median milliseconds of one generate() on one thread, per model and set size: the two
+    progressive models, the first progressive-2d (fixed sigma = 1.1, made here by
+    models/make_progressive_2d.py's repulsion_layers) and the dpc set model."""
+    import sys
+    import tempfile
+
+    sys.path.insert(0, str(ROOT / "models"))
+    from make_progressive_2d import progressive_spec, repulsion_layers
+
+    from dpc.model_file import write_model
+
+    out: dict[str, dict[int, float]] = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        first = progressive_spec(name="progressive-2d-sigma-1.1")
+        first.layers = repulsion_layers(0.3, 1.1, 4.125, 160)
+        write_model(first, Path(tmp) / "first.onnx")
+        models = {
+            PROGRESSIVE: PROGRESSIVE,
+            BALANCED: BALANCED,
+            "first progressive-2d (sigma 1.1)": str(Path(tmp) / "first.onnx"),
+            SET_MODEL: SET_MODEL,
+        }
+        for label, spec in models.items():
+            model = dpc.load(spec, backend="cpu", threads=1)
+            out[label] = {}
+            for m in sizes:
+                model.generate(0, m)  # warm
+                times = []
+                for r in range(repeats):
+                    t = time.perf_counter()
+                    model.generate(r, m)
+                    times.append(time.perf_counter() - t)
+                out[label][m] = 1000 * float(np.median(times))
+            print(f"  {label}: " + ", ".join(f"{out[label][m]:.0f} ms at {m}" for m in sizes))
+    return out
+
+
 def tree() -> str:
     try:
         git = ["git", "rev-parse", "--short", "HEAD"]
@@ -155,7 +193,15 @@ def tree() -> str:
         return "?"
 
 
-def section(results: dict[int, dict], checks, count: int, curve: dict[float, dict], curve_m: int) -> str:
+def section(
+    results: dict[int, dict],
+    checks,
+    count: int,
+    curve: dict[float, dict],
+    curve_m: int,
+    ms: dict[str, dict[int, float]],
+) -> str:
+    sizes = sorted(next(iter(ms.values())))
     lines = [
         f"Measured by `python bench/bench_progressive.py` (tree {tree()}) on {cpu_name()}: {count} sets of each "
         "sampler and size, set i from seed i. White noise has E_low = 1; delta_min = 1 is the densest packing.",
@@ -164,6 +210,16 @@ def section(results: dict[int, dict], checks, count: int, curve: dict[float, dic
         "",
     ]
     lines += [f"- **{'met' if ok else 'missed'}**: {g} ({msg})" for g, ok, msg in checks]
+    lines += [
+        "",
+        "### Generation time",
+        "",
+        "Median of 5 `generate` calls on one thread, milliseconds per set (shared machine: compare within the table).",
+        "",
+        "| model | " + " | ".join(f"m = {m:,}" for m in sizes) + " |",
+        "|---|" + "---:|" * len(sizes),
+    ]
+    lines += [f"| {label} | " + " | ".join(f"{t[m]:.0f}" for m in sizes) + " |" for label, t in ms.items()]
     lines += [
         "",
         f"### The stratified variant's trade-off (m = {curve_m:,})",
@@ -204,12 +260,14 @@ def main() -> None:
     print(f"stratified variant, m = {args.sizes[0]}:")
     curve = tradeoff(args.sizes[0], args.sets, args.seed, args.model)
     checks = goals(results)
+    print("generation time, one thread:")
+    ms = timings(args.sizes)
     print("\nGoals:")
     for g, ok, msg in checks:
         print(f"  [{'met' if ok else 'MISSED'}] {g}: {msg}")
     if args.quick or args.model != PROGRESSIVE:
         return
-    replace_section(DOC, "bench_progressive", section(results, checks, args.sets, curve, args.sizes[0]))
+    replace_section(DOC, "bench_progressive", section(results, checks, args.sets, curve, args.sizes[0], ms))
     print(f"wrote {DOC}")
 
 

@@ -12,7 +12,9 @@ bnot-2d-stratified set made for n points (the progressive-dpc issue's goal: <= 3
 * levels: the progressive rule (docs/model-format.md §6: each level's new points filtered past
   the earlier levels' points, which stay in place) with trained set cascades (bnot-2d-stratified
   and bnot-2d, their 40 layers repeated 1 or 4 times) and with Gaussian repulsion kernels (160
-  layers, A = 0.3, sigma 0.85, 1.1 (progressive-2d), 1.5 mean spacings, radius 3.75 sigma).
+  layers, A = 0.3, sigma 0.85, 1.1 (the first progressive-2d), 1.5 mean spacings, radius 3.75
+  sigma), and sigma falling from 2.0 to 0.9 (progressive-2d) or 2.5 to 0.9 over the 160 layers, or
+  from 2.0 to 0.9 over 320.
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ from dpc.analysis.spectrum import low_frequency_energy
 from dpc.model_file import ModelSpec, read_model, write_model
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "models"))
-from make_progressive_2d import PROGRESSIVE, repulsion_layers  # noqa: E402
+from make_progressive_2d import PROGRESSIVE, repulsion_layers, schedule_layers  # noqa: E402
 
 
 def eliminate(points: np.ndarray, target: int) -> tuple[np.ndarray, np.ndarray]:
@@ -100,6 +102,8 @@ def main() -> None:
     }
     for sigma in (0.85, 1.1, 1.5):
         variants[f"levels, repulsion sigma {sigma}"] = repulsion_layers(0.3, sigma, 3.75 * sigma, 160)
+    for first, last, layers in ((2.0, 0.9, 160), (2.5, 0.9, 160), (2.0, 0.9, 320)):
+        variants[f"levels, sigma {first}-{last}, {layers}"] = schedule_layers(0.3, first, last, 3.75, layers)
     with tempfile.TemporaryDirectory() as tmp:
         for i, (name, layers) in enumerate(variants.items()):
             model = levels_model(list(layers), Path(tmp) / f"v{i}.onnx")

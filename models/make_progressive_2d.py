@@ -2,13 +2,15 @@
 
 A hand-designed cascade under the progressive generation rule (dpc.order = "progressive", first
 level 16 points, docs/model-format.md §6): 160 layers of a Gaussian repulsion kernel
-g(d) = -A exp(-d^2 / (2 sigma^2)) (d, g in mean spacings of the current level; A = 0.3,
-sigma = 1.1, radius 4.125 spacings). Each level's new points are filtered past the earlier
-levels' points, which stay in place: the repulsion relaxes them into the holes those leave.
-Chosen by the sweep of bench/progressive_alternatives.py: the trained set cascades
+g(d) = -A exp(-d^2 / (2 sigma^2)) (d, g in mean spacings of the current level; A = 0.3, radius
+3.75 sigma), sigma falling geometrically from 2.0 to 0.9 spacings over the layers: wide kernels
+first even out the density of the new points over several spacings, narrow ones then settle
+each into its hole. Each level's new points are filtered past the earlier levels' points, which
+stay in place. Chosen by the sweep of bench/progressive_alternatives.py: the trained set cascades
 (bnot-2d-stratified, bnot-2d, repeated 1-8 times) and fine-tuning bnot-2d-stratified on a loss over
 the prefixes (training/configs/bnot-2d-progressive-finetune.toml) all left the prefixes more
-low-frequency energy than this relaxation (docs/progressive.md, "Design").
+low-frequency energy than a repulsion, and the falling sigma less than a fixed one (the previous
+progressive-2d, sigma = 1.1, is the sweep's row "repulsion sigma 1.1"; docs/progressive.md, "Design").
 
 progressive-2d-balanced is the same cascade with the output balance at radius 8 (dpc.balance,
 docs/model-format.md §5.1): each level ends with its own points cancelling the prefix's Fourier
@@ -16,8 +18,8 @@ coefficients at 0 < |q| <= min(8, sqrt(n)/4), the held points staying. That remo
 torus-scale power the levels leave (the Gaussian-integrand gap to PMJ02BN) and costs low-band
 energy above it: moving only half of the points against the other half leaks power into the
 band (docs/progressive.md, "Balanced levels"). Radius 8 is the smallest that keeps every prefix's
-Gaussian variance below PMJ02BN's up to 4,096 points in a development sweep (radius 4 missed at
-4,096; 16 and 32 cost more low-band energy).
+Gaussian variance below PMJ02BN's up to 4,096 points in a development sweep on the first,
+fixed-sigma cascade (radius 4 missed at 4,096; 16 and 32 cost more low-band energy).
 
     python models/make_progressive_2d.py            # writes models/progressive-2d.onnx
     python models/make_progressive_2d.py --balance 8 -o models/progressive-2d-balanced.onnx
@@ -31,22 +33,32 @@ import numpy as np
 from dpc.model_file import Layer, ModelSpec, write_model
 
 HERE = Path(__file__).resolve().parent
-AMPLITUDE, SIGMA, RHO, BINS, LAYERS, M, BASE = 0.3, 1.1, 4.125, 32, 160, 1024, 16
+AMPLITUDE, SIGMA_FIRST, SIGMA_LAST, RHO_PER_SIGMA, BINS, LAYERS, M, BASE = 0.3, 2.0, 0.9, 3.75, 32, 160, 1024, 16
 
 
 # What makes a cascade progressive (docs/model-format.md §6), with stratified input for each level.
 PROGRESSIVE = {"dpc.order": "progressive", "dpc.progressive_base": str(BASE), "dpc.input": "stratified"}
 
 
-def repulsion_layers(amplitude: float, sigma: float, rho: float, layers: int) -> list[Layer]:
+def repulsion_layer(amplitude: float, sigma: float, rho: float) -> Layer:
     d = np.linspace(0.0, rho, BINS)
     kernel = -amplitude * np.exp(-(d**2) / (2 * sigma**2))
     kernel[-1] = 0.0  # continuous at the radius
-    return [Layer(subspaces=[0b11], radius=[rho], kernels=kernel[None, :].astype(np.float32)) for _ in range(layers)]
+    return Layer(subspaces=[0b11], radius=[rho], kernels=kernel[None, :].astype(np.float32))
+
+
+def repulsion_layers(amplitude: float, sigma: float, rho: float, layers: int) -> list[Layer]:
+    """One fixed kernel, repeated (the previous progressive-2d: sigma = 1.1, rho = 4.125)."""
+    return [repulsion_layer(amplitude, sigma, rho) for _ in range(layers)]
+
+
+def schedule_layers(amplitude: float, first: float, last: float, rho_per_sigma: float, layers: int) -> list[Layer]:
+    """sigma from first to last, geometrically, radius rho_per_sigma * sigma."""
+    return [repulsion_layer(amplitude, s, rho_per_sigma * s) for s in np.geomspace(first, last, layers)]
 
 
 def progressive_spec(
-    amplitude=AMPLITUDE, sigma=SIGMA, rho=RHO, layers=LAYERS, name="progressive-2d", balance=0
+    amplitude=AMPLITUDE, first=SIGMA_FIRST, last=SIGMA_LAST, layers=LAYERS, name="progressive-2d", balance=0
 ) -> ModelSpec:
     meta = {**PROGRESSIVE, "dpc.source": "models/make_progressive_2d.py", "dpc.trained": "no"}
     if balance:
@@ -54,12 +66,13 @@ def progressive_spec(
     return ModelSpec(
         dims=2,
         n_points=M,
-        layers=repulsion_layers(amplitude, sigma, rho, layers),
+        layers=schedule_layers(amplitude, first, last, RHO_PER_SIGMA, layers),
         name=name,
         description=(
             "Progressive 2-D blue noise: the first 16 * 2^j points of a set are the set of that size, "
-            f"each blue noise. {layers} layers of a Gaussian repulsion kernel (A = {amplitude}, sigma = "
-            f"{sigma}, rho = {rho} mean spacings) run level by level, the earlier points held in place. "
+            f"each blue noise. {layers} layers of a Gaussian repulsion kernel (A = {amplitude}, sigma from "
+            f"{first} to {last} mean spacings, rho = {RHO_PER_SIGMA} sigma) run level by level, the earlier "
+            "points held in place. "
             + (
                 f"Each level's points then cancel the prefix's power at 0 < |q| <= min({balance}, sqrt(n)/4). "
                 if balance
