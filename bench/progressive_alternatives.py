@@ -13,8 +13,11 @@ bnot-2d-stratified set made for n points (the progressive-dpc issue's goal: <= 3
   the earlier levels' points, which stay in place) with trained set cascades (bnot-2d-stratified
   and bnot-2d, their 40 layers repeated 1 or 4 times) and with Gaussian repulsion kernels (160
   layers, A = 0.3, sigma 0.85, 1.1 (the first progressive-2d), 1.5 mean spacings, radius 3.75
-  sigma), and sigma falling from 2.0 to 0.9 (progressive-2d) or 2.5 to 0.9 over the 160 layers, or
-  from 2.0 to 0.9 over 320.
+  sigma), and sigma falling from 2.0 to 0.9 or 2.5 to 0.9 over the 160 layers, or from 2.0 to 0.9
+  over 320, or with the radius capped at 4.25 spacings over 160 or 200 layers (progressive-2d: from
+  2.0 to 0.9 over 160, uncapped). Last column: the anisotropy of the full sets (mean over
+  0.5 <= nu <= 4 of the ring's variance over its mean squared, dB; lower is more isotropic), as
+  on the model cards.
 """
 
 from __future__ import annotations
@@ -30,7 +33,7 @@ from scipy.spatial import cKDTree
 
 import dpc
 from dpc.analysis.pcf import min_distance
-from dpc.analysis.spectrum import low_frequency_energy
+from dpc.analysis.spectrum import low_frequency_energy, radial_spectrum
 from dpc.model_file import ModelSpec, read_model, write_model
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "models"))
@@ -104,6 +107,8 @@ def main() -> None:
         variants[f"levels, repulsion sigma {sigma}"] = repulsion_layers(0.3, sigma, 3.75 * sigma, 160)
     for first, last, layers in ((2.0, 0.9, 160), (2.5, 0.9, 160), (2.0, 0.9, 320)):
         variants[f"levels, sigma {first}-{last}, {layers}"] = schedule_layers(0.3, first, last, 3.75, layers)
+    for layers in (160, 200):
+        variants[f"levels, sigma 2.0-0.9, rho<=4.25, {layers}"] = schedule_layers(0.3, 2.0, 0.9, 3.75, layers, 4.25)
     with tempfile.TemporaryDirectory() as tmp:
         for i, (name, layers) in enumerate(variants.items()):
             model = levels_model(list(layers), Path(tmp) / f"v{i}.onnx")
@@ -111,12 +116,14 @@ def main() -> None:
     ns = [1 << k for k in range(4, m.bit_length()) if 1 << k <= m]
     ref = {n: low_frequency_energy(plain.generate_batch(s, 1000, n).astype(np.float64), 0.5) for n in ns}
     print(f"{s} sets of {m} points: E_low nu<0.5 of each prefix / a dpc set's of that size (delta_min)")
-    print(f"{'alternative':34s} " + " ".join(f"{n:>12d}" for n in ns))
+    print(f"{'alternative':40s} " + " ".join(f"{n:>12d}" for n in ns) + "  anisotropy")
     for name, x in samplers.items():
         cells = [
             f"{low_frequency_energy(x[:, :n], 0.5) / ref[n]:6.2f} ({min_distance(x[:, :n]).mean_ratio:.2f})" for n in ns
         ]
-        print(f"{name:34s} " + " ".join(f"{c:>12s}" for c in cells))
+        r = radial_spectrum(x, nu_max=4.0)
+        band = (r.nu >= 0.5) & (r.nu <= 4.0) & (r.samples > 0)
+        print(f"{name:40s} " + " ".join(f"{c:>12s}" for c in cells) + f"  {np.mean(r.anisotropy_db[band]):6.2f} dB")
 
 
 if __name__ == "__main__":

@@ -52,9 +52,12 @@ def repulsion_layers(amplitude: float, sigma: float, rho: float, layers: int) ->
     return [repulsion_layer(amplitude, sigma, rho) for _ in range(layers)]
 
 
-def schedule_layers(amplitude: float, first: float, last: float, rho_per_sigma: float, layers: int) -> list[Layer]:
-    """sigma from first to last, geometrically, radius rho_per_sigma * sigma."""
-    return [repulsion_layer(amplitude, s, rho_per_sigma * s) for s in np.geomspace(first, last, layers)]
+def schedule_layers(
+    amplitude: float, first: float, last: float, rho_per_sigma: float, layers: int, rho_max: float = np.inf
+) -> list[Layer]:
+    """sigma from first to last, geometrically, radius rho_per_sigma * sigma (at most rho_max: an
+    alternative of bench/progressive_alternatives.py, not progressive-2d's)."""
+    return [repulsion_layer(amplitude, s, min(rho_per_sigma * s, rho_max)) for s in np.geomspace(first, last, layers)]
 
 
 def progressive_spec(
