@@ -39,6 +39,7 @@ SCALAR_MODEL = "mask-64"
 VECTOR_MODEL = "mask-vector-64"
 ST_MODEL = "mask-st-32x16"
 COUNT = 8            # masks per row (scalar, vector); volumes per row: ST_COUNT
+WIDE_BAND = 12.0     # the scalar tables also report the measures over 0 < |q| <= 12
 ST_COUNT = 4
 
 
@@ -123,15 +124,18 @@ def dither_figure(masks: dict[str, np.ndarray], name: str) -> tuple[str, list[st
 
 def scalar_rows(label: str, ms: np.ndarray, secs: float) -> tuple[str, dict]:
     q = AM.scalar_quality(ms)
+    wide = AM.scalar_quality(ms, q_max=WIDE_BAND)  # the same measures over a wider low band
     seam = AM.seam_ratio(ms) if ms.shape[1] >= 8 else float("nan")
     return (f"| {label} | {len(ms)} | {q['mask_elow']:.5f} | {q['levels_elow_mean']:.4f} | "
-            f"{q['levels_elow_max']:.4f} | {q['levels_peak_mean']:.1f} | {seam:.2f} | {secs:.2f} |"), q
+            f"{q['levels_elow_max']:.4f} | {wide['mask_elow']:.5f} | {wide['levels_elow_mean']:.4f} | "
+            f"{q['levels_peak_mean']:.1f} | {seam:.2f} | {secs:.2f} |"), q
 
 
 def scalar() -> None:
     header = ["| mask | masks | mask E_low | thresholded 1/8 … 7/8: mean E_low | worst level | "
+              f"mask E_low, \\|q\\| ≤ {WIDE_BAND:g} | thresholded mean, \\|q\\| ≤ {WIDE_BAND:g} | "
               "largest single-frequency power | seam ratio | seconds per mask |",
-              "|---|---:|---:|---:|---:|---:|---:|---:|"]
+              "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     lines = ["## Scalar masks", "",
              "`python models/mask_report.py scalar`. Per size: the dpc models (at their trained "
              "grid, or filtered at another size with radii that scale with the point count), "
@@ -141,7 +145,8 @@ def scalar() -> None:
              "2-core machine, including loading the model (a model at another size runs libdpc's "
              "float64 layer kernels). Largest single-frequency power: the thresholded patterns' "
              "highest peak outside DC, mean over levels (Bayer's low band is empty because all "
-             "its power sits in a few spikes).", ""]
+             "its power sits in a few spikes). The columns at \\|q\\| ≤ 12 are the same measures over "
+             "a low band twice as wide (0 < \\|q\\| ≤ 12 cycles per tile).", ""]
     verdict = []
     models = [m for m in (SCALAR_MODEL, "dither-32") if model_available(m)]
     figs = {}
