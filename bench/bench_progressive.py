@@ -19,12 +19,14 @@ from __future__ import annotations
 
 import argparse
 import subprocess
+import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 from bench_generate import cpu_name  # one CPU description for every benchmark page
 from doc_sections import replace_section
+from progressive_alternatives import levels_model, repulsion_layers  # the design study's cascades
 
 import dpc
 from dpc import baselines
@@ -128,8 +130,7 @@ def goals(results: dict[int, dict]) -> list[tuple[str, bool, str]]:
             r_dpc = [res[n][p]["elow50"] / res[n]["dpc set"]["elow50"] for n in ns]
             r_pmj = [res[n][p]["elow50"] / res[n]["pmj02bn"]["elow50"] for n in ns]
             r_var = [res[n][p]["gauss"] / res[n]["pmj02bn"]["gauss"] for n in ns]
-            full = res[m]
-            r_full = max(full[p][k] / full["dpc set"][k] for k in ("elow50", "elow75"))
+            r_full = max(res[m][p][k] / res[m]["dpc set"][k] for k in ("elow50", "elow75"))
 
             def worst(r: list[float], ns: list[int] = ns) -> str:
                 return f"worst x{max(r):.2f} at n = {ns[int(np.argmax(r))]}"
@@ -149,29 +150,19 @@ def goals(results: dict[int, dict]) -> list[tuple[str, bool, str]]:
 
 def timings(sizes: list[int], repeats: int = 5) -> dict[str, dict[int, float]]:
     """Median milliseconds of one generate() on one thread, per model and set size: the two
-    progressive models, the first progressive-2d (fixed sigma = 1.1, made here by
-    models/make_progressive_2d.py's repulsion_layers) and the dpc set model."""
-    import sys
-    import tempfile
-
-    sys.path.insert(0, str(ROOT / "models"))
-    from make_progressive_2d import progressive_spec, repulsion_layers
-
-    from dpc.model_file import write_model
-
+    progressive models, the first progressive-2d (fixed sigma = 1.1, the design study's row) and
+    the dpc set model."""
     out: dict[str, dict[int, float]] = {}
     with tempfile.TemporaryDirectory() as tmp:
-        first = progressive_spec(name="progressive-2d-sigma-1.1")
-        first.layers = repulsion_layers(0.3, 1.1, 4.125, 160)
-        write_model(first, Path(tmp) / "first.onnx")
         models = {
-            PROGRESSIVE: PROGRESSIVE,
-            BALANCED: BALANCED,
-            "first progressive-2d (sigma 1.1)": str(Path(tmp) / "first.onnx"),
-            SET_MODEL: SET_MODEL,
+            PROGRESSIVE: dpc.load(PROGRESSIVE, backend="cpu", threads=1),
+            BALANCED: dpc.load(BALANCED, backend="cpu", threads=1),
+            "first progressive-2d (sigma 1.1)": levels_model(
+                repulsion_layers(0.3, 1.1, 4.125, 160), Path(tmp) / "first.onnx", threads=1
+            ),
+            SET_MODEL: dpc.load(SET_MODEL, backend="cpu", threads=1),
         }
-        for label, spec in models.items():
-            model = dpc.load(spec, backend="cpu", threads=1)
+        for label, model in models.items():
             out[label] = {}
             for m in sizes:
                 model.generate(0, m)  # warm

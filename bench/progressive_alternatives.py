@@ -83,9 +83,11 @@ def elimination_order(points: np.ndarray) -> np.ndarray:
     return np.concatenate([idx] + tail[::-1])
 
 
-def levels_model(layers: list, path: Path) -> dpc.Model:
+def levels_model(layers: list, path: Path, **load) -> dpc.Model:
+    """A progressive model of these layers, written to path and loaded on the CPU (``load``: more
+    dpc.load options)."""
     write_model(ModelSpec(dims=2, n_points=1024, layers=layers, name=path.stem, metadata=PROGRESSIVE), path)
-    return dpc.load(path, backend="cpu")
+    return dpc.load(path, backend="cpu", **load)
 
 
 def main() -> None:

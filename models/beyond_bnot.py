@@ -15,6 +15,7 @@ spectrum), cycled.
 from __future__ import annotations
 
 import argparse
+import functools
 import os
 import sys
 import time
@@ -60,19 +61,6 @@ def cascade_sampler(model):
     return lambda count, m, seed: np.stack([model.filter(inputs(seed + i, m, 2)) for i in range(count)]).astype(
         np.float64
     )
-
-
-def cached(sampler):
-    """The sampler with each (count, m, seed) made once: the integration study, its intervals and
-    the variance sources read the same sets."""
-    made = {}
-
-    def sets(count, m, seed):
-        if (count, m, seed) not in made:
-            made[(count, m, seed)] = sampler(count, m, seed)
-        return made[(count, m, seed)]
-
-    return sets
 
 
 def timing(models: dict, counts=(1024, 65536), rounds: int = 5) -> dict:
@@ -182,11 +170,11 @@ def main(argv=None) -> None:
 
     # 3. integration
     samplers = {
-        name: cached(model_sampler(model)),
+        name: functools.cache(model_sampler(model)),
         "bnot-2d-stratified": model_sampler(strat),
-        "sobol": cached(lambda c, m, s: baselines.generate("sobol", m, 2, count=c, seed=s)),
+        "sobol": functools.cache(lambda c, m, s: baselines.generate("sobol", m, 2, count=c, seed=s)),
     }
-    bnot_sets = cached(bnot_shifted)
+    bnot_sets = functools.cache(bnot_shifted)
     study = analysis.integration_study(
         samplers,
         COUNTS,

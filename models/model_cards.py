@@ -311,23 +311,31 @@ def scale_section(name: str, model, t: Target) -> list[str]:
             "Scale-aware radius; \"lowest frequencies\" = q in {(1,0), (0,1), (1,1), (1,−1)}, white "
             "noise = 1. At 64 m the spectrum is measured to ν = 1.5.", "", *table, "",
             f"![{name} at other point counts](figures/models/{fig.name})", "",
-            ("A progressive model's levels hold their earlier points in place, so whatever imbalance a "
-             "level's insertion leaves at the torus scale stays in every larger set: the last column "
-             "keeps a small power that the stratified input of a set model would not leave "
-             "(bnot-2d-stratified: at most 0.0008; docs/progressive.md)."
-             if model.order == "progressive" and not model.balance else
-             "Each level of this progressive model ends with the balance of its prefix (model-format.md §5.1, "
-             "§6), so the last column is 0 at every m, at the price of low-band energy above the balanced "
-             "frequencies (docs/progressive.md, \"Balanced levels\")." if model.order == "progressive" else
-             "A cascade of local filters moves each point a bounded distance per layer, so density "
-             "fluctuations on scales far beyond the receptive field relax slowly: E_low stays within "
-             "a small factor of its trained value, but the torus-scale frequencies (last column) keep "
-             "more and more of their white-noise power as m grows." if model.input == "uniform" else
-             "The input points are stratified (one per grid cell) and the output balanced at the "
-             "torus-scale frequencies (model-format.md §5.1): the last column is 0 at every m." if model.balance else
-             "The input points are stratified (one per grid cell), so there are no large-scale density "
-             "fluctuations for the local filters to leave behind: the torus-scale frequencies (last "
-             "column) stay near 0 at every m."), ""]
+            torus_scale_note(model), ""]
+
+
+def torus_scale_note(model) -> str:
+    """Why the point-count table's last column (the torus-scale power) is what it is."""
+    if model.order == "progressive" and model.balance:
+        return ("Each level of this progressive model ends with the balance of its prefix (model-format.md "
+                "§5.1, §6), so the last column is 0 at every m, at the price of low-band energy above the "
+                "balanced frequencies (docs/progressive.md, \"Balanced levels\").")
+    if model.order == "progressive":
+        return ("A progressive model's levels hold their earlier points in place, so whatever imbalance a "
+                "level's insertion leaves at the torus scale stays in every larger set: the last column "
+                "keeps a small power that the stratified input of a set model would not leave "
+                "(bnot-2d-stratified: at most 0.0008; docs/progressive.md).")
+    if model.input == "uniform":
+        return ("A cascade of local filters moves each point a bounded distance per layer, so density "
+                "fluctuations on scales far beyond the receptive field relax slowly: E_low stays within "
+                "a small factor of its trained value, but the torus-scale frequencies (last column) keep "
+                "more and more of their white-noise power as m grows.")
+    if model.balance:
+        return ("The input points are stratified (one per grid cell) and the output balanced at the "
+                "torus-scale frequencies (model-format.md §5.1): the last column is 0 at every m.")
+    return ("The input points are stratified (one per grid cell), so there are no large-scale density "
+            "fluctuations for the local filters to leave behind: the torus-scale frequencies (last "
+            "column) stay near 0 at every m.")
 
 
 def card_nd(name: str, card: Card, model) -> list[str]:

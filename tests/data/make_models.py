@@ -224,28 +224,38 @@ def model_10d() -> ModelSpec:
     )
 
 
+def variant(base: ModelSpec, name: str, description: str, **metadata: str) -> ModelSpec:
+    """base's cascade under another name, with more metadata (same layers, same points)."""
+    base.name, base.description = name, description
+    base.metadata.update(metadata)
+    return base
+
+
 def model_2d_progressive() -> ModelSpec:
-    spec = model_2d()
-    spec.name = "test-2d-progressive"
-    spec.description = "Test model: model_2d's cascade, generated level by level (format §6)."
-    spec.metadata.update({"dpc.order": "progressive", "dpc.progressive_base": "16"})
-    return spec
+    return variant(
+        model_2d(),
+        "test-2d-progressive",
+        "Test model: model_2d's cascade, generated level by level (format §6).",
+        **{"dpc.order": "progressive", "dpc.progressive_base": "16"},
+    )
 
 
 def model_2d_balanced() -> ModelSpec:
-    spec = model_2d()
-    spec.name = "test-2d-balanced"
-    spec.description = "Test model: model_2d's cascade, its output balanced at 0 < |q| <= 3 (format §5.1)."
-    spec.metadata.update({"dpc.balance": "3"})
-    return spec
+    return variant(
+        model_2d(),
+        "test-2d-balanced",
+        "Test model: model_2d's cascade, its output balanced at 0 < |q| <= 3 (format §5.1).",
+        **{"dpc.balance": "3"},
+    )
 
 
 def model_2d_progressive_balanced() -> ModelSpec:
-    spec = model_2d_progressive()
-    spec.name = "test-2d-progressive-balanced"
-    spec.description = "Test model: model_2d_progressive, each level's points balancing its prefix (format §5.1)."
-    spec.metadata.update({"dpc.balance": "8"})
-    return spec
+    return variant(
+        model_2d_progressive(),
+        "test-2d-progressive-balanced",
+        "Test model: model_2d_progressive, each level's points balancing its prefix (format §5.1).",
+        **{"dpc.balance": "8"},
+    )
 
 
 MODELS = {

@@ -14,9 +14,10 @@ import dpc
 import reference_cascade as rc
 from cpu_isa import VECTOR_ISAS
 from dpc.analysis.pcf import min_distance
-from dpc.analysis.spectrum import low_frequency_energy
+from dpc.analysis.spectrum import low_frequency_energy, power_spectrum_direct
 
 DATA = Path(__file__).resolve().parents[1] / "data"
+BALANCED = DATA / "model_2d_progressive_balanced.onnx"  # model_2d_progressive with dpc.balance = 8
 
 
 def progressive_copy(path: Path, **meta) -> Path:
@@ -72,28 +73,23 @@ def test_matches_the_float64_reference(prog_path, isa):
         assert float(rc.torus_diff(got, want).max()) < 1e-5, (seed, m)
 
 
-def test_same_bits_on_every_path_thread_count_and_batch(prog_path):
-    one = dpc.load(prog_path, isa="scalar", threads=1).generate_batch(3, 5, 500)
+@pytest.mark.parametrize("balanced", [False, True])
+def test_same_bits_on_every_path_thread_count_and_batch(prog_path, balanced):
+    path = BALANCED if balanced else prog_path
+    one = dpc.load(path, isa="scalar", threads=1).generate_batch(3, 5, 500)
     for isa in ["scalar"] + VECTOR_ISAS:
         for threads in (1, 2, 4):
-            got = dpc.load(prog_path, isa=isa, threads=threads).generate_batch(3, 5, 500)
+            got = dpc.load(path, isa=isa, threads=threads).generate_batch(3, 5, 500)
             assert np.array_equal(got.view(np.uint32), one.view(np.uint32)), (isa, threads)
-    single = dpc.load(prog_path).generate(6, 500)
+    single = dpc.load(path).generate(6, 500)
     assert np.array_equal(single, one[1])
 
 
-@pytest.fixture(scope="module")
-def balanced_path(tmp_path_factory) -> Path:
-    path = tmp_path_factory.mktemp("progressive") / "model_2d_progressive_balanced.onnx"
-    meta = {"dpc.order": "progressive", "dpc.progressive_base": "16", "dpc.balance": "8"}
-    return progressive_copy(path, **meta)
-
-
-def test_balanced_levels_match_the_reference_and_keep_the_contract(balanced_path):
+def test_balanced_levels_match_the_reference_and_keep_the_contract(prog_path):
     """dpc.balance on a progressive model (§5.1, §6): each level's own points balance its prefix,
     so the prefixes stay the smaller sets and each level size has no power at 0 < |q| <= k."""
-    ref = rc.load_reference(balanced_path)
-    model = dpc.load(balanced_path)
+    ref = rc.load_reference(BALANCED)
+    model = dpc.load(BALANCED)
     assert model.balance == 8
     for seed, m in [(0, 300), (5, 64)]:
         got = model.generate(seed, m)
@@ -103,25 +99,10 @@ def test_balanced_levels_match_the_reference_and_keep_the_contract(balanced_path
     for n, k in [(16, 1), (32, 1), (64, 2), (128, 2), (256, 4)]:
         prefix = full[:n]
         assert np.array_equal(prefix, model.generate(2, n)), n
-        q = rc.balance_frequencies(k, 2)
-        power = np.abs(np.exp(-2j * np.pi * prefix.astype(np.float64) @ q.T).sum(0)) ** 2 / n
+        power = power_spectrum_direct(prefix, rc.balance_frequencies(k, 2))
         assert power.max() < 1e-5, (n, power.max())  # white noise: about 1
-    plain = dpc.load(
-        progressive_copy(
-            balanced_path.with_name("plain.onnx"), **{"dpc.order": "progressive", "dpc.progressive_base": "16"}
-        )
-    )
-    q = rc.balance_frequencies(4, 2)
-    unbalanced = plain.generate(2, 256).astype(np.float64)
-    assert (np.abs(np.exp(-2j * np.pi * unbalanced @ q.T).sum(0)) ** 2 / 256).max() > 1e-3  # the cascade alone
-
-
-def test_balanced_levels_are_the_same_bits_everywhere(balanced_path):
-    one = dpc.load(balanced_path, isa="scalar", threads=1).generate_batch(3, 5, 300)
-    for isa in ["scalar"] + VECTOR_ISAS:
-        for threads in (1, 2):
-            got = dpc.load(balanced_path, isa=isa, threads=threads).generate_batch(3, 5, 300)
-            assert np.array_equal(got.view(np.uint32), one.view(np.uint32)), (isa, threads)
+    unbalanced = dpc.load(prog_path).generate(2, 256)
+    assert power_spectrum_direct(unbalanced, rc.balance_frequencies(4, 2)).max() > 1e-3  # the cascade alone
 
 
 @pytest.mark.parametrize(

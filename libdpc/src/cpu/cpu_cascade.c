@@ -464,26 +464,32 @@ dpc_status dpc_cpu_filter_frozen(const dpc_cascade *c, const dpc_cpu_engine *e, 
 static size_t first_level(const dpc_cascade *c, size_t m) { return m < c->progressive_base ? m : c->progressive_base; }
 static size_t level_size(size_t n, size_t m) { return n < m - n ? n : m - n; }
 
+/* The output balance of a set's first m points (format §5.1), the points from first on moving
+ * (0: all; a progressive level: its own points, §6); nothing when the model has no dpc.balance. */
+static dpc_status balance_prefix(const dpc_cascade *c, float *x, size_t m, size_t first) {
+    return dpc_balance_points(x, m, c->dims, dpc_balance_radius(c->balance, m, c->dims), first);
+}
+
 static dpc_status generate_one(const dpc_cascade *c, dpc_input input, const dpc_cpu_engine *e, uint64_t seed, size_t m,
                                float *out, dpc_cpu_hook hook, void *ctx) {
     if (hook && hook(ctx, 0) != DPC_OK) return DPC_ERROR_CANCELLED;
     if (!c->progressive_base) {
         dpc_input_fill(c, input, seed, m, out);
         const dpc_status st = dpc_cpu_filter_hooked(c, e, m, out, hook, ctx);
-        return st == DPC_OK ? dpc_balance_points(out, m, c->dims, dpc_balance_radius(c->balance, m, c->dims), 0) : st;
+        return st == DPC_OK ? balance_prefix(c, out, m, 0) : st;
     }
     /* Progressive: level j >= 1 adds its input points, of seed + j * 0x9E3779B97F4A7C15, to the
      * n points so far and filters them past those, which stay where they are. */
     size_t n = first_level(c, m);
     dpc_input_fill(c, input, seed, n, out);
     dpc_status st = dpc_cpu_filter_hooked(c, e, n, out, hook, ctx);
-    if (st == DPC_OK) st = dpc_balance_points(out, n, c->dims, dpc_balance_radius(c->balance, n, c->dims), 0);
+    if (st == DPC_OK) st = balance_prefix(c, out, n, 0);
     for (uint64_t level = 1; st == DPC_OK && n < m; level++) {
         const size_t add = level_size(n, m);
         dpc_input_fill(c, input, seed + level * 0x9E3779B97F4A7C15ull, add, out + n * c->dims);
         st = dpc_cpu_filter_frozen(c, e, n + add, n, out, hook, ctx);
         if (st == DPC_OK) /* the level's new points balance the whole prefix; the held ones stay */
-            st = dpc_balance_points(out, n + add, c->dims, dpc_balance_radius(c->balance, n + add, c->dims), n);
+            st = balance_prefix(c, out, n + add, n);
         n += add;
     }
     return st;
