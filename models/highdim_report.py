@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import itertools
+import math
 import sys
 import time
 from pathlib import Path
@@ -23,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from dpc import analysis, baselines
+from dpc.analysis.reference import reference_radial_spectrum, reference_spectrum_copies
 from dpc.analysis.spectrum import low_frequency_energy
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -95,6 +97,91 @@ def iso_row(label: str, sets: np.ndarray, m: int, n: int, layers="—", sec=None
     return row, out
 
 
+def target_rows() -> list[str]:
+    """The authors' n-D BNOT targets the cards use, against their 2-D spectrum at the same nu."""
+    flat = reference_radial_spectrum("bnot", 1048576, 2)  # the finest 2-D file: 1,024 rings per unit of nu
+    copies = reference_spectrum_copies()
+    rows = ["| target file | peak | exact copy of (every stride-th ring) | largest relative difference to the "
+            "2-D 1,048,576-point spectrum at the same ν (ν ≤ 3, rings with power ≥ 0.05) |",
+            "|---|---|---|---:|"]
+    for n in (3, 4, 5, 10):
+        t = reference_radial_spectrum("bnot", 1024, n)
+        name = f"bnot-powspec-radialmean-d{n}-n1024.txt"
+        src = [c for c in copies if c.copy == name]
+        lowest = min((int(c.source.split("-d")[1].split("-")[0]) for c in src), default=0)
+        text = ", ".join(f"`{c.source}` ({c.stride})" for c in src
+                         if int(c.source.split("-d")[1].split("-")[0]) == lowest) or "none"
+        sel = (t.nu <= 3.0) & (t.power >= 0.05)
+        ref = np.interp(t.nu[sel], flat.nu, flat.power)
+        i = int(np.argmax(t.power))
+        rows.append(f"| `{name}` | {t.power[i]:.2f} (ν = {t.nu[i]:.2f}) | {text} | "
+                    f"{np.max(np.abs(t.power[sel] - ref) / t.power[sel]):.3f} |")
+    return rows
+
+
+def projection_budget_rows(count: int) -> list[str]:
+    """projective-4d: how many low-band constraints its six projections pose against the set's degrees
+    of freedom, and what cancelling a part of them outright (the output balance's Newton steps on the
+    six projections' coefficients at 0 < |q| <= k) does to E_low."""
+    m, n, band = 1024, 4, 16  # E_low nu < 0.5: 0 < |q| < 16 in each 2-D projection at m = 1,024
+    axes = list(itertools.combinations(range(n), 2))
+
+    def frequencies(k: float, strict: bool) -> np.ndarray:  # one of each +-q pair, every projection
+        a = np.arange(-int(k), int(k) + 1)
+        qa, qb = (g.ravel() for g in np.meshgrid(a, a, indexing="ij"))
+        r2 = qa * qa + qb * qb
+        keep = (r2 > 0) & ((r2 < k * k) if strict else (r2 <= k * k)) & ((qa > 0) | ((qa == 0) & (qb > 0)))
+        out = np.zeros((len(axes), int(keep.sum()), n), dtype=np.int64)
+        for p, (i, j) in enumerate(axes):
+            out[p, :, i], out[p, :, j] = qa[keep], qb[keep]
+        return out.reshape(-1, n)
+
+    q_low = frequencies(band, strict=True)
+    rows = [f"In each 2-D projection E_low ν<0.5 averages {len(q_low) // len(axes) * 2} frequencies (±q), "
+            f"{len(q_low) // len(axes) * 2} real constraints (the real and imaginary parts of one of each pair) "
+            f"for a set with no power there; six projections make {len(q_low) * 2}, against the set's "
+            f"{m * n - n} degrees of freedom (4 coordinates of 1,024 points, less a translation). "
+            f"projective-3d's three projections and its 3-D ball below ν = 0.5 pose "
+            f"{3 * len(q_low) // len(axes) * 2 + _ball_count(3, 0.5 * m ** (1 / 3))} against {m * 3 - 3}. "
+            "Cancelling the lowest frequencies outright, by the output balance's Newton steps (docs/model-format.md "
+            f"§5.1) applied to the six projections' coefficients ({count} sets, 3 steps):", "",
+            "| frequencies cancelled | E_low ν<0.5, mean of the six projections (worst) | largest move (projection spacings) |",
+            "|---|---|---:|"]
+    model = load("projective-4d")
+    sets = model.generate_batch(count, seed=0).astype(np.float64)
+
+    def elow(x):
+        c = np.exp(-2j * np.pi * (x @ q_low.T)).sum(axis=0)
+        per = (np.abs(c) ** 2 / m).reshape(len(axes), -1).mean(axis=1)
+        return per.mean(), per.max()
+
+    before = np.array([elow(x) for x in sets]).mean(axis=0)
+    rows.append(f"| none (projective-4d) | {before[0]:.4f} ({before[1]:.4f}) | — |")
+    for k in (4, 8, 12):
+        q = frequencies(k, strict=False)
+        w = 1.0 / (np.pi * (q * q).sum(axis=1) * m)
+        got, moves = [], []
+        for x0 in sets:
+            x = x0.copy()
+            for _ in range(3):
+                e = np.exp(-2j * np.pi * (x @ q.T))
+                x = (x + (w * (e.sum(axis=0) * np.conj(e)).imag) @ q) % 1.0
+            got.append(elow(x))
+            moves.append(np.abs((x - x0 + 0.5) % 1.0 - 0.5).max() * math.sqrt(m))
+        g = np.mean(got, axis=0)
+        rows.append(f"| 0 < \\|q\\| ≤ {k} in each projection ({len(q) * 2} constraints) | {g[0]:.4f} ({g[1]:.4f}) | "
+                    f"{np.mean(moves):.2f} |")
+    return rows
+
+
+def _ball_count(n: int, radius: float) -> int:
+    """Integer vectors with 0 < |q| < radius in n dimensions."""
+    a = np.arange(-math.ceil(radius), math.ceil(radius) + 1)
+    g = np.stack(np.meshgrid(*[a] * n, indexing="ij"), axis=-1).reshape(-1, n)
+    r2 = (g * g).sum(axis=1)
+    return int(((r2 > 0) & (r2 < radius * radius)).sum())
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="16 sets, no 10-D dart throwing, print only")
@@ -121,7 +208,8 @@ def main() -> None:
                           f"worst {max(p.values()):.4f}", max(p.values()) <= 0.01))
             goals.append(("3-D E_low ν<0.5 ≤ 0.02 (projective-3d)", f"{full:.4f}", full <= 0.02))
         else:
-            goals.append(("all six projections of a 4-D model, measured the same way (against the 3-D goal's 0.01)",
+            goals.append(("all six projections of a 4-D model, measured the same way (against the 3-D goal's 0.01; "
+                          "more constraints than the set has coordinates: below)",
                           f"worst {max(p.values()):.4f} (previous file: "
                           f"{max(got[name + MC.PREVIOUS][0].values()):.4f})", max(p.values()) <= 0.01))
 
@@ -149,9 +237,9 @@ def main() -> None:
                       f"{new['dmin']:.3f} against {dart['dmin']:.3f} (previous file "
                       f"{res[name + MC.PREVIOUS]['dmin']:.3f})", new["dmin"] >= dart["dmin"]))
         if name == "bnot-5d":
-            goals.append(("bnot-5d: peak ≥ 2.0", f"{new['peak']:.2f} (previous {res[name + MC.PREVIOUS]['peak']:.2f})",
+            goals.append(("bnot-5d: peak ≥ 2.0 (the target's 2.69 is the authors' 2-D spectrum's: below)", f"{new['peak']:.2f} (previous {res[name + MC.PREVIOUS]['peak']:.2f})",
                           new["peak"] >= 2.0))
-            goals.append(("bnot-5d: rel. L1 to its target ≤ 0.15",
+            goals.append(("bnot-5d: rel. L1 to its target ≤ 0.15 (a copy of the 2-D spectrum in ν: below)",
                           f"{new['l1']:.3f} (previous {res[name + MC.PREVIOUS]['l1']:.3f})", new["l1"] <= 0.15))
 
     # ---- item 3: 10-D at m = 8,192 ----
@@ -183,7 +271,11 @@ def main() -> None:
     print("\n".join(table))
     if args.quick:
         return
-    PAGE.write_text("\n".join([*INTRO, *table, "", *lines, *OUTRO]) + "\n")
+    targets = ["## The authors' n-D BNOT targets", "", *TARGETS_INTRO, "", *target_rows(), "", *TARGETS_AFTER, ""]
+    budget = ["## projective-4d: more constraints than coordinates", "", *projection_budget_rows(8), "",
+              *BUDGET_AFTER, ""]
+    print("\n".join(targets + budget))
+    PAGE.write_text("\n".join([*INTRO, *table, "", *lines, *targets, *budget, *OUTRO]) + "\n")
     print(f"wrote {PAGE}")
 
 
@@ -200,6 +292,30 @@ INTRO = [
     "of 5 calls on one thread of this machine (shared, so compare within a table).",
     "",
 ]
+TARGETS_INTRO = [
+    "The cards' n-D targets are the authors' radial files (`dpc.analysis.reference_radial_spectrum`). "
+    "`dpc.analysis.reference_spectrum_copies()` lists every shipped file that repeats a lower-dimensional file "
+    "bit for bit (ring b of the copy = ring stride · b of the source, so the same power at the same ν); the last "
+    "column compares each file with the authors' finest 2-D BNOT spectrum at the same ν:",
+]
+TARGETS_AFTER = [
+    "So the 5-D and 10-D targets (bnot-5d's, bnot-10d's and blue-10d's) are not 5-D or 10-D spectra: they are the "
+    "authors' 2-D BNOT spectrum re-indexed in ν, bit for bit (the 5-D file is their 16-point 2-D file, the 4-D "
+    "256-point and 3-D 64-point files are the same numbers again). The 4-D target is the 2-D spectrum within "
+    "0.1 %, the 3-D one within 8.5 %. Issue #14's bnot-5d goals (peak ≥ 2.0, rel. L1 ≤ 0.15) therefore ask a 5-D set "
+    "for a 2-D set's radial spectrum, whose peak of 2.69 is 2-D BNOT's short-range order; no genuine 5-D BNOT "
+    "spectrum ships to say what a 5-D set of that quality reaches. The cards keep these targets (they are what the "
+    "models were trained and compared against) and say so.",
+]
+BUDGET_AFTER = [
+    "A set with no power below ν = 0.5 in all six projections must meet more equations than it has unknowns, "
+    "for every m: six disks of radius 0.5 √m hold 6 π (0.5)² m ≈ 4.7 m constraints against 4 m coordinates "
+    "(the counts balance at ν ≈ 0.46). Only special sets (lattices, which the projections' isotropy rules out) "
+    "can come near; projective-3d's count is below its unknowns, and it meets its goal. Cancelling part of the "
+    "band outright makes E_low worse: the Newton moves it needs are a third of a projection spacing (the table), "
+    "large enough to raise every frequency they do not cancel. The six projections trade the band against each "
+    "other, and 0.01 over ν < 0.5 is not a level a 4-D set can be expected to reach by local moves.",
+]
 OUTRO = [
     "## What the models are",
     "",
@@ -214,14 +330,14 @@ OUTRO = [
     "",
     "## Where a local cascade falls short, and what would lift it",
     "",
-    "- **bnot-5d's peak** stays near 1.3–1.4 against the target's 2.69, whatever was tried: "
+    "- **bnot-5d's peak** stays near 1.3–1.4 against the target's 2.69 (the 2-D spectrum's: above), whatever was tried: "
     "the trained file, a repulsion cascade of 40–120 layers (1.27–1.29), linear and quadratic "
     "hard-core kernels (1.14–1.48), an 80-layer cascade trained with the peak band weighted 10× (1.41; "
     "development runs of this session, 32 sets). A peak that high is the short-range order of a "
     "nearly crystalline packing, which local moves of 1,024 points in 5-D do not find; an optimiser over "
     "the whole set (BNOT's own optimal transport, or gradient descent on the spectrum loss per set) "
     "or far more layers with annealed kernels are what would lift it.",
-    "- **projective-4d's projections** level off at about 0.035 (repulsion in the six projections, "
+    "- **projective-4d's projections** level off at about 0.035 (more constraints than coordinates: above; repulsion in the six projections, "
     "160–280 layers, any amplitude that stays stable); every 4-D term tried made them worse. Each "
     "axis is in three projections, and the moves that fix one disturb the other two. Input points "
     "whose 2-D projections are already stratified (an Owen-scrambled (0,m,2)-net in each pair, as "

@@ -82,8 +82,14 @@ def _ring_mean(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def bnot_target(m: int, k: int) -> "Target":
     """The authors' k-D BNOT radial target for m points; their n-D files stop at 1,024 points,
-    so a larger m (blue-10d's 8,192) is compared with the 1,024-point file in ν."""
-    return target("bnot", min(m, 1024), k)
+    so a larger m (blue-10d's 8,192) is compared with the 1,024-point file in ν. A file that repeats
+    a lower-dimensional one (the 5-D and 10-D files: `dpc.analysis.reference_spectrum_copies`) says so
+    in its label."""
+    t = target("bnot", min(m, 1024), k)
+    name = f"bnot-powspec-radialmean-d{k}-n{min(m, 1024)}.txt"
+    if any(c.copy == name and "-d2-" in c.source for c in analysis.reference_spectrum_copies()):
+        t.label = "bnot (authors' file = their 2-D BNOT spectrum in ν)"
+    return t
 
 
 def target(key: str, m: int, k: int) -> Target:
@@ -362,7 +368,10 @@ def card_nd(name: str, card: Card, model) -> list[str]:
     radial_plot(fig, curves, t, f"{name}: radial power spectrum (Monte Carlo, 128 frequencies per ring)")
     print("\n".join(rows))
     return ["", f"Target: {t.label}" + (f" (the authors' file for {t.n_points:,} points, compared in ν)"
-                                        if t.n_points != m else "") + ". Radial spectra by Monte Carlo over 128 integer frequencies per "
+                                        if t.n_points != m else "")
+            + ("; that file repeats their 2-D spectrum bit for bit "
+               "([high-dimensions.md](high-dimensions.md#the-authors-n-d-bnot-targets))" if "2-D" in t.label else "")
+            + ". Radial spectra by Monte Carlo over 128 integer frequencies per "
             "ring (`dpc.analysis.radial_spectrum_mc`); rel. L1 over 0.25 ≤ ν ≤ 3."
             + (f" —: no integer frequency lies below that ν at m = {m:,} in {n}-D (the lowest, "
                f"|q| = 1, is ν = {m ** (-1.0 / n):.2f})." if m ** (-1.0 / n) >= 0.5 else ""),

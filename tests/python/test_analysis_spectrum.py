@@ -159,6 +159,23 @@ def test_bnot_sets_match_the_bnot_radial_target():
     assert np.abs(w.mean - tgt.power[: w.mean.size]).mean() > 0.3
 
 
+def test_reference_copies_find_the_2d_spectrum_in_the_5d_and_10d_targets():
+    copies = {(c.copy, c.source): c for c in analysis.reference_spectrum_copies()}
+    five = copies[("bnot-powspec-radialmean-d5-n1024.txt", "bnot-powspec-radialmean-d2-n16_old.txt")]
+    ten = copies[("bnot-powspec-radialmean-d10-n1024.txt", "bnot-powspec-radialmean-d2-n16_old.txt")]
+    assert (five.stride, five.rings) == (1, 31) and (ten.stride, ten.rings) == (2, 15)
+    # The same numbers at the same nu: 5-D at 1,024 points and 2-D at 16 both have m^(1/n) = 4.
+    t5, t2 = reference_radial_spectrum("bnot", 1024, 5), reference_radial_spectrum("bnot", 256, 4)
+    np.testing.assert_array_equal(t5.power, t2.power)
+    np.testing.assert_array_equal(t5.nu, t2.nu)
+    # The 3-D and 4-D targets the cards use are not copies, and every copy goes to fewer dimensions.
+    used = {c.copy for c in copies.values()}
+    assert "bnot-powspec-radialmean-d3-n1024.txt" not in used
+    assert "bnot-powspec-radialmean-d4-n1024.txt" not in used
+    dims = lambda f: int(f.split("-d")[1].split("-")[0])  # noqa: E731
+    assert all(dims(c.source) < dims(c.copy) for c in copies.values())
+
+
 def test_bnot_256_low_frequency_energy_and_peak():
     # docs/architecture.md ("A quick study") measured these for the authors' 20 BNOT sets at m = 256.
     sets = np.concatenate([baselines.generate("ref-bnot", 256, dims=2, count=20)])

@@ -121,6 +121,9 @@ def test_targets_come_from_the_model_metadata():
     np.testing.assert_allclose(t.power, ref.power[: len(t.power)])
     np.testing.assert_allclose(t.nu, ref.nu[: len(t.nu)])
     assert model_target(dpc.load("bnot-3d")).dims == 3
+    # The authors' 5-D file is their 2-D spectrum (docs/analysis.md, "Reference targets"): the label says so.
+    assert "2-D spectrum" in model_target(dpc.load("bnot-5d")).label
+    assert "2-D spectrum" not in model_target(dpc.load("bnot-3d")).label
     assert model_target(dpc.load("font-2d")) is None  # Eq. 5 variance: no radial target
     assert model_target(dpc.load("repulsion-2d")) is None  # hand-made: no loss
 

@@ -3,6 +3,7 @@ dpc/data/deepsampling/README.md)."""
 
 from __future__ import annotations
 
+import functools
 import re
 from dataclasses import dataclass
 from importlib import resources
@@ -54,3 +55,49 @@ def reference_radial_spectrum(pattern: str, n_points: int, dims: int = 2) -> Ref
     return ReferenceRadial(
         pattern=pattern, n_points=m, dims=n, radius=data[:, 0], nu=data[:, 0] / m ** (1.0 / n), power=data[:, 1]
     )
+
+
+_ANY_RADIAL = re.compile(r"^([a-z]+)-powspec-radialmean-d(\d+)-n(\d+)(_old)?\.txt$")
+
+
+@dataclass(frozen=True)
+class ReferenceCopy:
+    """A radial target file for n dimensions whose values are a file's for fewer dimensions: the
+    power at radius b of ``copy`` equals the power at radius ``stride`` * b of ``source``, bit for
+    bit, for every one of the copy's ``rings`` nonzero radii (the DC rows differ: they hold m).
+    Both files then give the same power at the same nu when stride = (m_source^(1/n_source)) /
+    (m_copy^(1/n_copy)): the copy is the lower-dimensional spectrum re-indexed in nu."""
+
+    copy: str  # file names
+    source: str
+    stride: int
+    rings: int
+
+
+def reference_spectrum_copies(max_stride: int = 4, min_rings: int = 8) -> list[ReferenceCopy]:
+    """Every shipped radial target file (the ``_old`` variants included) that repeats, exactly, a
+    file of the same pattern for fewer dimensions (at radius b and stride * b, stride <=
+    ``max_stride``, over all its nonzero rings, which take at least ``min_rings`` distinct
+    values: a step or plateau would match by itself). Several of the
+    authors' n-D targets are such copies (docs/analysis.md, "Reference targets"), so a model's
+    distance to one of them measures how close it comes to a lower-dimensional spectrum."""
+    return list(_copies(int(max_stride), int(min_rings)))
+
+
+@functools.cache
+def _copies(max_stride: int, min_rings: int) -> tuple[ReferenceCopy, ...]:
+    rows = {}
+    for f in sorted(_spectra_dir().iterdir(), key=lambda f: f.name):
+        mt = _ANY_RADIAL.match(f.name)
+        if mt:
+            rows[f.name] = (mt[1], int(mt[2]), np.loadtxt(str(f), ndmin=2)[:, 1])
+    out = []
+    for copy, (pattern, dims, a) in rows.items():
+        for source, (pattern_s, dims_s, b) in rows.items():
+            if pattern_s != pattern or dims_s >= dims or len(np.unique(a[1:])) < min_rings:
+                continue
+            for s in range(1, max_stride + 1):
+                n = len(a) - 1
+                if s * n < len(b) and np.array_equal(a[1:], b[s : s * n + 1 : s]):
+                    out.append(ReferenceCopy(copy, source, s, n))
+    return tuple(out)
