@@ -108,9 +108,8 @@ def target_rows() -> list[str]:
         t = reference_radial_spectrum("bnot", 1024, n)
         name = f"bnot-powspec-radialmean-d{n}-n1024.txt"
         src = [c for c in copies if c.copy == name]
-        lowest = min((int(c.source.split("-d")[1].split("-")[0]) for c in src), default=0)
-        text = ", ".join(f"`{c.source}` ({c.stride})" for c in src
-                         if int(c.source.split("-d")[1].split("-")[0]) == lowest) or "none"
+        lowest = min((c.source_dims for c in src), default=0)
+        text = ", ".join(f"`{c.source}` ({c.stride})" for c in src if c.source_dims == lowest) or "none"
         sel = (t.nu <= 3.0) & (t.power >= 0.05)
         ref = np.interp(t.nu[sel], flat.nu, flat.power)
         i = int(np.argmax(t.power))

@@ -87,7 +87,7 @@ def bnot_target(m: int, k: int) -> "Target":
     in its label."""
     t = target("bnot", min(m, 1024), k)
     name = f"bnot-powspec-radialmean-d{k}-n{min(m, 1024)}.txt"
-    if any(c.copy == name and "-d2-" in c.source for c in analysis.reference_spectrum_copies()):
+    if any(c.copy == name and c.source_dims == 2 for c in analysis.reference_spectrum_copies()):
         t.label = "bnot (authors' file = their 2-D BNOT spectrum in ν)"
     return t
 

@@ -172,8 +172,8 @@ def test_reference_copies_find_the_2d_spectrum_in_the_5d_and_10d_targets():
     used = {c.copy for c in copies.values()}
     assert "bnot-powspec-radialmean-d3-n1024.txt" not in used
     assert "bnot-powspec-radialmean-d4-n1024.txt" not in used
-    dims = lambda f: int(f.split("-d")[1].split("-")[0])  # noqa: E731
-    assert all(dims(c.source) < dims(c.copy) for c in copies.values())
+    assert all(c.source_dims < c.copy_dims for c in copies.values())
+    assert all(f"-d{c.source_dims}-" in c.source and f"-d{c.copy_dims}-" in c.copy for c in copies.values())
 
 
 def test_bnot_256_low_frequency_energy_and_peak():

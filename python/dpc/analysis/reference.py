@@ -72,6 +72,8 @@ class ReferenceCopy:
     source: str
     stride: int
     rings: int
+    copy_dims: int
+    source_dims: int
 
 
 def reference_spectrum_copies(max_stride: int = 4, min_rings: int = 8) -> list[ReferenceCopy]:
@@ -99,5 +101,5 @@ def _copies(max_stride: int, min_rings: int) -> tuple[ReferenceCopy, ...]:
             for s in range(1, max_stride + 1):
                 n = len(a) - 1
                 if s * n < len(b) and np.array_equal(a[1:], b[s : s * n + 1 : s]):
-                    out.append(ReferenceCopy(copy, source, s, n))
+                    out.append(ReferenceCopy(copy, source, s, n, dims, dims_s))
     return tuple(out)

@@ -168,7 +168,7 @@ def _from_loss(loss: str, m: int) -> Target | None:
 def _copies_2d(pattern: str, k: int, m: int) -> bool:
     """Whether the authors' k-D radial file for m points repeats their 2-D one (docs/analysis.md)."""
     name = f"{pattern}-powspec-radialmean-d{k}-n{m}.txt"
-    return any(c.copy == name and "-d2-" in c.source for c in reference_spectrum_copies())
+    return any(c.copy == name and c.source_dims == 2 for c in reference_spectrum_copies())
 
 
 def model_target(model) -> Target | None:
