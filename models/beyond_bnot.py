@@ -64,18 +64,14 @@ def cascade_sampler(model):
 
 
 def stratify_axes(x: np.ndarray, q_max: int, steps: int = 3) -> np.ndarray:
-    """A set whose 1-D projections are balanced: the output balance's Newton steps (docs/model-format.md
-    §5.1) on the axis frequencies (q, 0) and (0, q), 0 < q <= q_max, of one set. Each axis is a 1-D
-    problem of its own (q . q' = 0 across the axes). The trade-off study of issue 14 item 1's
+    """A set whose 1-D projections are balanced: the output balance's Newton steps on the axis
+    frequencies (q, 0) and (0, q), 0 < q <= q_max (model_cards.cancel_coefficients; q . q' = 0 across
+    the axes, so each axis is a 1-D problem of its own). The trade-off study of issue 14 item 1's
     half-plane goal, not a feature of any model."""
-    x = x.copy()
     q = np.arange(1, q_max + 1)
-    for d in range(x.shape[1]):
-        for _ in range(steps):
-            e = np.exp(-2j * np.pi * np.outer(x[:, d], q))
-            c = e.sum(axis=0)
-            x[:, d] = (x[:, d] + ((c[None] * np.conj(e)).imag / (np.pi * q * len(x))).sum(axis=1)) % 1.0
-    return x
+    axes = np.zeros((2 * q_max, 2), dtype=np.int64)
+    axes[:q_max, 0], axes[q_max:, 1] = q, q
+    return MC.cancel_coefficients(x, axes, steps)
 
 
 def axis_tradeoff(sets: np.ndarray, q_maxes=(32, 64, 128)) -> list[tuple]:

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from dpc import analysis, baselines
-from dpc.analysis.reference import reference_radial_spectrum, reference_spectrum_copies
+from dpc.analysis.reference import reference_copied_from, reference_radial_spectrum
 from dpc.analysis.spectrum import low_frequency_energy
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -100,14 +100,13 @@ def iso_row(label: str, sets: np.ndarray, m: int, n: int, layers="—", sec=None
 def target_rows() -> list[str]:
     """The authors' n-D BNOT targets the cards use, against their 2-D spectrum at the same nu."""
     flat = reference_radial_spectrum("bnot", 1048576, 2)  # the finest 2-D file: 1,024 rings per unit of nu
-    copies = reference_spectrum_copies()
     rows = ["| target file | peak | exact copy of (every stride-th ring) | largest relative difference to the "
             "2-D 1,048,576-point spectrum at the same ν (ν ≤ 3, rings with power ≥ 0.05) |",
             "|---|---|---|---:|"]
     for n in (3, 4, 5, 10):
         t = reference_radial_spectrum("bnot", 1024, n)
         name = f"bnot-powspec-radialmean-d{n}-n1024.txt"
-        src = [c for c in copies if c.copy == name]
+        src = reference_copied_from("bnot", 1024, n)
         lowest = min((c.source_dims for c in src), default=0)
         text = ", ".join(f"`{c.source}` ({c.stride})" for c in src if c.source_dims == lowest) or "none"
         sel = (t.nu <= 3.0) & (t.power >= 0.05)
@@ -136,12 +135,13 @@ def projection_budget_rows(count: int) -> list[str]:
         return out.reshape(-1, n)
 
     q_low = frequencies(band, strict=True)
-    rows = [f"In each 2-D projection E_low ν<0.5 averages {len(q_low) // len(axes) * 2} frequencies (±q), "
-            f"{len(q_low) // len(axes) * 2} real constraints (the real and imaginary parts of one of each pair) "
+    per = len(q_low) // len(axes) * 2  # frequencies (+-q) of one projection = its real constraints
+    rows = [f"In each 2-D projection E_low ν<0.5 averages {per} frequencies (±q), "
+            f"{per} real constraints (the real and imaginary parts of one of each pair) "
             f"for a set with no power there; six projections make {len(q_low) * 2}, against the set's "
             f"{m * n - n} degrees of freedom (4 coordinates of 1,024 points, less a translation). "
             f"projective-3d's three projections and its 3-D ball below ν = 0.5 pose "
-            f"{3 * len(q_low) // len(axes) * 2 + _ball_count(3, 0.5 * m ** (1 / 3))} against {m * 3 - 3}. "
+            f"{3 * per + _ball_count(3, 0.5 * m ** (1 / 3))} against {m * 3 - 3}. "
             "Cancelling the lowest frequencies outright, by the output balance's Newton steps (docs/model-format.md "
             f"§5.1) applied to the six projections' coefficients ({count} sets, 3 steps):", "",
             "| frequencies cancelled | E_low ν<0.5, mean of the six projections (worst) | largest move (projection spacings) |",
@@ -158,13 +158,9 @@ def projection_budget_rows(count: int) -> list[str]:
     rows.append(f"| none (projective-4d) | {before[0]:.4f} ({before[1]:.4f}) | — |")
     for k in (4, 8, 12):
         q = frequencies(k, strict=False)
-        w = 1.0 / (np.pi * (q * q).sum(axis=1) * m)
         got, moves = [], []
         for x0 in sets:
-            x = x0.copy()
-            for _ in range(3):
-                e = np.exp(-2j * np.pi * (x @ q.T))
-                x = (x + (w * (e.sum(axis=0) * np.conj(e)).imag) @ q) % 1.0
+            x = MC.cancel_coefficients(x0, q)
             got.append(elow(x))
             moves.append(np.abs((x - x0 + 0.5) % 1.0 - 0.5).max() * math.sqrt(m))
         g = np.mean(got, axis=0)

@@ -58,6 +58,7 @@ class Target:
     power: np.ndarray
     n_points: int
     dims: int
+    note: str = ""  # appended to the card's "Target:" sentence (not to plot legends)
 
     @property
     def nu(self) -> np.ndarray:
@@ -86,9 +87,10 @@ def bnot_target(m: int, k: int) -> "Target":
     a lower-dimensional one (the 5-D and 10-D files: `dpc.analysis.reference_spectrum_copies`) says so
     in its label."""
     t = target("bnot", min(m, 1024), k)
-    name = f"bnot-powspec-radialmean-d{k}-n{min(m, 1024)}.txt"
-    if any(c.copy == name and c.source_dims == 2 for c in analysis.reference_spectrum_copies()):
+    if any(c.source_dims == 2 for c in analysis.reference_copied_from("bnot", min(m, 1024), k)):
         t.label = "bnot (authors' file = their 2-D BNOT spectrum in ν)"
+        t.note = ("; that file repeats their 2-D spectrum bit for bit "
+                  "([high-dimensions.md](high-dimensions.md#the-authors-n-d-bnot-targets))")
     return t
 
 
@@ -126,6 +128,17 @@ def elow_text(r, nu: float) -> str:
         return f"{r.low_frequency_energy(nu):.4f}"
     except dpc.InvalidArgumentError:
         return "—"
+
+
+def cancel_coefficients(x: np.ndarray, q: np.ndarray, steps: int = 3) -> np.ndarray:
+    """One set x (m, n) after the output balance's Newton steps (docs/model-format.md §5.1), in
+    float64, on any frequencies q (F, n; one of each +-q pair) instead of the full-space ball: the
+    reports' studies of cancelling a projection's or an axis's coefficients outright."""
+    w = 1.0 / (np.pi * (q * q).sum(axis=1) * len(x))
+    for _ in range(steps):
+        e = np.exp(-2j * np.pi * (x @ q.T))
+        x = (x + (w * (e.sum(axis=0) * np.conj(e)).imag) @ q) % 1.0
+    return x
 
 
 # ---- cards ----------------------------------------------------------------------------------
@@ -368,9 +381,7 @@ def card_nd(name: str, card: Card, model) -> list[str]:
     radial_plot(fig, curves, t, f"{name}: radial power spectrum (Monte Carlo, 128 frequencies per ring)")
     print("\n".join(rows))
     return ["", f"Target: {t.label}" + (f" (the authors' file for {t.n_points:,} points, compared in ν)"
-                                        if t.n_points != m else "")
-            + ("; that file repeats their 2-D spectrum bit for bit "
-               "([high-dimensions.md](high-dimensions.md#the-authors-n-d-bnot-targets))" if "2-D" in t.label else "")
+                                        if t.n_points != m else "") + t.note
             + ". Radial spectra by Monte Carlo over 128 integer frequencies per "
             "ring (`dpc.analysis.radial_spectrum_mc`); rel. L1 over 0.25 ≤ ν ≤ 3."
             + (f" —: no integer frequency lies below that ν at m = {m:,} in {n}-D (the lowest, "

@@ -23,7 +23,7 @@ from .integration import (
     relative_variance,
 )
 from .pcf import PCF, MinDistance, min_distance, min_distance_ratio, pair_statistics, pcf
-from .reference import ReferenceCopy, reference_radial_spectrum, reference_spectrum_copies
+from .reference import ReferenceCopy, reference_copied_from, reference_radial_spectrum, reference_spectrum_copies
 from .report import Analysis, analyze
 from .spectrum import (
     RadialSpectrum,
@@ -75,5 +75,6 @@ __all__ = [
     "Analysis",
     "reference_radial_spectrum",
     "reference_spectrum_copies",
+    "reference_copied_from",
     "ReferenceCopy",
 ]

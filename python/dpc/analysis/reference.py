@@ -42,9 +42,13 @@ def available_reference_spectra() -> list[tuple[str, int, int]]:
     return sorted(out)
 
 
+def _radial_name(pattern: str, n_points: int, dims: int) -> str:
+    return f"{pattern}-powspec-radialmean-d{int(dims)}-n{int(n_points)}.txt"
+
+
 def reference_radial_spectrum(pattern: str, n_points: int, dims: int = 2) -> ReferenceRadial:
     """Read ``{pattern}-powspec-radialmean-d{dims}-n{n_points}.txt``."""
-    name = f"{pattern}-powspec-radialmean-d{int(dims)}-n{int(n_points)}.txt"
+    name = _radial_name(pattern, n_points, dims)
     f = _spectra_dir() / name
     if not f.is_file():
         have = ", ".join(f"{p} d={d} m={m}" for p, d, m in available_reference_spectra())
@@ -57,6 +61,7 @@ def reference_radial_spectrum(pattern: str, n_points: int, dims: int = 2) -> Ref
     )
 
 
+_MAX_STRIDE, _MIN_RINGS = 4, 8  # reference_spectrum_copies' defaults
 _ANY_RADIAL = re.compile(r"^([a-z]+)-powspec-radialmean-d(\d+)-n(\d+)(_old)?\.txt$")
 
 
@@ -76,7 +81,7 @@ class ReferenceCopy:
     source_dims: int
 
 
-def reference_spectrum_copies(max_stride: int = 4, min_rings: int = 8) -> list[ReferenceCopy]:
+def reference_spectrum_copies(max_stride: int = _MAX_STRIDE, min_rings: int = _MIN_RINGS) -> list[ReferenceCopy]:
     """Every shipped radial target file (the ``_old`` variants included) that repeats, exactly, a
     file of the same pattern for fewer dimensions (at radius b and stride * b, stride <=
     ``max_stride``, over all its nonzero rings, which take at least ``min_rings`` distinct
@@ -84,6 +89,16 @@ def reference_spectrum_copies(max_stride: int = 4, min_rings: int = 8) -> list[R
     authors' n-D targets are such copies (docs/analysis.md, "Reference targets"), so a model's
     distance to one of them measures how close it comes to a lower-dimensional spectrum."""
     return list(_copies(int(max_stride), int(min_rings)))
+
+
+def reference_copied_from(pattern: str, n_points: int, dims: int) -> list[ReferenceCopy]:
+    """The files that the radial target of (pattern, n_points, dims) repeats
+    (:func:`reference_spectrum_copies` with default bounds); empty for 1-D and 2-D targets, which
+    have no lower-dimensional file to repeat, without reading the files."""
+    if int(dims) <= 2:
+        return []
+    name = _radial_name(pattern, n_points, dims)
+    return [c for c in _copies(_MAX_STRIDE, _MIN_RINGS) if c.copy == name]
 
 
 @functools.cache
@@ -95,11 +110,13 @@ def _copies(max_stride: int, min_rings: int) -> tuple[ReferenceCopy, ...]:
             rows[f.name] = (mt[1], int(mt[2]), np.loadtxt(str(f), ndmin=2)[:, 1])
     out = []
     for copy, (pattern, dims, a) in rows.items():
+        n = len(a) - 1
+        if len(np.unique(a[1:])) < min_rings:
+            continue
         for source, (pattern_s, dims_s, b) in rows.items():
-            if pattern_s != pattern or dims_s >= dims or len(np.unique(a[1:])) < min_rings:
+            if pattern_s != pattern or dims_s >= dims:
                 continue
             for s in range(1, max_stride + 1):
-                n = len(a) - 1
                 if s * n < len(b) and np.array_equal(a[1:], b[s : s * n + 1 : s]):
                     out.append(ReferenceCopy(copy, source, s, n, dims, dims_s))
     return tuple(out)

@@ -24,7 +24,7 @@ from importlib import resources
 
 import numpy as np
 
-from .reference import reference_spectrum_copies
+from .reference import reference_copied_from
 
 _ASSIGN = re.compile(r"^\s*(\w+)\s*=\s*(radial_target|spectrum2d_radial)\((.*)\)\s*$", re.MULTILINE)
 _USE = re.compile(r"radspec\(\s*(xy\(X\)|X)\s*,[^()]*\)\s*-\s*(\w+)")
@@ -150,7 +150,7 @@ def _from_loss(loss: str, m: int) -> Target | None:
                     and (pattern == "step" or round(math.sqrt(m)) ** 2 == m)
                     else "authors' radial mean"
                 )
-                if what != "analytic" and _copies_2d(pattern, k, m):
+                if what != "analytic" and any(c.source_dims == 2 for c in reference_copied_from(pattern, m, k)):
                     what += ", which is their 2-D spectrum in ν"
             else:
                 k = 2
@@ -163,12 +163,6 @@ def _from_loss(loss: str, m: int) -> Target | None:
         nu = np.arange(len(power)) / m ** (1.0 / k)
         return Target(label=f"target: {pattern} ({what}, {k}-D, m={m})", dims=k, nu=nu[1:], power=power[1:])
     return None
-
-
-def _copies_2d(pattern: str, k: int, m: int) -> bool:
-    """Whether the authors' k-D radial file for m points repeats their 2-D one (docs/analysis.md)."""
-    name = f"{pattern}-powspec-radialmean-d{k}-n{m}.txt"
-    return any(c.copy == name and c.source_dims == 2 for c in reference_spectrum_copies())
 
 
 def model_target(model) -> Target | None:
