@@ -10,7 +10,7 @@ Arrays follow scipy.stats.qmc: C-contiguous ``(m, n)`` points in [0, 1), batches
 
 from . import (
     masks,  # blue-noise threshold masks, docs/masks.md
-    stratify,  # (0,2)-stratification of progressive sequences, docs/progressive.md
+    stratify,  # progressive sequences: (0,2)-stratification, joint relaxation; docs/progressive.md
     training,  # the float64 layer ops (dpc_layer_forward / _backward)
 )
 from ._core import __version__  # version of the linked libdpc (dpc.h; = the distribution's version)

@@ -1,9 +1,11 @@
-"""(0,2)-stratification of a progressive point sequence (docs/progressive.md, "Stratified variant").
+"""Post-processes of a progressive point sequence (docs/progressive.md): its (0,2)-stratification
+("Stratified variant") and the joint relaxation of all its prefixes ("Jointly relaxed prefixes").
 
     >>> import dpc
     >>> x = dpc.load("progressive-2d").generate(seed=0, n_points=1024)
     >>> y = dpc.stratify.stratify_02(x)               # every power-of-two prefix a (0,2)-net
     >>> z = dpc.stratify.stratify_02(x, up_to=64)     # only the first 64: the trade-off between the two
+    >>> r = dpc.stratify.relax_prefixes(x)            # every point moves; every prefix 16 * 2^j stays blue
 
 A (0,2)-sequence in base 2 (every prefix of 2^k points has one point in each elementary interval
 of area 2^-k, of every shape 2^a x 2^(k-a)) is what scrambled Sobol' and PMJ02 give renderers;
@@ -16,6 +18,14 @@ opens (a minimum-cost matching of points to subquadrant centres, toroidal distan
 nearest to it. ``up_to`` stops the construction at a prefix: the points after it are left as
 they are, so the small prefixes are nets and the large ones keep the given sequence's blue
 noise; docs/progressive.md measures that trade-off.
+
+:func:`relax_prefixes` lets every point of a progressive sequence move at once, by gradient steps
+on the sum over its prefixes of a Gaussian pair energy at each prefix's own scale (the energy of
+Gaussian blue noise, Ahmed et al. 2022, once per prefix: the prefix's pairs feel it), plus a
+small term that cancels each prefix's lowest frequencies. A progressive model's levels hold the
+earlier points in place; relaxed jointly, the full set and every power-of-two prefix are each as
+blue as a set made for their size (the measurements in docs/progressive.md), and the first n
+points are no longer the model's set of n.
 """
 
 from __future__ import annotations
@@ -25,7 +35,15 @@ import numpy as np
 from .baselines import _free_strata, _mark, _pmj02_steps
 from .errors import InvalidArgumentError
 
-__all__ = ["stratify_02"]
+__all__ = ["relax_prefixes", "stratify_02"]
+
+# relax_prefixes' constants, chosen by the development sweeps recorded in docs/progressive.md:
+# Gaussian widths in units of n^-1/2 (the prefix's scale) for the proper prefixes and the whole
+# set, the step and its linear decay, the low-frequency term's weight and radius.
+RELAX_WIDTH, RELAX_WIDTH_FULL = 0.72, 0.60
+RELAX_STEP, RELAX_DECAY = 0.1, 0.2
+RELAX_BALANCE, RELAX_BALANCE_RADIUS = 0.05, 8
+RELAX_REFRESH = 10  # steps between neighbour searches (pairs within 3.9 widths)
 
 
 def _place(target: np.ndarray, square: np.ndarray, width: int, level: int, occ: list) -> np.ndarray:
@@ -69,3 +87,64 @@ def stratify_02(points, up_to: int | None = None) -> np.ndarray:
         for i in new.tolist():
             y[i] = _place(x[i], squares[square_of[i]], width, level, occ)
     return y
+
+
+def _low_frequencies(radius: float) -> np.ndarray:
+    """Integer frequencies of a half-plane with 0 < |q| <= radius."""
+    r = int(radius)
+    a, b = np.meshgrid(np.arange(-r, r + 1), np.arange(0, r + 1), indexing="ij")
+    q = np.stack([a.ravel(), b.ravel()], 1).astype(np.float64)
+    keep = ((q[:, 1] > 0) | (q[:, 0] > 0)) & ((q * q).sum(1) <= radius * radius)
+    return q[keep]
+
+
+def relax_prefixes(points, steps: int = 1600, base: int = 16) -> np.ndarray:
+    """Every point of the ordered set ``points`` (m, 2) in [0, 1), m >= ``base``, moved at once so
+    that each prefix of ``base`` * 2^j points and the whole set are blue noise; float64 (m, 2),
+    the same order. ``steps`` gradient steps on E = sum over those prefixes P of
+    sum_{i<j in P} exp(-|x_i - x_j|^2 / (2 s_P^2)), s_P = 0.72 / sqrt(|P|) (0.60 / sqrt(m) for
+    the whole set), toroidal distances, plus 0.05 * sum_q |sum_{i in P} exp(2 pi i q.x_i)|^2 /
+    (|q|^2 |P|) over 0 < |q| <= min(8, sqrt(|P|) / 4), which cancels the torus-scale imbalance that
+    smooth integrands see. Each step moves point i by 0.1 (falling linearly to 0.02) times minus
+    the gradient, the pair terms scaled by s_P^2. Deterministic: the same input gives the same
+    bits. The first n points of the result are not the relaxed set of n (it depends on m)."""
+    from scipy.spatial import cKDTree
+
+    x = np.asarray(points, dtype=np.float64)
+    if isinstance(base, bool) or not isinstance(base, int) or base < 2:
+        raise InvalidArgumentError(f"base must be an integer >= 2, got {base!r}")
+    if x.ndim != 2 or x.shape[1] != 2 or len(x) < base:
+        raise InvalidArgumentError(f"points must be (m, 2) with m >= base = {base}, got shape {x.shape}")
+    if not np.all((x >= 0) & (x < 1)):
+        raise InvalidArgumentError("points must lie in [0, 1)")
+    if isinstance(steps, bool) or not isinstance(steps, int) or steps < 0:
+        raise InvalidArgumentError(f"steps must be a non-negative integer, got {steps!r}")
+    m = len(x)
+    sizes = [base << j for j in range(m.bit_length()) if base << j < m] + [m]
+    widths = {n: (RELAX_WIDTH_FULL if n == m else RELAX_WIDTH) / np.sqrt(n) for n in sizes}
+    lows = {n: _low_frequencies(min(RELAX_BALANCE_RADIUS, np.sqrt(n) / 4)) for n in sizes}
+    newton = {n: q / (q * q).sum(1)[:, None] for n, q in lows.items()}  # q / |q|^2
+    x = x.copy()
+    pairs: dict[int, np.ndarray] = {}
+    for step in range(steps):
+        if step % RELAX_REFRESH == 0:  # points move little between searches: 3 widths * 1.3
+            for n in sizes:
+                r = min(0.4999, 3.9 * widths[n])
+                pairs[n] = cKDTree(x[:n], boxsize=1.0).query_pairs(r, output_type="ndarray")
+        force = np.zeros_like(x)
+        for n in sizes:
+            i, j = pairs[n][:, 0], pairs[n][:, 1]
+            d = x[i] - x[j]
+            d -= np.round(d)
+            t = d * np.exp(-(d * d).sum(1) / (2 * widths[n] ** 2))[:, None]
+            for k in range(2):  # -grad of the pair energy, times s_P^2: a push along d
+                force[:, k] += np.bincount(i, t[:, k], m) - np.bincount(j, t[:, k], m)
+            q = lows[n]
+            if len(q):  # -grad of the low-frequency term; exp(2 pi i q.x) from powers of exp(2 pi i x)
+                r = int(q[:, 1].max())
+                powers = np.exp(2j * np.pi * x[:n, :, None] * np.arange(-r, r + 1))
+                e = powers[:, 0, q[:, 0].astype(int) + r] * powers[:, 1, q[:, 1].astype(int) + r]
+                force[:n] += (RELAX_BALANCE * 4 * np.pi / n) * (np.imag(np.conj(e.sum(0)) * e) @ newton[n])
+        x = (x + RELAX_STEP * (1 - (1 - RELAX_DECAY) * step / steps) * force) % 1.0
+    x[x >= 1.0] = 0.0  # (x % 1.0) rounds a tiny negative x up to 1.0
+    return x

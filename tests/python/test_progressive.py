@@ -158,3 +158,37 @@ def test_stratify_02_makes_every_power_of_two_prefix_a_net():
     for bad in [dict(points=x[:, :1]), dict(points=x + 1.0), dict(points=x, up_to=0), dict(points=x, up_to=2.5)]:
         with pytest.raises(dpc.InvalidArgumentError):
             dpc.stratify.stratify_02(**bad)
+
+
+def test_relax_prefixes_lowers_every_prefix_and_the_full_set():
+    """A small case of bench/bench_progressive_relaxed.py: 8 sets of 256 points, relaxed
+    jointly, against the same sets as progressive-2d makes them and a dpc set of each size."""
+    sets = dpc.load("progressive-2d", backend="cpu").generate_batch(8, 0, 256).astype(np.float64)
+    relaxed = np.stack([dpc.stratify.relax_prefixes(x, steps=400) for x in sets])
+    assert relaxed.shape == sets.shape and relaxed.dtype == np.float64
+    assert np.all((relaxed >= 0) & (relaxed < 1))
+    plain = dpc.load("bnot-2d-stratified", backend="cpu")
+    for n in (32, 64, 128, 256):
+        e_relaxed = low_frequency_energy(relaxed[:, :n], 0.5)
+        e_plain = low_frequency_energy(plain.generate_batch(8, 0, n).astype(np.float64), 0.5)
+        assert e_relaxed < 3.0 * e_plain, n  # the issue's goal for every prefix
+        assert e_relaxed < low_frequency_energy(sets[:, :n], 0.5), n  # better than held levels
+        assert min_distance(relaxed[:, :n]).mean_ratio > 0.55, n
+
+
+def test_relax_prefixes_is_deterministic_and_checks_its_input():
+    x = dpc.load("progressive-2d").generate(5, 100).astype(np.float64)  # not a power of two: its own last prefix
+    y = dpc.stratify.relax_prefixes(x, steps=50)
+    assert np.array_equal(y, dpc.stratify.relax_prefixes(x, steps=50))
+    assert not np.array_equal(y, x) and np.array_equal(dpc.stratify.relax_prefixes(x, steps=0), x)
+    bad = [
+        dict(points=x[:, :1]),
+        dict(points=x[:10]),  # fewer than base = 16 points
+        dict(points=x + 1.0),
+        dict(points=x, steps=-1),
+        dict(points=x, steps=2.5),
+        dict(points=x, base=1),
+    ]
+    for kwargs in bad:
+        with pytest.raises(dpc.InvalidArgumentError):
+            dpc.stratify.relax_prefixes(**kwargs)

@@ -1,0 +1,129 @@
+"""Jointly relaxed progressive sets: every prefix against the issue's goals (docs/progressive.md).
+
+    python bench/bench_progressive_relaxed.py            # 64 sets, m = 1,024 and 4,096: writes docs/progressive.md
+    python bench/bench_progressive_relaxed.py --quick    # 8 sets, m = 1,024, prints only
+
+progressive-2d's sets, each passed through dpc.stratify.relax_prefixes (every point moves; the
+energy of every prefix 16 * 2^j at once), measured prefix by prefix as bench_progressive.py
+measures the progressive samplers (its measures and integrands, set i from seed i), beside the
+sets as the model makes them, a dpc set made for each prefix size (bnot-2d-stratified) and PMJ02BN.
+Relaxation runs on two worker processes; its seconds per set are the median over the sets.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from multiprocessing import Pool
+
+import numpy as np
+from bench_generate import cpu_name
+from bench_progressive import DOC, PROGRESSIVE, SET_MODEL, measure, prefixes, tree
+from doc_sections import replace_section
+
+import dpc
+from dpc import baselines
+
+RELAXED = "progressive dpc, relaxed"
+SAMPLERS = [RELAXED, "progressive dpc", "dpc set", "pmj02bn"]
+METRICS = [
+    ("elow50", "E_low ν<0.5"),
+    ("elow75", "E_low ν<0.75"),
+    ("dmin", "δ_min"),
+    ("gauss", "Gaussian rel. variance"),
+    ("half", "half-plane rel. variance"),
+]
+
+
+def _relax(x: np.ndarray) -> tuple[np.ndarray, float]:
+    t = time.perf_counter()
+    y = dpc.stratify.relax_prefixes(x)
+    return y, time.perf_counter() - t
+
+
+def run(m: int, count: int, seed: int) -> tuple[dict, float]:
+    prog = dpc.load(PROGRESSIVE, backend="cpu").generate_batch(count, seed, m).astype(np.float64)
+    with Pool(2) as pool:
+        out = pool.map(_relax, list(prog))
+    relaxed = np.stack([y for y, _ in out])
+    seconds = float(np.median([t for _, t in out]))
+    print(f"m = {m}: {count} sets relaxed, median {seconds:.1f} s per set")
+    full = {RELAXED: relaxed, "progressive dpc": prog, "pmj02bn": baselines.generate("pmj02bn", m, 2, count, seed)}
+    plain = dpc.load(SET_MODEL, backend="cpu")
+    res: dict = {}
+    for n in prefixes(m):
+        row = {name: measure(sets[:, :n]) for name, sets in full.items()}
+        row["dpc set"] = measure(plain.generate_batch(count, seed, n).astype(np.float64))
+        res[n] = row
+        print(f"  n = {n:5d}: E_low<0.5 " + "  ".join(f"{s} {row[s]['elow50']:.5f}" for s in SAMPLERS))
+    return res, seconds
+
+
+def goals(results: dict[int, dict]) -> list[tuple[str, bool, str]]:
+    out = []
+    for m, res in results.items():
+        ns = sorted(res)
+        r_dpc = [res[n][RELAXED]["elow50"] / res[n]["dpc set"]["elow50"] for n in ns]
+        r_pmj = [res[n][RELAXED]["elow50"] / res[n]["pmj02bn"]["elow50"] for n in ns]
+        r_var = [res[n][RELAXED]["gauss"] / res[n]["pmj02bn"]["gauss"] for n in ns]
+        r_full = {k: res[m][RELAXED][k] / res[m]["dpc set"][k] for k in ("elow50", "elow75")}
+
+        def worst(r: list[float], ns: list[int] = ns) -> str:
+            return f"worst x{max(r):.2f} at n = {ns[int(np.argmax(r))]}"
+
+        full = f"x{r_full['elow50']:.2f} below nu = 0.5, x{r_full['elow75']:.2f} below 0.75"
+        out += [
+            (f"m = {m}: every prefix's E_low nu<0.5 <= 3 x a dpc set's", max(r_dpc) <= 3.0, worst(r_dpc)),
+            (f"m = {m}: every prefix's E_low nu<0.5 <= 0.1 x PMJ02BN's", max(r_pmj) <= 0.1, worst(r_pmj)),
+            (f"m = {m}: the full set within 1.2 x {SET_MODEL}'s E_low (both bands)", max(r_full.values()) <= 1.2, full),
+            (f"m = {m}: every prefix's Gaussian variance <= PMJ02BN's", max(r_var) <= 1.0, worst(r_var)),
+        ]
+    return out
+
+
+def section(results: dict[int, dict], checks, count: int, seconds: dict[int, float]) -> str:
+    lines = [
+        f"Measured by `python bench/bench_progressive_relaxed.py` (tree {tree()}) on {cpu_name()}: {count} sets "
+        f"of each sampler and size, set i from seed i; `{PROGRESSIVE}`'s sets relaxed by "
+        "`dpc.stratify.relax_prefixes`, median seconds per set: "
+        + ", ".join(f"{s:.1f} s at m = {m:,}" for m, s in seconds.items())
+        + " (numpy, one process per set, two at once on the shared machine).",
+        "",
+        "Goals (for the relaxed sets):",
+        "",
+    ]
+    lines += [f"- **{'met' if ok else 'missed'}**: {g} ({msg})" for g, ok, msg in checks]
+    for m, res in results.items():
+        for key, title in METRICS:
+            lines += ["", f"#### m = {m:,}: {title}", ""]
+            lines += ["| prefix n | " + " | ".join(SAMPLERS) + " |", "|---:|" + "---:|" * len(SAMPLERS)]
+            fmt = "{:.3f}" if key == "dmin" else "{:.3g}"
+            for n in sorted(res):
+                lines.append(f"| {n:,} | " + " | ".join(fmt.format(res[n][s][key]) for s in SAMPLERS) + " |")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--sets", type=int, default=64)
+    ap.add_argument("--sizes", type=int, nargs="+", default=[1024, 4096])
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--quick", action="store_true", help="8 sets at m = 1,024; prints, does not write docs/")
+    args = ap.parse_args()
+    if args.quick:
+        args.sets, args.sizes = 8, [1024]
+    results, seconds = {}, {}
+    for m in args.sizes:
+        results[m], seconds[m] = run(m, args.sets, args.seed)
+    checks = goals(results)
+    print("\nGoals (relaxed sets):")
+    for g, ok, msg in checks:
+        print(f"  [{'met' if ok else 'MISSED'}] {g}: {msg}")
+    if args.quick:
+        return
+    replace_section(DOC, "bench_progressive_relaxed", section(results, checks, args.sets, seconds))
+    print(f"wrote {DOC}")
+
+
+if __name__ == "__main__":
+    main()
