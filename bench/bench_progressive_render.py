@@ -9,10 +9,13 @@ with: the dpc plugin on progressive-2d (progressive tables: a pixel's first n sa
 the table's prefix) and on progressive-2d-balanced (the same, each level balanced: dpc.balance),
 the dpc plugin on bnot-2d-stratified (a set made for each count), Mitsuba's
 ldsampler and independent, and PMJ02BN. Mitsuba has no PMJ sampler, so the bench brings its
-own (`Pmj02bnSampler`, a Python mitsuba.Sampler): pixel p's dimension pair d reads sequence
+own (`PoolSampler`, a Python mitsuba.Sampler): pixel p's dimension pair d reads sequence
 h(p, d) mod 32 of a pool of 32 PMJ02BN sequences (dpc.baselines, Christensen et al. 2018) at
 the sample index, Cranley-Patterson-rotated by a second hash of (p, d); 1-D values are the x
-coordinates. Being Python, it is the slow one; its error does not depend on that.
+coordinates. Being Python, it is the slow one; its error does not depend on that. The same
+sampler on a pool of 32 relaxed progressive-2d sets (dpc.stratify.relax_prefixes, which libdpc
+does not run, so the dpc plugin cannot serve them) is the row "dpc progressive, relaxed"; "dpc progressive, pool" is that sampler on progressive-2d's
+sets as the model makes them, so the two rows show what the relaxation does in one sampler.
 Image MSE against bench_rendering.py's reference (ldsampler at 8,192 spp, two halves of other seeds),
 mean over seeds; a figure of MSE against spp goes to docs/figures/progressive/.
 """
@@ -34,7 +37,16 @@ from doc_sections import replace_section  # noqa: E402
 DOC = ROOT / "docs" / "progressive.md"
 FIG = ROOT / "docs" / "figures" / "progressive" / "render-mse.png"
 SCENE = "soft-shadow"
-SAMPLERS = ["dpc progressive", "dpc progressive balanced", "dpc set", "pmj02bn", "ldsampler", "independent"]
+SAMPLERS = [
+    "dpc progressive",
+    "dpc progressive balanced",
+    "dpc progressive, relaxed",
+    "dpc progressive, pool",
+    "dpc set",
+    "pmj02bn",
+    "ldsampler",
+    "independent",
+]
 POOL = 32
 M64 = (1 << 64) - 1
 
@@ -46,12 +58,23 @@ def mix64(z: int) -> int:
     return z ^ (z >> 31)
 
 
-def pmj02bn_sampler_class(mi, max_spp: int):
+def pool_points(kind: str, max_spp: int) -> np.ndarray:
+    """The pool of POOL sequences of max_spp points a pool sampler reads: PMJ02BN, or
+    progressive-2d's sets (seeds 0 .. POOL-1) as made or relaxed jointly (dpc.stratify.relax_prefixes)."""
+    import dpc
     from dpc import baselines
 
-    pool = baselines.generate("pmj02bn", max_spp, 2, POOL, seed=0).astype(np.float32).tolist()
+    if kind == "pmj02bn":
+        return baselines.generate("pmj02bn", max_spp, 2, POOL, seed=0)
+    sets = dpc.load("progressive-2d", backend="cpu").generate_batch(POOL, 0, max_spp).astype(np.float64)
+    return sets if kind == "progressive" else np.stack([dpc.stratify.relax_prefixes(x) for x in sets])
 
-    class Pmj02bnSampler(mi.Sampler):
+
+def pool_sampler_class(mi, pool_array: np.ndarray):
+    pool = pool_array.astype(np.float32).tolist()
+    max_spp = pool_array.shape[1]
+
+    class PoolSampler(mi.Sampler):
         def __init__(self, props):
             mi.Sampler.__init__(self, props)
             self.base = mix64(props.get("seed", 0) + 0x5EED)
@@ -81,7 +104,7 @@ def pmj02bn_sampler_class(mi, max_spp: int):
             return mi.Point2f(*self._point())
 
         def clone(self):
-            s = Pmj02bnSampler(mi.Properties())
+            s = PoolSampler(mi.Properties())
             s.base = self.base
             s.set_sample_count(self.sample_count())
             return s
@@ -90,9 +113,9 @@ def pmj02bn_sampler_class(mi, max_spp: int):
             return self.clone()
 
         def to_string(self):
-            return "Pmj02bnSampler"
+            return "PoolSampler"
 
-    return Pmj02bnSampler
+    return PoolSampler
 
 
 def render(mi, sampler: str, spp: int, seed: int, width: int) -> np.ndarray:
@@ -102,6 +125,8 @@ def render(mi, sampler: str, spp: int, seed: int, width: int) -> np.ndarray:
         "dpc progressive balanced": ("dpc", {"model": "progressive-2d-balanced"}),
         "dpc set": ("dpc", {"model": "bnot-2d-stratified"}),
         "pmj02bn": ("pmj02bn_bench", {}),
+        "dpc progressive, relaxed": ("relaxed_bench", {}),
+        "dpc progressive, pool": ("progressive_bench", {}),
     }.get(sampler, (sampler, {}))
     d["sensor"]["sampler"] = {"type": kind, "sample_count": spp, "seed": seed, **extra}
     sc = mi.load_dict(d)
@@ -116,8 +141,10 @@ def run(width: int, seeds: int, max_spp: int) -> dict:
     mi.set_variant("scalar_rgb")
     import dpc.mitsuba  # noqa: F401  (registers the dpc plugin)
 
-    cls = pmj02bn_sampler_class(mi, max_spp)
-    mi.register_sampler("pmj02bn_bench", lambda props: cls(props))
+    pools = (("pmj02bn_bench", "pmj02bn"), ("relaxed_bench", "relaxed"), ("progressive_bench", "progressive"))
+    for name, kind in pools:
+        cls = pool_sampler_class(mi, pool_points(kind, max_spp))
+        mi.register_sampler(name, lambda props, cls=cls: cls(props))
     ref, ref_mse = BR.reference(mi, SCENE, width)
     counts = [1 << k for k in range(max_spp.bit_length()) if 1 << k <= max_spp]
     mse: dict[str, list[float]] = {}
@@ -174,6 +201,18 @@ def section(res: dict) -> str:
         "MSE of progressive dpc over PMJ02BN's: " + ", ".join(f"{n}: x{r:.2f}" for n, r in zip(counts, ratio)) + ".",
         "Over the best of the others at that count (ldsampler renders only 4, 16 and 64): "
         + ", ".join(f"{n}: x{res['mse']['dpc progressive'][i] / best[n]:.2f}" for i, n in enumerate(counts))
+        + ".",
+        "MSE of the relaxed progressive sets over PMJ02BN's (the same pool sampler): "
+        + ", ".join(
+            f"{n}: x{res['mse']['dpc progressive, relaxed'][i] / res['mse']['pmj02bn'][i]:.2f}"
+            for i, n in enumerate(counts)
+        )
+        + ".",
+        "MSE of the relaxed sets over the same sets unrelaxed (the same pool sampler): "
+        + ", ".join(
+            f"{n}: x{res['mse']['dpc progressive, relaxed'][i] / res['mse']['dpc progressive, pool'][i]:.2f}"
+            for i, n in enumerate(counts)
+        )
         + ".",
         "MSE of the balanced levels over progressive dpc's: "
         + ", ".join(f"{n}: x{r:.2f}" for n, r in zip(counts, bal))
