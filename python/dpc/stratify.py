@@ -106,8 +106,8 @@ def relax_prefixes(points, steps: int = 1600, base: int = 16) -> np.ndarray:
     the whole set), toroidal distances, plus 0.05 * sum_q |sum_{i in P} exp(2 pi i q.x_i)|^2 /
     (|q|^2 |P|) over 0 < |q| <= min(8, sqrt(|P|) / 4), which cancels the torus-scale imbalance that
     smooth integrands see. Each step moves point i by 0.1 (falling linearly to 0.02) times minus
-    the gradient, the pair terms scaled by s_P^2. Deterministic: the same input gives the same
-    bits. The first n points of the result are not the relaxed set of n (it depends on m)."""
+    the gradient, the pair terms scaled by s_P^2. Deterministic: on one machine the same input
+    gives the same bits. The first n points of the result are not the relaxed set of n (it depends on m)."""
     from scipy.spatial import cKDTree
 
     x = np.asarray(points, dtype=np.float64)
@@ -146,5 +146,5 @@ def relax_prefixes(points, steps: int = 1600, base: int = 16) -> np.ndarray:
                 e = powers[:, 0, q[:, 0].astype(int) + r] * powers[:, 1, q[:, 1].astype(int) + r]
                 force[:n] += (RELAX_BALANCE * 4 * np.pi / n) * (np.imag(np.conj(e.sum(0)) * e) @ newton[n])
         x = (x + RELAX_STEP * (1 - (1 - RELAX_DECAY) * step / steps) * force) % 1.0
-    x[x >= 1.0] = 0.0  # (x % 1.0) rounds a tiny negative x up to 1.0
+        x[x >= 1.0] = 0.0  # (x % 1.0) rounds a tiny negative x up to 1.0, outside cKDTree's box
     return x
