@@ -227,14 +227,21 @@ def section(
     lines += [
         f"| {t:g} | {r['elow']:.2f} | {r['net']:.3f} | {r['dmin']:.3f} | {r['gauss']:.2f} |" for t, r in curve.items()
     ]
+    lines += prefix_tables(results, SAMPLERS, METRICS, "###")
+    return "\n".join(lines)
+
+
+def prefix_tables(results: dict[int, dict], samplers: list[str], metrics, heading: str) -> list[str]:
+    """One markdown table per m and metric: a row per prefix n, a column per sampler."""
+    lines = []
     for m, res in results.items():
-        for key, title in METRICS:
-            lines += ["", f"### m = {m:,}: {title}", ""]
-            lines += ["| prefix n | " + " | ".join(SAMPLERS) + " |", "|---:|" + "---:|" * len(SAMPLERS)]
+        for key, title in metrics:
+            lines += ["", f"{heading} m = {m:,}: {title}", ""]
+            lines += ["| prefix n | " + " | ".join(samplers) + " |", "|---:|" + "---:|" * len(samplers)]
             fmt = "{:.3f}" if key == "dmin" else "{:.3g}"
             for n in sorted(res):
-                lines.append(f"| {n:,} | " + " | ".join(fmt.format(res[n][s][key]) for s in SAMPLERS) + " |")
-    return "\n".join(lines)
+                lines.append(f"| {n:,} | " + " | ".join(fmt.format(res[n][s][key]) for s in samplers) + " |")
+    return lines
 
 
 def main() -> None:

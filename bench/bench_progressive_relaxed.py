@@ -18,7 +18,7 @@ from multiprocessing import Pool
 
 import numpy as np
 from bench_generate import cpu_name
-from bench_progressive import DOC, PROGRESSIVE, SET_MODEL, measure, prefixes, tree
+from bench_progressive import DOC, PROGRESSIVE, SET_MODEL, measure, prefix_tables, prefixes, tree
 from doc_sections import replace_section
 
 import dpc
@@ -93,13 +93,7 @@ def section(results: dict[int, dict], checks, count: int, seconds: dict[int, flo
         "",
     ]
     lines += [f"- **{'met' if ok else 'missed'}**: {g} ({msg})" for g, ok, msg in checks]
-    for m, res in results.items():
-        for key, title in METRICS:
-            lines += ["", f"#### m = {m:,}: {title}", ""]
-            lines += ["| prefix n | " + " | ".join(SAMPLERS) + " |", "|---:|" + "---:|" * len(SAMPLERS)]
-            fmt = "{:.3f}" if key == "dmin" else "{:.3g}"
-            for n in sorted(res):
-                lines.append(f"| {n:,} | " + " | ".join(fmt.format(res[n][s][key]) for s in SAMPLERS) + " |")
+    lines += prefix_tables(results, SAMPLERS, METRICS, "####")
     return "\n".join(lines)
 
 

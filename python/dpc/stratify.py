@@ -122,8 +122,17 @@ def relax_prefixes(points, steps: int = 1600, base: int = 16) -> np.ndarray:
     m = len(x)
     sizes = [base << j for j in range(m.bit_length()) if base << j < m] + [m]
     widths = {n: (RELAX_WIDTH_FULL if n == m else RELAX_WIDTH) / np.sqrt(n) for n in sizes}
-    lows = {n: _low_frequencies(min(RELAX_BALANCE_RADIUS, np.sqrt(n) / 4)) for n in sizes}
-    newton = {n: q / (q * q).sum(1)[:, None] for n, q in lows.items()}  # q / |q|^2
+    lows = {}  # per prefix with a low band: its radius r, q's indices into the powers -r..r, q / |q|^2
+    for n in sizes:
+        q = _low_frequencies(min(RELAX_BALANCE_RADIUS, np.sqrt(n) / 4))
+        if len(q):
+            r = int(q[:, 1].max())
+            lows[n] = (
+                np.arange(-r, r + 1),
+                q[:, 0].astype(int) + r,
+                q[:, 1].astype(int) + r,
+                q / (q * q).sum(1)[:, None],
+            )
     x = x.copy()
     pairs: dict[int, np.ndarray] = {}
     for step in range(steps):
@@ -139,12 +148,11 @@ def relax_prefixes(points, steps: int = 1600, base: int = 16) -> np.ndarray:
             t = d * np.exp(-(d * d).sum(1) / (2 * widths[n] ** 2))[:, None]
             for k in range(2):  # -grad of the pair energy, times s_P^2: a push along d
                 force[:, k] += np.bincount(i, t[:, k], m) - np.bincount(j, t[:, k], m)
-            q = lows[n]
-            if len(q):  # -grad of the low-frequency term; exp(2 pi i q.x) from powers of exp(2 pi i x)
-                r = int(q[:, 1].max())
-                powers = np.exp(2j * np.pi * x[:n, :, None] * np.arange(-r, r + 1))
-                e = powers[:, 0, q[:, 0].astype(int) + r] * powers[:, 1, q[:, 1].astype(int) + r]
-                force[:n] += (RELAX_BALANCE * 4 * np.pi / n) * (np.imag(np.conj(e.sum(0)) * e) @ newton[n])
+            if n in lows:  # -grad of the low-frequency term; exp(2 pi i q.x) from powers of exp(2 pi i x)
+                exponents, ia, ib, newton = lows[n]
+                powers = np.exp(2j * np.pi * x[:n, :, None] * exponents)
+                e = powers[:, 0, ia] * powers[:, 1, ib]
+                force[:n] += (RELAX_BALANCE * 4 * np.pi / n) * (np.imag(np.conj(e.sum(0)) * e) @ newton)
         x = (x + RELAX_STEP * (1 - (1 - RELAX_DECAY) * step / steps) * force) % 1.0
         x[x >= 1.0] = 0.0  # (x % 1.0) rounds a tiny negative x up to 1.0, outside cKDTree's box
     return x
