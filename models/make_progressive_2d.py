@@ -21,8 +21,15 @@ band (docs/progressive.md, "Balanced levels"). Radius 8 is the smallest that kee
 Gaussian variance below PMJ02BN's up to 4,096 points in a development sweep on the first,
 fixed-sigma cascade (radius 4 missed at 4,096; 16 and 32 cost more low-band energy).
 
+progressive-2d-relaxed is the same cascade followed by the prefix relaxation (dpc.relax = 1600,
+docs/model-format.md §6.1): after the levels every point moves at once, 1,600 gradient steps on
+the sum over the prefixes of a Gaussian pair energy at each prefix's scale plus a low-frequency
+term, so that every prefix and the whole set are as blue as a set made for their size. The first
+n points are then no longer the set of n (docs/progressive.md, "Jointly relaxed prefixes").
+
     python models/make_progressive_2d.py            # writes models/progressive-2d.onnx
     python models/make_progressive_2d.py --balance 8 -o models/progressive-2d-balanced.onnx
+    python models/make_progressive_2d.py --relax 1600 -o models/progressive-2d-relaxed.onnx
 """
 
 import argparse
@@ -61,19 +68,33 @@ def schedule_layers(
 
 
 def progressive_spec(
-    amplitude=AMPLITUDE, first=SIGMA_FIRST, last=SIGMA_LAST, layers=LAYERS, name="progressive-2d", balance=0
+    amplitude=AMPLITUDE,
+    first=SIGMA_FIRST,
+    last=SIGMA_LAST,
+    layers=LAYERS,
+    name="progressive-2d",
+    balance=0,
+    relax=0,
 ) -> ModelSpec:
     meta = {**PROGRESSIVE, "dpc.source": "models/make_progressive_2d.py", "dpc.trained": "no"}
     if balance:
         meta.update({"dpc.balance": str(balance), "dpc.source": f"models/make_progressive_2d.py --balance {balance}"})
+    if relax:
+        meta.update({"dpc.relax": str(relax), "dpc.source": f"models/make_progressive_2d.py --relax {relax}"})
     return ModelSpec(
         dims=2,
         n_points=M,
         layers=schedule_layers(amplitude, first, last, RHO_PER_SIGMA, layers),
         name=name,
         description=(
-            "Progressive 2-D blue noise: the first 16 * 2^j points of a set are the set of that size, "
-            f"each blue noise. {layers} layers of a Gaussian repulsion kernel (A = {amplitude}, sigma from "
+            (
+                "Progressive 2-D blue noise, every prefix of 16 * 2^j points and the whole set relaxed jointly "
+                "after the levels (the first n points are not the set of n). "
+                if relax
+                else "Progressive 2-D blue noise: the first 16 * 2^j points of a set are the set of that size, "
+                "each blue noise. "
+            )
+            + f"{layers} layers of a Gaussian repulsion kernel (A = {amplitude}, sigma from "
             f"{first} to {last} mean spacings, rho = {RHO_PER_SIGMA} sigma) run level by level, the earlier "
             "points held in place. "
             + (
@@ -81,6 +102,7 @@ def progressive_spec(
                 if balance
                 else ""
             )
+            + (f"Then {relax} steps of the prefix relaxation (dpc.relax, format §6.1). " if relax else "")
             + "Not trained."
         ),
         metadata=meta,
@@ -91,8 +113,11 @@ if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("-o", "--output", default=None, help="default: models/progressive-2d[-balanced].onnx")
     ap.add_argument("--balance", type=int, default=0, help="output balance radius (dpc.balance; 0: none)")
+    ap.add_argument("--relax", type=int, default=0, help="prefix relaxation steps (dpc.relax; 0: none)")
     args = ap.parse_args()
-    name = "progressive-2d-balanced" if args.balance else "progressive-2d"
+    if args.balance and args.relax:
+        ap.error("--balance and --relax exclude each other (the relaxation has its own low-frequency term)")
+    name = "progressive-2d-balanced" if args.balance else "progressive-2d-relaxed" if args.relax else "progressive-2d"
     args.output = args.output or str(HERE / f"{name}.onnx")
-    write_model(progressive_spec(name=name, balance=args.balance), args.output)
+    write_model(progressive_spec(name=name, balance=args.balance, relax=args.relax), args.output)
     print(f"wrote {args.output} ({Path(args.output).stat().st_size} bytes)")

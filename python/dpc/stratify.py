@@ -33,17 +33,12 @@ from __future__ import annotations
 import numpy as np
 
 from .baselines import _free_strata, _mark, _pmj02_steps
+from . import _core
 from .errors import InvalidArgumentError
 
 __all__ = ["relax_prefixes", "stratify_02"]
 
-# relax_prefixes' constants, chosen by the development sweeps recorded in docs/progressive.md:
-# Gaussian widths in units of n^-1/2 (the prefix's scale) for the proper prefixes and the whole
-# set, the step and its linear decay, the low-frequency term's weight and radius.
-RELAX_WIDTH, RELAX_WIDTH_FULL = 0.72, 0.60
-RELAX_STEP, RELAX_DECAY = 0.1, 0.2
-RELAX_BALANCE, RELAX_BALANCE_RADIUS = 0.05, 8
-RELAX_REFRESH = 10  # steps between neighbour searches (pairs within 3.9 widths)
+RELAX_MAX_STEPS = 100_000  # libdpc's bound (DPC_RELAX_MAX_STEPS)
 
 
 def _place(target: np.ndarray, square: np.ndarray, width: int, level: int, occ: list) -> np.ndarray:
@@ -89,70 +84,26 @@ def stratify_02(points, up_to: int | None = None) -> np.ndarray:
     return y
 
 
-def _low_frequencies(radius: float) -> np.ndarray:
-    """Integer frequencies of a half-plane with 0 < |q| <= radius."""
-    r = int(radius)
-    a, b = np.meshgrid(np.arange(-r, r + 1), np.arange(0, r + 1), indexing="ij")
-    q = np.stack([a.ravel(), b.ravel()], 1).astype(np.float64)
-    keep = ((q[:, 1] > 0) | (q[:, 0] > 0)) & ((q * q).sum(1) <= radius * radius)
-    return q[keep]
-
-
 def relax_prefixes(points, steps: int = 1600, base: int = 16) -> np.ndarray:
     """Every point of the ordered set ``points`` (m, 2) in [0, 1), m >= ``base``, moved at once so
-    that each prefix of ``base`` * 2^j points and the whole set are blue noise; float64 (m, 2),
-    the same order. ``steps`` gradient steps on E = sum over those prefixes P of
-    sum_{i<j in P} exp(-|x_i - x_j|^2 / (2 s_P^2)), s_P = 0.72 / sqrt(|P|) (0.60 / sqrt(m) for
-    the whole set), toroidal distances, plus 0.05 * sum_q |sum_{i in P} exp(2 pi i q.x_i)|^2 /
-    (|q|^2 |P|) over 0 < |q| <= min(8, sqrt(|P|) / 4), which cancels the torus-scale imbalance that
-    smooth integrands see. Each step moves point i by 0.1 (falling linearly to 0.02) times minus
-    the gradient, the pair terms scaled by s_P^2. Deterministic: on one machine the same input
-    gives the same bits. The first n points of the result are not the relaxed set of n (it depends on m)."""
-    from scipy.spatial import cKDTree
-
-    x = np.asarray(points, dtype=np.float64)
+    that each prefix of ``base`` * 2^j points and the whole set are blue noise; (m, 2) float32,
+    the same order. libdpc's ``dpc_relax_prefixes`` (docs/model-format.md §6.1): ``steps``
+    gradient steps on E = sum over those prefixes P of sum_{i<j in P} exp(-|x_i - x_j|^2 /
+    (2 s_P^2)), s_P = 0.72 / sqrt(|P|) (0.60 / sqrt(m) for the whole set), toroidal distances,
+    plus 0.05 * sum_q |sum_{i in P} exp(2 pi i q.x_i)|^2 / (|q|^2 |P|) over 0 < |q| <=
+    min(8, sqrt(|P|) / 4), which cancels the torus-scale imbalance that smooth integrands see.
+    Each step moves point i by 0.1 (falling linearly to 0.02) times minus the gradient, the pair
+    terms scaled by s_P^2. What the generator of a model with metadata ``dpc.relax`` (e.g.
+    progressive-2d-relaxed) does after its levels, bit for bit; the same bits on every machine.
+    The first n points of the result are not the relaxed set of n (it depends on m)."""
+    x = np.asarray(points)
     if isinstance(base, bool) or not isinstance(base, int) or base < 2:
         raise InvalidArgumentError(f"base must be an integer >= 2, got {base!r}")
     if x.ndim != 2 or x.shape[1] != 2 or len(x) < base:
         raise InvalidArgumentError(f"points must be (m, 2) with m >= base = {base}, got shape {x.shape}")
-    if not np.all((x >= 0) & (x < 1)):
-        raise InvalidArgumentError("points must lie in [0, 1)")
-    if isinstance(steps, bool) or not isinstance(steps, int) or steps < 0:
-        raise InvalidArgumentError(f"steps must be a non-negative integer, got {steps!r}")
-    m = len(x)
-    sizes = [base << j for j in range(m.bit_length()) if base << j < m] + [m]
-    widths = {n: (RELAX_WIDTH_FULL if n == m else RELAX_WIDTH) / np.sqrt(n) for n in sizes}
-    lows = {}  # per prefix with a low band: its radius r, q's indices into the powers -r..r, q / |q|^2
-    for n in sizes:
-        q = _low_frequencies(min(RELAX_BALANCE_RADIUS, np.sqrt(n) / 4))
-        if len(q):
-            r = int(q[:, 1].max())
-            lows[n] = (
-                np.arange(-r, r + 1),
-                q[:, 0].astype(int) + r,
-                q[:, 1].astype(int) + r,
-                q / (q * q).sum(1)[:, None],
-            )
-    x = x.copy()
-    pairs: dict[int, np.ndarray] = {}
-    for step in range(steps):
-        if step % RELAX_REFRESH == 0:  # points move little between searches: 3 widths * 1.3
-            for n in sizes:
-                r = min(0.4999, 3.9 * widths[n])
-                pairs[n] = cKDTree(x[:n], boxsize=1.0).query_pairs(r, output_type="ndarray")
-        force = np.zeros_like(x)
-        for n in sizes:
-            i, j = pairs[n][:, 0], pairs[n][:, 1]
-            d = x[i] - x[j]
-            d -= np.round(d)
-            t = d * np.exp(-(d * d).sum(1) / (2 * widths[n] ** 2))[:, None]
-            for k in range(2):  # -grad of the pair energy, times s_P^2: a push along d
-                force[:, k] += np.bincount(i, t[:, k], m) - np.bincount(j, t[:, k], m)
-            if n in lows:  # -grad of the low-frequency term; exp(2 pi i q.x) from powers of exp(2 pi i x)
-                exponents, ia, ib, newton = lows[n]
-                powers = np.exp(2j * np.pi * x[:n, :, None] * exponents)
-                e = powers[:, 0, ia] * powers[:, 1, ib]
-                force[:n] += (RELAX_BALANCE * 4 * np.pi / n) * (np.imag(np.conj(e.sum(0)) * e) @ newton)
-        x = (x + RELAX_STEP * (1 - (1 - RELAX_DECAY) * step / steps) * force) % 1.0
-        x[x >= 1.0] = 0.0  # (x % 1.0) rounds a tiny negative x up to 1.0, outside cKDTree's box
-    return x
+    if isinstance(steps, bool) or not isinstance(steps, int) or not 0 <= steps <= RELAX_MAX_STEPS:
+        raise InvalidArgumentError(f"steps must be an integer in 0..{RELAX_MAX_STEPS}, got {steps!r}")
+    y = np.ascontiguousarray(x, dtype=np.float32)
+    if not np.all((y >= 0) & (y < 1)):
+        raise InvalidArgumentError("points must lie in [0, 1) (as float32)")
+    return _core.relax_prefixes(y, base, steps)

@@ -225,12 +225,15 @@ def generate(model: RefModel, seed: int, m: int | None = None) -> np.ndarray:
     return run_cascade(model, initial_points(model, seed, m))
 
 
-def generate_progressive(model: RefModel, seed: int, m: int, base: int, radius: int = 0) -> np.ndarray:
+def generate_progressive(
+    model: RefModel, seed: int, m: int, base: int, radius: int = 0, relax: int = 0
+) -> np.ndarray:
     """Reference of dpc_generate_n for a progressive model (§6): a set of min(m, base) points,
     then levels that add min(n, m - n) input points of seed + level * golden to the n so far and
     run every layer on all of them, the first n put back after each layer. With a balance radius
     (§5.1) each level ends with the balance of its prefix, only the level's own points moving
-    (float32 in between, as libdpc)."""
+    (float32 in between, as libdpc). With relax steps (§6.1) the levels' float32 points are then
+    relaxed jointly."""
     n = min(m, base)
     y = run_cascade(model, initial_points(model, seed, n))
     if radius:
@@ -247,6 +250,8 @@ def generate_progressive(model: RefModel, seed: int, m: int, base: int, radius: 
         if radius:
             x = balance(x.astype(np.float32), radius, first=n).astype(np.float32).astype(np.float64)
         y, n, level = x, n + add, level + 1
+    if relax:
+        y = relax_prefixes(y.astype(np.float32), relax, base)
     return y
 
 
@@ -283,3 +288,48 @@ def torus_diff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Per-coordinate distance on the unit torus: |a - b| with 0.999… and 0.000… close."""
     d = np.abs(np.asarray(a, dtype=np.float64) - np.asarray(b, dtype=np.float64))
     return np.minimum(d, 1.0 - d)
+
+
+def _relax_low_frequencies(radius: float) -> np.ndarray:
+    """Integer frequencies of a half-plane with 0 < |q| <= radius."""
+    r = int(radius)
+    a, b = np.meshgrid(np.arange(-r, r + 1), np.arange(0, r + 1), indexing="ij")
+    q = np.stack([a.ravel(), b.ravel()], 1).astype(np.float64)
+    keep = ((q[:, 1] > 0) | (q[:, 0] > 0)) & ((q * q).sum(1) <= radius * radius)
+    return q[keep]
+
+
+def relax_prefixes(points: np.ndarray, steps: int, base: int) -> np.ndarray:
+    """The prefix relaxation (§6.1) in float64, with scipy's k-d tree for the neighbour pairs:
+    over the prefixes P of base * 2^j < m points and all m, ``steps`` steps of
+    x += 0.1 (1 - 0.8 t / steps) F, F_i = sum_P sum_{j in P, pair within 3.9 s_P at the last
+    search} (x_i - x_j) exp(-|x_i - x_j|^2 / (2 s_P^2)) + sum_P (0.2 pi / |P|) sum_q
+    Im(conj(c_q(P)) e_q(x_i)) q / |q|^2, s_P = 0.72 / sqrt(|P|) (0.60 / sqrt(m) for all m),
+    q over 0 < |q| <= min(8, sqrt(|P|) / 4) of a half-plane, pairs searched every 10 steps."""
+    from scipy.spatial import cKDTree
+
+    x = np.array(points, dtype=np.float64)
+    m = len(x)
+    sizes = [base << j for j in range(m.bit_length()) if base << j < m] + [m]
+    widths = {n: (0.60 if n == m else 0.72) / np.sqrt(n) for n in sizes}
+    lows = {n: _relax_low_frequencies(min(8, np.sqrt(n) / 4)) for n in sizes}
+    pairs: dict[int, np.ndarray] = {}
+    for step in range(steps):
+        if step % 10 == 0:
+            for n in sizes:
+                pairs[n] = cKDTree(x[:n], boxsize=1.0).query_pairs(min(0.4999, 3.9 * widths[n]), output_type="ndarray")
+        force = np.zeros_like(x)
+        for n in sizes:
+            i, j = pairs[n][:, 0], pairs[n][:, 1]
+            d = x[i] - x[j]
+            d -= np.round(d)
+            t = d * np.exp(-(d * d).sum(1) / (2 * widths[n] ** 2))[:, None]
+            for k in range(2):
+                force[:, k] += np.bincount(i, t[:, k], m) - np.bincount(j, t[:, k], m)
+            q = lows[n]
+            if len(q):
+                e = np.exp(2j * np.pi * (x[:n] @ q.T))  # (n, F)
+                force[:n] += (0.05 * 4 * np.pi / n) * (np.imag(np.conj(e.sum(0)) * e) @ (q / (q * q).sum(1)[:, None]))
+        x = (x + 0.1 * (1 - 0.8 * step / steps) * force) % 1.0
+        x[x >= 1.0] = 0.0  # (x % 1.0) rounds a tiny negative x up to 1.0
+    return x

@@ -323,6 +323,18 @@ DPC_API dpc_status dpc_stratified(uint64_t seed, size_t n_points, size_t dims, f
  * nothing changes. DPC_ERROR_LIMIT when the radius holds more than 4,096 frequencies. */
 DPC_API dpc_status dpc_balance(float *points, size_t n_points, size_t dims, uint32_t radius);
 
+/* The prefix relaxation (docs/model-format.md §6.1), in place on an ordered set of n_points 2-D
+ * points in [0, 1) (n_points x 2 floats): steps gradient steps move every point at once so that
+ * every prefix of base * 2^j points and the whole set are blue noise at their own scale
+ * (docs/progressive.md, "Jointly relaxed prefixes"); the first n points are then no longer the
+ * caller's first n. What the generator of a model with metadata dpc.relax = steps does after its
+ * levels (e.g. progressive-2d-relaxed: base 16, 1,600 steps). Sequential double arithmetic with
+ * its own exp, sin and cos: the same bits on every machine. Its cost grows as n_points * steps
+ * (about 1 s for 1,024 points and 1,600 steps on one core; docs/performance.md). base >= 2,
+ * n_points >= base, steps <= 100,000 (0: nothing changes); DPC_ERROR_OUT_OF_MEMORY leaves the
+ * points unchanged. */
+DPC_API dpc_status dpc_relax_prefixes(float *points, size_t n_points, uint32_t base, uint32_t steps);
+
 /* ---------------------------------------------------------------------------------------------
  * Sampler: values for (pixel, sample index, dimension), for a renderer
  *

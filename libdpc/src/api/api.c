@@ -20,6 +20,7 @@
 #include "cpu/cpu_cascade.h"
 #include "cpu/cpu_layer_train.h"
 #include "model/balance.h"
+#include "model/relax.h"
 #include "model/input.h"
 #include "model/plan.h"
 
@@ -456,6 +457,20 @@ dpc_status dpc_balance(float *points, size_t n_points, size_t dims, uint32_t rad
                         DPC_BALANCE_MAX_FREQS, dims);
     const dpc_status st = check_unit_points(points, n_points, dims);
     return st == DPC_OK ? dpc_balance_points(points, n_points, dims, k, 0) : st;
+}
+
+dpc_status dpc_relax_prefixes(float *points, size_t n_points, uint32_t base, uint32_t steps) {
+    dpc_clear_error();
+    if (!points) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "points is NULL");
+    if (base < 2 || n_points < base)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "base is %u and n_points %zu: base >= 2 and n_points >= base", base,
+                        n_points);
+    if (n_points > DPC_MAX_POINTS)
+        return dpc_fail(DPC_ERROR_LIMIT, "%zu points, at most %u per set", n_points, DPC_MAX_POINTS);
+    if (steps > DPC_RELAX_MAX_STEPS)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "steps is %u, at most %u", steps, DPC_RELAX_MAX_STEPS);
+    const dpc_status st = check_unit_points(points, n_points, 2);
+    return st == DPC_OK ? dpc_relax_points(points, n_points, base, steps, NULL, NULL) : st;
 }
 
 static double model_max_radius(const dpc_cascade *c) {

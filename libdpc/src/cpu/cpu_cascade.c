@@ -20,6 +20,7 @@
 #include "cpu/cpu_lists.h"
 #include "model/balance.h"
 #include "model/input.h"
+#include "model/relax.h"
 #include "model/plan.h"
 
 #define MAX_RANGES DPC_PLAN_MAX_RANGES /* index ranges per point (2 per row of cells) */
@@ -470,6 +471,17 @@ static dpc_status balance_prefix(const dpc_cascade *c, float *x, size_t m, size_
     return dpc_balance_points(x, m, c->dims, dpc_balance_radius(c->balance, m, c->dims), first);
 }
 
+/* The progress hook asked between the relaxation's neighbour searches (inside a step: 0). */
+typedef struct relax_hook_ctx {
+    dpc_cpu_hook hook;
+    void *ctx;
+} relax_hook_ctx;
+
+static dpc_status relax_hook(void *ctx) {
+    const relax_hook_ctx *h = (const relax_hook_ctx *)ctx;
+    return h->hook(h->ctx, 0) == DPC_OK ? DPC_OK : DPC_ERROR_CANCELLED;
+}
+
 static dpc_status generate_one(const dpc_cascade *c, dpc_input input, const dpc_cpu_engine *e, uint64_t seed, size_t m,
                                float *out, dpc_cpu_hook hook, void *ctx) {
     if (hook && hook(ctx, 0) != DPC_OK) return DPC_ERROR_CANCELLED;
@@ -491,6 +503,10 @@ static dpc_status generate_one(const dpc_cascade *c, dpc_input input, const dpc_
         if (st == DPC_OK) /* the level's new points balance the whole prefix; the held ones stay */
             st = balance_prefix(c, out, n + add, n);
         n += add;
+    }
+    if (st == DPC_OK && c->relax) { /* every prefix relaxed at once (§6.1): the held points move too */
+        relax_hook_ctx h = {hook, ctx};
+        st = dpc_relax_points(out, m, c->progressive_base, c->relax, hook ? relax_hook : NULL, &h);
     }
     return st;
 }

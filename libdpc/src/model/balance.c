@@ -14,52 +14,8 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "common/detmath.h"
 #include "common/error.h"
-
-typedef struct cplx {
-    double re, im;
-} cplx;
-
-static cplx cmul(cplx a, cplx b) { return (cplx){a.re * b.re - a.im * b.im, a.re * b.im + a.im * b.re}; }
-
-/* sin and cos of 2 pi t by Taylor series on [-pi/4, pi/4] (truncation below 1e-19): plain double
- * operations in a fixed order, the same bits everywhere (libm's sin may differ in the last bit). */
-static const double SIN_TAYLOR[9] = {1.0,
-                                     -1.0 / 6.0,
-                                     1.0 / 120.0,
-                                     -1.0 / 5040.0,
-                                     1.0 / 362880.0,
-                                     -1.0 / 39916800.0,
-                                     1.0 / 6227020800.0,
-                                     -1.0 / 1307674368000.0,
-                                     1.0 / 355687428096000.0};
-static const double COS_TAYLOR[10] = {1.0,
-                                      -1.0 / 2.0,
-                                      1.0 / 24.0,
-                                      -1.0 / 720.0,
-                                      1.0 / 40320.0,
-                                      -1.0 / 3628800.0,
-                                      1.0 / 479001600.0,
-                                      -1.0 / 87178291200.0,
-                                      1.0 / 20922789888000.0,
-                                      -1.0 / 6402373705728000.0};
-
-static cplx turn(double t) {
-    t -= floor(t);
-    const double quadrant = floor(t * 4.0 + 0.5); /* 0 .. 4 */
-    const double r = (t - quadrant * 0.25) * 6.283185307179586;
-    const double r2 = r * r;
-    double s = SIN_TAYLOR[8], c = COS_TAYLOR[9];
-    for (int i = 7; i >= 0; i--) s = s * r2 + SIN_TAYLOR[i];
-    for (int i = 8; i >= 0; i--) c = c * r2 + COS_TAYLOR[i];
-    s *= r;
-    switch ((int)quadrant & 3) {
-    case 0: return (cplx){c, s};
-    case 1: return (cplx){-s, c};
-    case 2: return (cplx){-c, -s};
-    default: return (cplx){s, -c};
-    }
-}
 
 uint32_t dpc_balance_radius(uint32_t k, size_t m, size_t n) {
     uint32_t j = 0;
@@ -108,23 +64,23 @@ size_t dpc_balance_frequencies(uint32_t k, size_t n) {
 }
 
 /* exp(2 pi i q.x) from the powers p[d * (k + 1) + a] = exp(2 pi i a x_d). */
-static cplx wave(const cplx *p, const int8_t *q, size_t n, uint32_t k) {
-    cplx z = {1.0, 0.0};
+static dpc_cplx wave(const dpc_cplx *p, const int8_t *q, size_t n, uint32_t k) {
+    dpc_cplx z = {1.0, 0.0};
     for (size_t d = 0; d < n; d++) {
         if (!q[d]) continue;
-        cplx e = p[d * (k + 1) + (size_t)abs(q[d])];
+        dpc_cplx e = p[d * (k + 1) + (size_t)abs(q[d])];
         if (q[d] < 0) e.im = -e.im;
-        z = cmul(z, e);
+        z = dpc_cmul(z, e);
     }
     return z;
 }
 
-static void powers(const float *x, size_t n, uint32_t k, cplx *p) {
+static void powers(const float *x, size_t n, uint32_t k, dpc_cplx *p) {
     for (size_t d = 0; d < n; d++) {
-        cplx *row = p + d * (k + 1);
-        row[0] = (cplx){1.0, 0.0};
-        if (k) row[1] = turn((double)x[d]);
-        for (uint32_t a = 2; a <= k; a++) row[a] = cmul(row[a - 1], row[1]);
+        dpc_cplx *row = p + d * (k + 1);
+        row[0] = (dpc_cplx){1.0, 0.0};
+        if (k) row[1] = dpc_turn((double)x[d]);
+        for (uint32_t a = 2; a <= k; a++) row[a] = dpc_cmul(row[a - 1], row[1]);
     }
 }
 
@@ -135,9 +91,9 @@ dpc_status dpc_balance_points(float *x, size_t m, size_t n, uint32_t k, size_t f
                         DPC_BALANCE_MAX_K, DPC_MAX_DIMS);
     freqs f = {n, 0, DPC_BALANCE_MAX_FREQS, NULL, {0}};
     f.q = (int8_t *)malloc(f.cap * n);
-    cplx *c = (cplx *)malloc(f.cap * sizeof *c);
+    dpc_cplx *c = (dpc_cplx *)malloc(f.cap * sizeof *c);
     double *w = (double *)malloc(f.cap * sizeof *w);
-    cplx *p = (cplx *)malloc(n * (k + 1) * sizeof *p);
+    dpc_cplx *p = (dpc_cplx *)malloc(n * (k + 1) * sizeof *p);
     double *step = (double *)malloc(n * sizeof *step);
     dpc_status st = DPC_OK;
     if (!f.q || !c || !w || !p || !step) {
@@ -156,11 +112,11 @@ dpc_status dpc_balance_points(float *x, size_t m, size_t n, uint32_t k, size_t f
     }
     const int iterations = first ? DPC_BALANCE_LEVEL_ITERATIONS : DPC_BALANCE_ITERATIONS;
     for (int it = 0; it < iterations; it++) {
-        for (size_t j = 0; j < f.count; j++) c[j] = (cplx){0.0, 0.0};
+        for (size_t j = 0; j < f.count; j++) c[j] = (dpc_cplx){0.0, 0.0};
         for (size_t i = 0; i < m; i++) { /* c_q = sum_i exp(-2 pi i q.x_i), in point order */
             powers(x + i * n, n, k, p);
             for (size_t j = 0; j < f.count; j++) {
-                const cplx z = wave(p, f.q + j * n, n, k);
+                const dpc_cplx z = wave(p, f.q + j * n, n, k);
                 c[j].re += z.re;
                 c[j].im -= z.im;
             }
@@ -170,7 +126,7 @@ dpc_status dpc_balance_points(float *x, size_t m, size_t n, uint32_t k, size_t f
             powers(xi, n, k, p);
             for (size_t d = 0; d < n; d++) step[d] = 0.0;
             for (size_t j = 0; j < f.count; j++) {
-                const cplx z = wave(p, f.q + j * n, n, k);
+                const dpc_cplx z = wave(p, f.q + j * n, n, k);
                 const double a = w[j] * (c[j].re * z.im + c[j].im * z.re); /* w_q Im(c_q z) */
                 for (size_t d = 0; d < n; d++)
                     if (f.q[j * n + d]) step[d] += a * (double)f.q[j * n + d];

@@ -38,6 +38,7 @@ typedef struct dpc_cascade {
     uint32_t grid_shape[DPC_MAX_DIMS];
     uint32_t progressive_base; /* 0: a set; else generated level by level from this count (format §6) */
     uint32_t balance;          /* 0: none; else the generator's output balance radius (format §5.1) */
+    uint32_t relax;            /* 0: none; else the prefix relaxation's steps after the levels (format §6.1) */
     size_t n_meta;
     char **meta_keys;
     char **meta_values;

@@ -10,6 +10,7 @@
 
 #include "common/error.h"
 #include "model/balance.h"
+#include "model/relax.h"
 #include "model/model.h"
 #include "model/protobuf.h"
 
@@ -493,6 +494,15 @@ static dpc_status parse_metadata(const pb_span *entries, size_t n, dpc_cascade *
             return FAIL("metadata 'dpc.balance' = %u holds more than %u frequencies in %u dimensions", (unsigned)x,
                         DPC_BALANCE_MAX_FREQS, c->dims);
         c->balance = (uint32_t)x;
+    }
+    const char *relax = dpc_cascade_meta(c, "dpc.relax");
+    if (relax) {
+        if (!parse_uint(relax, DPC_RELAX_MAX_STEPS, &x) || x == 0)
+            return FAIL("metadata 'dpc.relax' is '%.40s': a step count in 1..%u", relax, DPC_RELAX_MAX_STEPS);
+        if (!c->progressive_base || c->dims != 2)
+            return FAIL("metadata 'dpc.relax' belongs to a 2-D model with dpc.order = 'progressive'");
+        if (c->balance) return FAIL("metadata 'dpc.relax' and 'dpc.balance' exclude each other");
+        c->relax = (uint32_t)x;
     }
     return DPC_OK;
 }

@@ -1,0 +1,313 @@
+/* The prefix relaxation of docs/model-format.md §6.1 (relax.h).
+ *
+ * The energy is a sum over the prefixes P (base * 2^j < m points, and all m) of
+ *   sum_{i<j in P} exp(-|x_i - x_j|^2 / (2 s_P^2)),  s_P = 0.72 / sqrt(|P|)  (0.60 / sqrt(m) for all m),
+ * the Gaussian energy of blue noise at the prefix's own scale (toroidal distances), plus
+ *   0.05 * sum_q |c_q(P)|^2 / (|q|^2 |P|),  c_q(P) = sum_{i in P} exp(2 pi i q.x_i),
+ * over the integer q of a half-plane with 0 < |q| <= min(8, sqrt(|P|) / 4): the torus-scale
+ * imbalance a smooth integrand sees. A pair feels every prefix that holds both its points, so
+ * early points keep apart at the coarse scales and late ones only at the full set's. Step t of S
+ * moves every point by 0.1 (1 - 0.8 t / S) times the force (minus the gradient, its pair part
+ * scaled by s_P^2 so that every prefix pushes at its own scale).
+ *
+ * Pairs come from a cell grid per prefix, every DPC_RELAX_REFRESH steps, within 3.9 widths
+ * (points move far less than 0.9 widths in that time). The low-frequency force of point i is
+ * one sum over q of Im(conj(A_q) exp(2 pi i q.x_i)) q / |q|^2, A_q being the weighted c_q of the
+ * prefixes holding i: the c_q of every prefix come from one pass in point order. Everything
+ * runs on a double copy of the points, written back (as float32) only when all steps are done. */
+#include "model/relax.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "common/detmath.h"
+#include "common/error.h"
+
+#define WIDTH 0.72      /* s_P sqrt(|P|) of a proper prefix */
+#define WIDTH_FULL 0.60 /* ... of the whole set */
+#define STEP 0.1
+#define DECAY 0.2         /* the last step is this fraction of the first */
+#define LOW_WEIGHT 0.05   /* of the low-frequency term */
+#define LOW_RADIUS 8.0    /* its largest |q| */
+#define REACH_WIDTHS 3.9  /* neighbour search radius, in widths */
+#define MAX_PREFIXES 40   /* base * 2^j <= 2^32 */
+#define MAX_LOW 8         /* integer part of LOW_RADIUS */
+#define MAX_FREQS (17 * 9) /* a in -8..8, b in 0..8 */
+
+typedef struct prefix {
+    size_t n;
+    double two_w2;      /* 2 s_P^2 */
+    double reach;       /* neighbour search radius */
+    double weight;      /* LOW_WEIGHT * 4 pi / |P| */
+    double radius2;     /* its largest |q|^2 (0: no low frequencies) */
+    uint32_t *pairs;    /* [n_pairs][2] */
+    size_t n_pairs, cap;
+} prefix;
+
+typedef struct relax {
+    size_t m;
+    double *x, *force;      /* [m][2] */
+    size_t n_prefix;
+    prefix p[MAX_PREFIXES];
+    int low;                /* the largest integer |q| component of any prefix (0: none) */
+    size_t n_freq;          /* q = (a, b) of a half-plane, |q| <= the largest radius: rows b = 0 .. low */
+    size_t row[MAX_LOW + 2]; /* row b: frequencies row[b] .. row[b + 1], a increasing from a_first[b] */
+    int a_first[MAX_LOW + 1];
+    double q2[MAX_FREQS], newton_a[MAX_FREQS], newton_b[MAX_FREQS]; /* |q|^2, q / |q|^2 */
+    double *c;              /* [n_prefix][2][n_freq]: re, im of c_q of each prefix, then the weighted A_q */
+    uint32_t *cell_start, *cell_points; /* the grid of one search */
+} relax;
+
+/* x_i - x_j on the torus, in [-1/2, 1/2] */
+static double wrap(double d) { return d > 0.5 ? d - 1.0 : d < -0.5 ? d + 1.0 : d; }
+
+static int add_pair(prefix *P, uint32_t i, uint32_t j) {
+    if (P->n_pairs == P->cap) {
+        const size_t cap = P->cap ? 2 * P->cap : 1024;
+        uint32_t *grown = (uint32_t *)realloc(P->pairs, cap * 2 * sizeof *grown);
+        if (!grown) return 0;
+        P->pairs = grown;
+        P->cap = cap;
+    }
+    P->pairs[2 * P->n_pairs] = i;
+    P->pairs[2 * P->n_pairs + 1] = j;
+    P->n_pairs++;
+    return 1;
+}
+
+static int close_enough(const double *x, uint32_t i, uint32_t j, double reach2) {
+    const double dx = wrap(x[2 * i] - x[2 * j]), dy = wrap(x[2 * i + 1] - x[2 * j + 1]);
+    return dx * dx + dy * dy <= reach2;
+}
+
+/* The pairs i < j < n within reach: from a grid of G x G cells of side >= reach, each point
+ * against its 3 x 3 cells (G >= 3, so no cell is visited twice), or all pairs for G < 3. */
+static int search(relax *R, prefix *P) {
+    const double *x = R->x;
+    const double reach2 = P->reach * P->reach;
+    const size_t n = P->n;
+    P->n_pairs = 0;
+    size_t G = (size_t)floor(1.0 / (P->reach * (1.0 + 1e-9))); /* the margin: cells a rounding wider */
+    const size_t most = (size_t)floor(sqrt((double)n)) + 1; /* about one point per cell at most */
+    if (G > most) G = most;
+    if (G < 3) {
+        for (uint32_t i = 0; i < n; i++)
+            for (uint32_t j = i + 1; j < n; j++)
+                if (close_enough(x, i, j, reach2) && !add_pair(P, i, j)) return 0;
+        return 1;
+    }
+    uint32_t *start = R->cell_start, *pts = R->cell_points;
+    memset(start, 0, (G * G + 1) * sizeof *start);
+    for (size_t i = 0; i < n; i++) { /* counting sort by cell, stable: each cell in index order */
+        size_t cx = (size_t)(x[2 * i] * (double)G), cy = (size_t)(x[2 * i + 1] * (double)G);
+        cx = cx < G ? cx : G - 1;
+        cy = cy < G ? cy : G - 1;
+        start[cy * G + cx + 1]++;
+    }
+    for (size_t k = 0; k < G * G; k++) start[k + 1] += start[k];
+    for (size_t i = 0; i < n; i++) {
+        size_t cx = (size_t)(x[2 * i] * (double)G), cy = (size_t)(x[2 * i + 1] * (double)G);
+        cx = cx < G ? cx : G - 1;
+        cy = cy < G ? cy : G - 1;
+        pts[start[cy * G + cx]++] = (uint32_t)i;
+    }
+    for (size_t k = G * G; k > 0; k--) start[k] = start[k - 1]; /* back to the cells' starts */
+    start[0] = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        size_t cx = (size_t)(x[2 * i] * (double)G), cy = (size_t)(x[2 * i + 1] * (double)G);
+        cx = cx < G ? cx : G - 1;
+        cy = cy < G ? cy : G - 1;
+        for (size_t oy = 0; oy < 3; oy++)
+            for (size_t ox = 0; ox < 3; ox++) {
+                const size_t cell = ((cy + G + oy - 1) % G) * G + (cx + G + ox - 1) % G;
+                for (uint32_t k = start[cell]; k < start[cell + 1]; k++) {
+                    const uint32_t j = pts[k];
+                    if (j > i && close_enough(x, i, j, reach2) && !add_pair(P, i, j)) return 0;
+                }
+            }
+    }
+    return 1;
+}
+
+/* The pair forces of one prefix: a push along x_i - x_j, weighted by the pair's Gaussian. */
+static void pair_forces(relax *R, const prefix *P) {
+    const double *x = R->x;
+    double *f = R->force;
+    for (size_t k = 0; k < P->n_pairs; k++) {
+        const uint32_t i = P->pairs[2 * k], j = P->pairs[2 * k + 1];
+        const double dx = wrap(x[2 * i] - x[2 * j]), dy = wrap(x[2 * i + 1] - x[2 * j + 1]);
+        const double g = dpc_exp_neg(-(dx * dx + dy * dy) / P->two_w2);
+        f[2 * i] += dx * g;
+        f[2 * i + 1] += dy * g;
+        f[2 * j] -= dx * g;
+        f[2 * j + 1] -= dy * g;
+    }
+}
+
+/* exp(2 pi i q.x) of a point for every q (re, im), from the powers of exp(2 pi i x_d): row by
+ * row, contiguous in a (the compiler's vectors compute each lane as the scalar code would). */
+static void waves(const relax *R, const double *xi, double *e_re, double *e_im) {
+    double pr[2 * MAX_LOW + 1], pi[2 * MAX_LOW + 1]; /* exp(2 pi i a x_0), a = -low .. low */
+    dpc_cplx py[MAX_LOW + 1];
+    const int L = R->low;
+    const dpc_cplx x1 = dpc_turn(xi[0]);
+    dpc_cplx px = {1.0, 0.0};
+    py[0] = (dpc_cplx){1.0, 0.0};
+    py[1] = dpc_turn(xi[1]);
+    for (int a = 0; a <= L; a++) {
+        pr[L + a] = pr[L - a] = px.re;
+        pi[L + a] = px.im;
+        pi[L - a] = -px.im;
+        px = dpc_cmul(px, x1);
+        if (a >= 1 && a < L) py[a + 1] = dpc_cmul(py[a], py[1]);
+    }
+    for (int b = 0; b <= L; b++) {
+        const size_t f0 = R->row[b], count = R->row[b + 1] - f0;
+        const double *ar = pr + L + R->a_first[b], *ai = pi + L + R->a_first[b];
+        const double br = py[b].re, bi = py[b].im;
+        for (size_t k = 0; k < count; k++) {
+            e_re[f0 + k] = ar[k] * br - ai[k] * bi;
+            e_im[f0 + k] = ar[k] * bi + ai[k] * br;
+        }
+    }
+}
+
+static void low_forces(relax *R) {
+    if (!R->n_freq) return;
+    const size_t F = R->n_freq;
+    double e_re[MAX_FREQS], e_im[MAX_FREQS], sum_re[MAX_FREQS] = {0}, sum_im[MAX_FREQS] = {0}, s[MAX_FREQS];
+    size_t p = 0; /* c_q of each prefix: the running sums in point order, kept at its end */
+    for (size_t i = 0; i < R->m; i++) {
+        waves(R, R->x + 2 * i, e_re, e_im);
+        for (size_t f = 0; f < F; f++) {
+            sum_re[f] += e_re[f];
+            sum_im[f] += e_im[f];
+        }
+        while (p < R->n_prefix && R->p[p].n == i + 1) {
+            memcpy(R->c + 2 * p * F, sum_re, F * sizeof *sum_re);
+            memcpy(R->c + (2 * p + 1) * F, sum_im, F * sizeof *sum_im);
+            p++;
+        }
+    }
+    /* A_q of the points of prefix p's level: the weighted c_q of p and every larger prefix */
+    for (size_t q = R->n_prefix; q-- > 0;) {
+        const prefix *P = &R->p[q];
+        double *re = R->c + 2 * q * F, *im = re + F;
+        for (size_t f = 0; f < F; f++) {
+            double ar = 0.0, ai = 0.0;
+            if (R->q2[f] <= P->radius2) {
+                ar = P->weight * re[f];
+                ai = P->weight * im[f];
+            }
+            if (q + 1 < R->n_prefix) {
+                ar += re[2 * F + f];
+                ai += im[2 * F + f];
+            }
+            re[f] = ar;
+            im[f] = ai;
+        }
+    }
+    p = 0;
+    for (size_t i = 0; i < R->m; i++) {
+        while (R->p[p].n <= i) p++;
+        const double *Ar = R->c + 2 * p * F, *Ai = Ar + F;
+        waves(R, R->x + 2 * i, e_re, e_im);
+        for (size_t f = 0; f < F; f++) s[f] = Ar[f] * e_im[f] - Ai[f] * e_re[f]; /* Im(conj(A_q) e_q) */
+        double fa = 0.0, fb = 0.0;
+        for (size_t f = 0; f < F; f++) {
+            fa += s[f] * R->newton_a[f];
+            fb += s[f] * R->newton_b[f];
+        }
+        R->force[2 * i] += fa;
+        R->force[2 * i + 1] += fb;
+    }
+}
+
+static void relax_free(relax *R) {
+    for (size_t q = 0; q < R->n_prefix; q++) free(R->p[q].pairs);
+    free(R->x);
+    free(R->force);
+    free(R->c);
+    free(R->cell_start);
+    free(R->cell_points);
+}
+
+dpc_status dpc_relax_points(float *x, size_t m, uint32_t base, uint32_t steps, dpc_relax_hook hook, void *ctx) {
+    if (m < 2 || !steps) return DPC_OK;
+    if (!base) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "the relaxation's base must be positive");
+    relax R;
+    memset(&R, 0, sizeof R);
+    R.m = m;
+    for (size_t n = base; n < m; n *= 2) { /* the proper prefixes, then the whole set */
+        R.p[R.n_prefix++].n = n;
+        if (n > SIZE_MAX / 2 || R.n_prefix == MAX_PREFIXES - 1) break;
+    }
+    R.p[R.n_prefix++].n = m;
+    double largest = 0.0;
+    for (size_t q = 0; q < R.n_prefix; q++) {
+        prefix *P = &R.p[q];
+        const double w = (P->n == m ? WIDTH_FULL : WIDTH) / sqrt((double)P->n);
+        P->two_w2 = 2.0 * (w * w);
+        P->reach = REACH_WIDTHS * w < 0.4999 ? REACH_WIDTHS * w : 0.4999;
+        P->weight = LOW_WEIGHT * 4.0 * 3.141592653589793 / (double)P->n;
+        double r = sqrt((double)P->n) / 4.0;
+        r = r < LOW_RADIUS ? r : LOW_RADIUS;
+        P->radius2 = r >= 1.0 ? r * r : 0.0;
+        if (r >= 1.0 && (int)r > R.low) R.low = (int)r;
+        if (P->radius2 > largest) largest = P->radius2;
+    }
+    for (int b = 0; b <= R.low; b++) { /* the half-plane b > 0, or b = 0 and a > 0: rows of b */
+        R.row[b] = R.n_freq;
+        R.a_first[b] = 0;
+        for (int a = -R.low; a <= R.low; a++) {
+            const double q2 = (double)(a * a + b * b);
+            if ((b > 0 || a > 0) && q2 <= largest) {
+                if (R.n_freq == R.row[b]) R.a_first[b] = a;
+                R.q2[R.n_freq] = q2;
+                R.newton_a[R.n_freq] = (double)a / q2;
+                R.newton_b[R.n_freq] = (double)b / q2;
+                R.n_freq++;
+            }
+        }
+    }
+    R.row[R.low + 1] = R.n_freq;
+    const size_t cells = (size_t)floor(sqrt((double)m)) + 2;
+    R.x = (double *)malloc(2 * m * sizeof *R.x);
+    R.force = (double *)malloc(2 * m * sizeof *R.force);
+    R.c = (double *)malloc((2 * R.n_prefix * R.n_freq + 1) * sizeof *R.c);
+    R.cell_start = (uint32_t *)malloc((cells * cells + 1) * sizeof *R.cell_start);
+    R.cell_points = (uint32_t *)malloc(m * sizeof *R.cell_points);
+    dpc_status st = DPC_OK;
+    if (!R.x || !R.force || !R.c || !R.cell_start || !R.cell_points) {
+        st = dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "cannot allocate the relaxation of %zu points", m);
+        goto done;
+    }
+    for (size_t i = 0; i < 2 * m; i++) R.x[i] = (double)x[i];
+    for (uint32_t t = 0; t < steps; t++) {
+        if (t % DPC_RELAX_REFRESH == 0) {
+            if (hook && (st = hook(ctx)) != DPC_OK) goto done;
+            for (size_t q = 0; q < R.n_prefix; q++)
+                if (!search(&R, &R.p[q])) {
+                    st = dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "cannot allocate the relaxation's neighbour pairs");
+                    goto done;
+                }
+        }
+        memset(R.force, 0, 2 * m * sizeof *R.force);
+        for (size_t q = 0; q < R.n_prefix; q++) pair_forces(&R, &R.p[q]);
+        low_forces(&R);
+        const double eta = STEP * (1.0 - (1.0 - DECAY) * (double)t / (double)steps);
+        for (size_t i = 0; i < 2 * m; i++) {
+            double v = R.x[i] + eta * R.force[i];
+            v -= floor(v);
+            R.x[i] = v < 1.0 ? v : 0.0; /* a tiny negative v rounds up to 1: the torus's 0 */
+        }
+    }
+    for (size_t i = 0; i < 2 * m; i++) {
+        const float y = (float)R.x[i];
+        x[i] = y < 1.0f ? y : 0.0f; /* v just below 1 rounds to 1: the torus's 0 */
+    }
+done:
+    relax_free(&R);
+    return st;
+}
