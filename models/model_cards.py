@@ -160,6 +160,7 @@ CARDS = {
     "blue-2d": Card("plane", {"xy": "bnot"}, scales=True),  # aims below BNOT: docs/beyond-bnot.md
     "progressive-2d": Card("plane", {"xy": "bnot"}, scales=True),  # prefixes: docs/progressive.md
     "progressive-2d-balanced": Card("plane", {"xy": "bnot"}, scales=True),
+    "progressive-2d-relaxed": Card("plane", {"xy": "bnot"}, scales=True),
     "repulsion-2d": Card("plane", {"xy": "bnot"}),
     "jitter-2d": Card("plane", {"xy": "jitter"}),
     "step-2d": Card("plane", {"xy": "step"}),

@@ -241,6 +241,10 @@ class Model:
         self.progressive_base: int | None = (
             int(self.metadata["dpc.progressive_base"]) if self.order == "progressive" else None
         )
+        # steps of the prefix relaxation after the levels (metadata dpc.relax; 0: none): every
+        # prefix of progressive_base * 2^j points is blue noise of its size, but the first n points
+        # are no longer the set of n (docs/model-format.md §6.1)
+        self.relax: int = int(self.metadata.get("dpc.relax", "0"))
 
     def __repr__(self) -> str:
         return (

@@ -22,6 +22,7 @@ Models (docs/model-format.md):
   model_2d_progressive.onnx  model_2d's layers as a progressive model (dpc.order, base 16: §6)
   model_2d_balanced.onnx     model_2d's layers with the output balance (dpc.balance = 3: §5.1)
   model_2d_progressive_balanced.onnx  model_2d_progressive, each level balanced (dpc.balance = 8)
+  model_2d_progressive_relaxed.onnx  model_2d_progressive, then its prefixes relaxed (dpc.relax = 400: §6.1)
 
 The metadata entries are stored with the optional keys first and the required keys last
 (dpc.n_points is the very last field of the file), so that every proper prefix of a file lacks a
@@ -258,11 +259,21 @@ def model_2d_progressive_balanced() -> ModelSpec:
     )
 
 
+def model_2d_progressive_relaxed() -> ModelSpec:
+    return variant(
+        model_2d_progressive(),
+        "test-2d-progressive-relaxed",
+        "Test model: model_2d_progressive, then every prefix relaxed jointly (format §6.1, 400 steps).",
+        **{"dpc.relax": "400"},
+    )
+
+
 MODELS = {
     "model_2d.onnx": model_2d,
     "model_2d_progressive.onnx": model_2d_progressive,
     "model_2d_balanced.onnx": model_2d_balanced,
     "model_2d_progressive_balanced.onnx": model_2d_progressive_balanced,
+    "model_2d_progressive_relaxed.onnx": model_2d_progressive_relaxed,
     "model_3d_proj.onnx": model_3d_proj,
     "model_3d_mixed.onnx": model_3d_mixed,
     "model_grid_3to1.onnx": model_grid_3to1,

@@ -302,28 +302,33 @@ def _relax_low_frequencies(radius: float) -> np.ndarray:
 def relax_prefixes(points: np.ndarray, steps: int, base: int) -> np.ndarray:
     """The prefix relaxation (§6.1) in float64, with scipy's k-d tree for the neighbour pairs:
     over the prefixes P of base * 2^j < m points and all m, ``steps`` steps of
-    x += 0.1 (1 - 0.8 t / steps) F, F_i = sum_P sum_{j in P, pair within 3.9 s_P at the last
-    search} (x_i - x_j) exp(-|x_i - x_j|^2 / (2 s_P^2)) + sum_P (0.2 pi / |P|) sum_q
-    Im(conj(c_q(P)) e_q(x_i)) q / |q|^2, s_P = 0.72 / sqrt(|P|) (0.60 / sqrt(m) for all m),
-    q over 0 < |q| <= min(8, sqrt(|P|) / 4) of a half-plane, pairs searched every 10 steps."""
+    x += 0.1 (1 - 0.8 t / steps) F, F_i = sum_P sum_{j in P, pair within R_P + 0.4 s_P at the
+    last search} d max(0, G(d) - G(R_P)) + sum_P (0.2 pi / |P|) sum_q Im(conj(c_q(P)) e_q(x_i))
+    q / |q|^2, d = x_i - x_j (toroidal), G(d) = exp(-|d|^2 / (2 s_P^2)), s_P = 0.72 / sqrt(|P|)
+    (0.60 / sqrt(m) for all m), R_P = min(3.5 s_P, 1/2), q over 0 < |q| <= min(8, sqrt(|P|) / 4)
+    of a half-plane, pairs searched every 10 steps."""
     from scipy.spatial import cKDTree
 
     x = np.array(points, dtype=np.float64)
     m = len(x)
     sizes = [base << j for j in range(m.bit_length()) if base << j < m] + [m]
     widths = {n: (0.60 if n == m else 0.72) / np.sqrt(n) for n in sizes}
+    support = {n: min(3.5 * widths[n], 0.5) for n in sizes}
+    cut = {n: np.exp(-(support[n] ** 2) / (2 * widths[n] ** 2)) for n in sizes}
     lows = {n: _relax_low_frequencies(min(8, np.sqrt(n) / 4)) for n in sizes}
     pairs: dict[int, np.ndarray] = {}
     for step in range(steps):
         if step % 10 == 0:
             for n in sizes:
-                pairs[n] = cKDTree(x[:n], boxsize=1.0).query_pairs(min(0.4999, 3.9 * widths[n]), output_type="ndarray")
+                reach = min(support[n] + 0.4 * widths[n], 0.7072)
+                pairs[n] = cKDTree(x[:n], boxsize=1.0).query_pairs(reach, output_type="ndarray")
         force = np.zeros_like(x)
         for n in sizes:
             i, j = pairs[n][:, 0], pairs[n][:, 1]
             d = x[i] - x[j]
             d -= np.round(d)
-            t = d * np.exp(-(d * d).sum(1) / (2 * widths[n] ** 2))[:, None]
+            g = np.maximum(np.exp(-(d * d).sum(1) / (2 * widths[n] ** 2)) - cut[n], 0.0)
+            t = d * g[:, None]
             for k in range(2):
                 force[:, k] += np.bincount(i, t[:, k], m) - np.bincount(j, t[:, k], m)
             q = lows[n]

@@ -121,6 +121,72 @@ def test_bad_order_metadata_is_a_format_error(tmp_path, meta, match):
         dpc.load(path)
 
 
+@pytest.mark.parametrize(
+    "meta,match",
+    [
+        ({"dpc.relax": "0"}, "dpc.relax"),
+        ({"dpc.relax": "100001"}, "dpc.relax"),
+        ({"dpc.relax": "many"}, "dpc.relax"),
+        ({"dpc.order": "set", "dpc.relax": "10"}, "progressive"),
+        ({"dpc.balance": "8", "dpc.relax": "10"}, "exclude"),
+    ],
+)
+def test_bad_relax_metadata_is_a_format_error(tmp_path, meta, match):
+    base = {"dpc.order": "progressive", "dpc.progressive_base": "16"}
+    if meta.get("dpc.order") == "set":
+        base = {}
+    path = progressive_copy(tmp_path / "bad.onnx", **{**base, **meta})
+    with pytest.raises(dpc.ModelFormatError, match=match):
+        dpc.load(path)
+
+
+def test_relax_metadata_belongs_to_a_2d_model(tmp_path):
+    from dpc.model_file import read_model, write_model
+
+    spec = read_model(DATA / "model_3d_proj.onnx")
+    spec.metadata.update({"dpc.order": "progressive", "dpc.progressive_base": "16", "dpc.relax": "10"})
+    write_model(spec, tmp_path / "bad.onnx")
+    with pytest.raises(dpc.ModelFormatError, match="2-D"):
+        dpc.load(tmp_path / "bad.onnx")
+
+
+RELAXED = DATA / "model_2d_progressive_relaxed.onnx"  # model_2d_progressive with dpc.relax = 400
+
+
+@pytest.mark.parametrize("seed,m", [(0, 300), (5, 64), (2**64 - 1, 10)])
+def test_relaxed_model_is_its_levels_then_the_relaxation_and_matches_the_reference(seed, m):
+    """§6.1: the generator runs the levels, then relaxes all prefixes; against the float64
+    reference (levels and relaxation both in float64, float32 between them as libdpc)."""
+    model, levels = dpc.load(RELAXED), dpc.load(DATA / "model_2d_progressive.onnx")
+    assert (model.order, model.progressive_base, model.relax) == ("progressive", 16, 400)
+    assert (levels.relax, dpc.load(DATA / "model_2d.onnx").relax) == (0, 0)
+    got = model.generate(seed, m)
+    x = levels.generate(seed, m)
+    if m >= 16:
+        assert np.array_equal(got, dpc.stratify.relax_prefixes(x, steps=400))
+    want = rc.generate_progressive(rc.load_reference(RELAXED), seed, m, 16, relax=400)
+    assert rc.torus_diff(got, want).max() < 1e-5
+    assert not np.array_equal(got, x)
+
+
+def test_relaxed_prefixes_are_not_the_smaller_sets():
+    """The ordering contract of §6.1: every point moves, so the first n points of a set of m are
+    not the set of n (each is still blue noise of its size: test_relax_prefixes_lowers_...)."""
+    model = dpc.load(RELAXED)
+    full = model.generate(3, 256)
+    for n in (16, 64, 128):
+        assert not np.array_equal(full[:n], model.generate(3, n)), n
+
+
+def test_relaxed_model_gives_the_same_bits_everywhere():
+    want = dpc.load(RELAXED, isa="scalar", threads=1).generate(4, 700)
+    for isa in ["scalar", *VECTOR_ISAS]:
+        for threads in (1, 3):
+            model = dpc.load(RELAXED, isa=isa, threads=threads)
+            assert np.array_equal(model.generate(4, 700), want), (isa, threads)
+            assert np.array_equal(model.generate_batch(3, 3, 700)[1], want), (isa, threads)
+
+
 def test_runs_on_the_cpu_and_says_so_for_vulkan(prog_path):
     assert dpc.load(prog_path, backend="auto").backend == "cpu"
     with pytest.raises(dpc.UnsupportedError):
@@ -164,8 +230,8 @@ def test_relax_prefixes_lowers_every_prefix_and_the_full_set():
     """A small case of bench/bench_progressive_relaxed.py: 8 sets of 256 points, relaxed
     jointly, against the same sets as progressive-2d makes them and a dpc set of each size."""
     sets = dpc.load("progressive-2d", backend="cpu").generate_batch(8, 0, 256).astype(np.float64)
-    relaxed = np.stack([dpc.stratify.relax_prefixes(x, steps=400) for x in sets])
-    assert relaxed.shape == sets.shape and relaxed.dtype == np.float64
+    relaxed = np.stack([dpc.stratify.relax_prefixes(x, steps=400) for x in sets]).astype(np.float64)
+    assert relaxed.shape == sets.shape
     assert np.all((relaxed >= 0) & (relaxed < 1))
     plain = dpc.load("bnot-2d-stratified", backend="cpu")
     for n in (32, 64, 128, 256):
@@ -176,18 +242,23 @@ def test_relax_prefixes_lowers_every_prefix_and_the_full_set():
         assert min_distance(relaxed[:, :n]).mean_ratio > 0.55, n
 
 
-def test_relax_prefixes_is_deterministic_and_checks_its_input():
-    x = dpc.load("progressive-2d").generate(5, 100).astype(np.float64)  # not a power of two: its own last prefix
+def test_relax_prefixes_is_deterministic_matches_the_reference_and_checks_its_input():
+    x = dpc.load("progressive-2d").generate(5, 100)  # not a power of two: its own last prefix
     y = dpc.stratify.relax_prefixes(x, steps=50)
-    assert np.array_equal(y, dpc.stratify.relax_prefixes(x, steps=50))
+    assert y.dtype == np.float32 and np.array_equal(y, dpc.stratify.relax_prefixes(x, steps=50))
     assert not np.array_equal(y, x) and np.array_equal(dpc.stratify.relax_prefixes(x, steps=0), x)
+    assert rc.torus_diff(y, rc.relax_prefixes(x, 50, 16)).max() < 1e-6  # float64 throughout: float32 rounding
+    z = dpc.stratify.relax_prefixes(x, steps=50, base=8)  # other prefixes: 8, 16, ..., 64, 100
+    assert rc.torus_diff(z, rc.relax_prefixes(x, 50, 8)).max() < 1e-6 and not np.array_equal(z, y)
     bad = [
         dict(points=x[:, :1]),
         dict(points=x[:10]),  # fewer than base = 16 points
         dict(points=x + 1.0),
         dict(points=x, steps=-1),
         dict(points=x, steps=2.5),
+        dict(points=x, steps=100_001),
         dict(points=x, base=1),
+        dict(points=np.full((20, 2), 0.99999999, dtype=np.float64)),  # 1.0 as float32
     ]
     for kwargs in bad:
         with pytest.raises(dpc.InvalidArgumentError):
