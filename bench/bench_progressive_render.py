@@ -6,16 +6,18 @@
 The soft-shadow scene of bench/bench_rendering.py (direct lighting, a large area light) at
 `--width`^2 pixels, rendered at 1, 2, 4, ..., `--max-spp` samples per pixel over `--seeds` seeds
 with: the dpc plugin on progressive-2d (progressive tables: a pixel's first n samples are
-the table's prefix) and on progressive-2d-balanced (the same, each level balanced: dpc.balance),
+the table's prefix), on progressive-2d-balanced (the same, each level balanced: dpc.balance)
+and on progressive-2d-relaxed (the same levels, then every prefix relaxed jointly: dpc.relax),
 the dpc plugin on bnot-2d-stratified (a set made for each count), Mitsuba's
 ldsampler and independent, and PMJ02BN. Mitsuba has no PMJ sampler, so the bench brings its
 own (`PoolSampler`, a Python mitsuba.Sampler): pixel p's dimension pair d reads sequence
 h(p, d) mod 32 of a pool of 32 PMJ02BN sequences (dpc.baselines, Christensen et al. 2018) at
 the sample index, Cranley-Patterson-rotated by a second hash of (p, d); 1-D values are the x
 coordinates. Being Python, it is the slow one; its error does not depend on that. The same
-sampler on a pool of 32 relaxed progressive-2d sets (dpc.stratify.relax_prefixes, which libdpc
-does not run, so the dpc plugin cannot serve them) is the row "dpc progressive, relaxed"; "dpc progressive, pool" is that sampler on progressive-2d's
-sets as the model makes them, so the two rows show what the relaxation does in one sampler.
+sampler on a pool of 32 progressive-2d-relaxed sets is the row "dpc progressive, relaxed"; "dpc
+progressive, pool" is that sampler on progressive-2d's sets (the same levels, unrelaxed), so the
+two rows show what the relaxation does in one sampler, without the dpc plugin's screen-space
+shifts and folding.
 Image MSE against bench_rendering.py's reference (ldsampler at 8,192 spp, two halves of other seeds),
 mean over seeds; a figure of MSE against spp goes to docs/figures/progressive/.
 """
@@ -40,6 +42,7 @@ SCENE = "soft-shadow"
 SAMPLERS = [
     "dpc progressive",
     "dpc progressive balanced",
+    "dpc progressive relaxed",
     "dpc progressive, relaxed",
     "dpc progressive, pool",
     "dpc set",
@@ -59,15 +62,15 @@ def mix64(z: int) -> int:
 
 
 def pool_points(kind: str, max_spp: int) -> np.ndarray:
-    """The pool of POOL sequences of max_spp points a pool sampler reads: PMJ02BN, or
-    progressive-2d's sets (seeds 0 .. POOL-1) as made or relaxed jointly (dpc.stratify.relax_prefixes)."""
+    """The pool of POOL sequences of max_spp points a pool sampler reads: PMJ02BN, or the sets of
+    progressive-2d or progressive-2d-relaxed (its levels relaxed jointly), seeds 0 .. POOL-1."""
     import dpc
     from dpc import baselines
 
     if kind == "pmj02bn":
         return baselines.generate("pmj02bn", max_spp, 2, POOL, seed=0)
-    sets = dpc.load("progressive-2d", backend="cpu").generate_batch(POOL, 0, max_spp).astype(np.float64)
-    return sets if kind == "progressive" else np.stack([dpc.stratify.relax_prefixes(x) for x in sets])
+    model = "progressive-2d" if kind == "progressive" else "progressive-2d-relaxed"
+    return dpc.load(model, backend="cpu").generate_batch(POOL, 0, max_spp).astype(np.float64)
 
 
 def pool_sampler_class(mi, pool_array: np.ndarray):
@@ -123,6 +126,7 @@ def render(mi, sampler: str, spp: int, seed: int, width: int) -> np.ndarray:
     kind, extra = {
         "dpc progressive": ("dpc", {"model": "progressive-2d"}),
         "dpc progressive balanced": ("dpc", {"model": "progressive-2d-balanced"}),
+        "dpc progressive relaxed": ("dpc", {"model": "progressive-2d-relaxed"}),
         "dpc set": ("dpc", {"model": "bnot-2d-stratified"}),
         "pmj02bn": ("pmj02bn_bench", {}),
         "dpc progressive, relaxed": ("relaxed_bench", {}),
@@ -201,6 +205,17 @@ def section(res: dict) -> str:
         "MSE of progressive dpc over PMJ02BN's: " + ", ".join(f"{n}: x{r:.2f}" for n, r in zip(counts, ratio)) + ".",
         "Over the best of the others at that count (ldsampler renders only 4, 16 and 64): "
         + ", ".join(f"{n}: x{res['mse']['dpc progressive'][i] / best[n]:.2f}" for i, n in enumerate(counts))
+        + ".",
+        "MSE of progressive-2d-relaxed in the dpc plugin over PMJ02BN's: "
+        + ", ".join(
+            f"{n}: x{res['mse']['dpc progressive relaxed'][i] / res['mse']['pmj02bn'][i]:.2f}"
+            for i, n in enumerate(counts)
+        )
+        + "; over progressive-2d's in the plugin: "
+        + ", ".join(
+            f"{n}: x{res['mse']['dpc progressive relaxed'][i] / res['mse']['dpc progressive'][i]:.2f}"
+            for i, n in enumerate(counts)
+        )
         + ".",
         "MSE of the relaxed progressive sets over PMJ02BN's (the same pool sampler): "
         + ", ".join(

@@ -527,7 +527,8 @@ PYBIND11_MODULE(_core, mod) {
     mod.def(
         "relax_prefixes",
         [](py::array_t<float, py::array::c_style | py::array::forcecast> points, uint32_t base, uint32_t steps) {
-            if (points.ndim() != 2 || points.shape(1) != 2) raise_status(DPC_ERROR_INVALID_ARGUMENT, "points must be (m, 2)");
+            if (points.ndim() != 2 || points.shape(1) != 2)
+                raise_status(DPC_ERROR_INVALID_ARGUMENT, "points must be (m, 2)");
             py::array_t<float> out({points.shape(0), points.shape(1)});
             std::memcpy(out.mutable_data(), points.data(), sizeof(float) * points.size());
             float *p = out.mutable_data();

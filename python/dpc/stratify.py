@@ -25,15 +25,16 @@ Gaussian blue noise, Ahmed et al. 2022, once per prefix: the prefix's pairs feel
 small term that cancels each prefix's lowest frequencies. A progressive model's levels hold the
 earlier points in place; relaxed jointly, the full set and every power-of-two prefix are each as
 blue as a set made for their size (the measurements in docs/progressive.md), and the first n
-points are no longer the model's set of n.
+points are no longer the model's set of n. It is libdpc's ``dpc_relax_prefixes``, the last step
+of a model with metadata ``dpc.relax`` (progressive-2d-relaxed: docs/model-format.md §6.1).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .baselines import _free_strata, _mark, _pmj02_steps
 from . import _core
+from .baselines import _free_strata, _mark, _pmj02_steps
 from .errors import InvalidArgumentError
 
 __all__ = ["relax_prefixes", "stratify_02"]

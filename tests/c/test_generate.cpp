@@ -454,6 +454,124 @@ TEST(Progressive, RunsOnTheCpuAndVulkanSaysWhy) {
     dpc_model_free(m);
 }
 
+// ---- the prefix relaxation (docs/model-format.md §6.1) ----------------------------------------
+
+namespace {
+// the smallest toroidal distance among the first n points, times sqrt(n)
+double min_gap(const std::vector<float> &x, size_t n) {
+    double best = 1.0;
+    for (size_t i = 0; i < n; i++)
+        for (size_t j = i + 1; j < n; j++) {
+            double d2 = 0.0;
+            for (size_t c = 0; c < 2; c++) {
+                double d = std::fabs((double)x[2 * i + c] - (double)x[2 * j + c]);
+                d = std::min(d, 1.0 - d);
+                d2 += d * d;
+            }
+            best = std::min(best, std::sqrt(d2));
+        }
+    return best * std::sqrt((double)n);
+}
+} // namespace
+
+// dpc.relax = 400: the levels of model_2d_progressive, then dpc_relax_prefixes on all points.
+TEST(Relax, TheModelIsItsLevelsThenTheRelaxation) {
+    ModelPtr m = load(model_path("model_2d_progressive_relaxed"));
+    ModelPtr levels = load(model_path("model_2d_progressive"));
+    ASSERT_TRUE(m && levels);
+    EXPECT_STREQ(dpc_model_metadata(m.get(), "dpc.relax"), "400");
+    for (uint64_t seed : {0ull, 9ull, ~0ull})
+        for (size_t n : {10u, 64u, 300u}) {
+            std::vector<float> x = generate(levels.get(), seed, n);
+            ASSERT_EQ(dpc_relax_prefixes(x.data(), n, 16, 400), n >= 16 ? DPC_OK : DPC_ERROR_INVALID_ARGUMENT);
+            if (n >= 16) {
+                EXPECT_EQ(generate(m.get(), seed, n), x) << "seed " << seed << ", n " << n;
+            }
+        }
+    // every point moves: the first n points of a set are no longer the set of n (§6.1)
+    const std::vector<float> big = generate(m.get(), 3, 256);
+    EXPECT_NE(head(big, 64), generate(m.get(), 3, 64));
+}
+
+// Every prefix 16 * 2^j and the whole set keep their points apart (min distance times sqrt(n)),
+// far more than model_2d_progressive's held levels (model_2d's cascade is no progressive design).
+TEST(Relax, EveryPrefixSpreadsOut) {
+    ModelPtr m = load(model_path("model_2d_progressive_relaxed"));
+    ModelPtr levels = load(model_path("model_2d_progressive"));
+    double relaxed_sum = 0.0, levels_sum = 0.0;
+    for (uint64_t seed = 0; seed < 4; seed++) {
+        const std::vector<float> x = generate(m.get(), seed, 200), y = generate(levels.get(), seed, 200);
+        for (size_t n : {16u, 32u, 64u, 128u, 200u}) {
+            EXPECT_GT(min_gap(x, n), 0.45) << "seed " << seed << ", n " << n; // the levels: 0.03-0.73
+            relaxed_sum += min_gap(x, n);
+            levels_sum += min_gap(y, n);
+        }
+    }
+    EXPECT_GT(relaxed_sum, 2.0 * levels_sum); // 12.5 against 4.5 when written
+}
+
+TEST(Relax, SameBitsOnEveryPathThreadCountAndBatch) {
+    ModelPtr ref = load(model_path("model_2d_progressive_relaxed"), DPC_ISA_SCALAR, 1);
+    ASSERT_TRUE(ref);
+    const std::vector<float> want = generate(ref.get(), 4, 600);
+    std::vector<dpc_isa> isas = {DPC_ISA_SCALAR};
+    for (dpc_isa v : vector_isas()) isas.push_back(v);
+    for (dpc_isa isa : isas)
+        for (uint32_t threads : {1u, 3u}) {
+            ModelPtr m = load(model_path("model_2d_progressive_relaxed"), isa, threads);
+            ASSERT_TRUE(m);
+            EXPECT_EQ(generate(m.get(), 4, 600), want) << isa_name(isa) << ", " << threads << " threads";
+            std::vector<float> batch(3 * 600 * 2);
+            ASSERT_EQ(dpc_generate_batch(m.get(), 3, 3, 600, batch.data()), DPC_OK) << dpc_last_error();
+            EXPECT_EQ(std::vector<float>(batch.begin() + 1200, batch.begin() + 2400), want) << isa_name(isa);
+        }
+}
+
+TEST(Relax, BadArgumentsLeaveThePointsAsTheyWere) {
+    std::vector<float> x(100 * 2);
+    ASSERT_EQ(dpc_uniform(1, 100, 2, x.data()), DPC_OK);
+    const std::vector<float> before = x;
+    EXPECT_EQ(dpc_relax_prefixes(nullptr, 100, 16, 10), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(dpc_relax_prefixes(x.data(), 100, 1, 10), DPC_ERROR_INVALID_ARGUMENT); // base < 2
+    EXPECT_EQ(dpc_relax_prefixes(x.data(), 15, 16, 10), DPC_ERROR_INVALID_ARGUMENT); // fewer than base
+    EXPECT_EQ(dpc_relax_prefixes(x.data(), 100, 16, 100001), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(dpc_last_error()).find("100000"), std::string::npos) << dpc_last_error();
+    EXPECT_EQ(dpc_relax_prefixes(x.data(), (size_t)DPC_MAX_POINTS + 1, 16, 10), DPC_ERROR_LIMIT);
+    x[77] = 1.0f;
+    EXPECT_EQ(dpc_relax_prefixes(x.data(), 100, 16, 10), DPC_ERROR_INVALID_ARGUMENT);
+    x[77] = before[77];
+    EXPECT_EQ(x, before);
+    EXPECT_EQ(dpc_relax_prefixes(x.data(), 100, 16, 0), DPC_OK); // no steps: nothing moves
+    EXPECT_EQ(x, before);
+    EXPECT_EQ(dpc_relax_prefixes(x.data(), 100, 16, 10), DPC_OK);
+    EXPECT_NE(x, before);
+    for (float v : x) EXPECT_TRUE(v >= 0.0f && v < 1.0f);
+}
+
+namespace {
+struct Polls {
+    uint64_t total = 0, after_end = 0;
+};
+int stop_after_the_layers(void *user, uint64_t done, uint64_t total) {
+    Polls *p = (Polls *)user;
+    p->total = total;
+    if (done < total) return 0;
+    return ++p->after_end >= 3; // the relaxation polls once every 10 steps after the last layer
+}
+} // namespace
+
+TEST(Relax, TheProgressCallbackCanStopIt) {
+    ModelPtr m = load(model_path("model_2d_progressive_relaxed"));
+    std::vector<float> out(2000 * 2);
+    Polls polls;
+    dpc_generate_options o;
+    dpc_generate_options_init(&o);
+    o.progress = stop_after_the_layers;
+    o.user = &polls;
+    EXPECT_EQ(dpc_generate_ex(m.get(), 1, 1, 2000, &o, out.data()), DPC_ERROR_CANCELLED) << dpc_last_error();
+    EXPECT_EQ(polls.after_end, 3u);
+}
+
 // ---- the output balance (docs/model-format.md §5.1) -------------------------------------------
 
 namespace {

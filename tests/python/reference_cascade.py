@@ -225,9 +225,7 @@ def generate(model: RefModel, seed: int, m: int | None = None) -> np.ndarray:
     return run_cascade(model, initial_points(model, seed, m))
 
 
-def generate_progressive(
-    model: RefModel, seed: int, m: int, base: int, radius: int = 0, relax: int = 0
-) -> np.ndarray:
+def generate_progressive(model: RefModel, seed: int, m: int, base: int, radius: int = 0, relax: int = 0) -> np.ndarray:
     """Reference of dpc_generate_n for a progressive model (§6): a set of min(m, base) points,
     then levels that add min(n, m - n) input points of seed + level * golden to the n so far and
     run every layer on all of them, the first n put back after each layer. With a balance radius

@@ -20,9 +20,9 @@
 #include "cpu/cpu_cascade.h"
 #include "cpu/cpu_layer_train.h"
 #include "model/balance.h"
-#include "model/relax.h"
 #include "model/input.h"
 #include "model/plan.h"
+#include "model/relax.h"
 
 #define MAX_FLOATS_PER_SET (1ull << 28) /* n_points * dims: 1 GiB of floats */
 

@@ -20,8 +20,8 @@
 #include "cpu/cpu_lists.h"
 #include "model/balance.h"
 #include "model/input.h"
-#include "model/relax.h"
 #include "model/plan.h"
+#include "model/relax.h"
 
 #define MAX_RANGES DPC_PLAN_MAX_RANGES /* index ranges per point (2 per row of cells) */
 

@@ -10,9 +10,9 @@
 
 #include "common/error.h"
 #include "model/balance.h"
-#include "model/relax.h"
 #include "model/model.h"
 #include "model/protobuf.h"
+#include "model/relax.h"
 
 #define DPC_DOMAIN "ai.dpc"
 #define MAX_INITIALIZERS 8192u

@@ -31,38 +31,38 @@
 #define WIDTH 0.72      /* s_P sqrt(|P|) of a proper prefix */
 #define WIDTH_FULL 0.60 /* ... of the whole set */
 #define STEP 0.1
-#define DECAY 0.2         /* the last step is this fraction of the first */
-#define LOW_WEIGHT 0.05   /* of the low-frequency term */
-#define LOW_RADIUS 8.0    /* its largest |q| */
-#define SUPPORT 3.5       /* the pair term's support, in widths (at most 1/2) */
-#define MARGIN 0.4        /* the neighbour search's reach beyond it, in widths */
-#define MAX_PREFIXES 40   /* base * 2^j <= 2^32 */
-#define MAX_LOW 8         /* integer part of LOW_RADIUS */
+#define DECAY 0.2          /* the last step is this fraction of the first */
+#define LOW_WEIGHT 0.05    /* of the low-frequency term */
+#define LOW_RADIUS 8.0     /* its largest |q| */
+#define SUPPORT 3.5        /* the pair term's support, in widths (at most 1/2) */
+#define MARGIN 0.4         /* the neighbour search's reach beyond it, in widths */
+#define MAX_PREFIXES 40    /* base * 2^j <= 2^32 */
+#define MAX_LOW 8          /* integer part of LOW_RADIUS */
 #define MAX_FREQS (17 * 9) /* a in -8..8, b in 0..8 */
 
 typedef struct prefix {
     size_t n;
-    double two_w2;      /* 2 s_P^2 */
-    double support2;    /* R_P^2 */
-    double cut;         /* G(R_P), subtracted: the force goes to 0 at R_P */
-    double reach;       /* neighbour search radius */
-    double weight;      /* LOW_WEIGHT * 4 pi / |P| */
-    double radius2;     /* its largest |q|^2 (0: no low frequencies) */
-    uint32_t *pairs;    /* [n_pairs][2] */
+    double two_w2;   /* 2 s_P^2 */
+    double support2; /* R_P^2 */
+    double cut;      /* G(R_P), subtracted: the force goes to 0 at R_P */
+    double reach;    /* neighbour search radius */
+    double weight;   /* LOW_WEIGHT * 4 pi / |P| */
+    double radius2;  /* its largest |q|^2 (0: no low frequencies) */
+    uint32_t *pairs; /* [n_pairs][2] */
     size_t n_pairs, cap;
 } prefix;
 
 typedef struct relax {
     size_t m;
-    double *x, *force;      /* [m][2] */
+    double *x, *force; /* [m][2] */
     size_t n_prefix;
     prefix p[MAX_PREFIXES];
-    int low;                /* the largest integer |q| component of any prefix (0: none) */
-    size_t n_freq;          /* q = (a, b) of a half-plane, |q| <= the largest radius: rows b = 0 .. low */
+    int low;                 /* the largest integer |q| component of any prefix (0: none) */
+    size_t n_freq;           /* q = (a, b) of a half-plane, |q| <= the largest radius: rows b = 0 .. low */
     size_t row[MAX_LOW + 2]; /* row b: frequencies row[b] .. row[b + 1], a increasing from a_first[b] */
     int a_first[MAX_LOW + 1];
     double q2[MAX_FREQS], newton_a[MAX_FREQS], newton_b[MAX_FREQS]; /* |q|^2, q / |q|^2 */
-    double *c;              /* [n_prefix][2][n_freq]: re, im of c_q of each prefix, then the weighted A_q */
+    double *c;                          /* [n_prefix][2][n_freq]: re, im of c_q of each prefix, then the weighted A_q */
     uint32_t *cell_start, *cell_points; /* the grid of one search */
 } relax;
 
@@ -96,7 +96,7 @@ static int search(relax *R, prefix *P) {
     const size_t n = P->n;
     P->n_pairs = 0;
     size_t G = (size_t)floor(1.0 / (P->reach * (1.0 + 1e-9))); /* the margin: cells a rounding wider */
-    const size_t most = (size_t)floor(sqrt((double)n)) + 1; /* about one point per cell at most */
+    const size_t most = (size_t)floor(sqrt((double)n)) + 1;    /* about one point per cell at most */
     if (G > most) G = most;
     if (G < 3) {
         for (uint32_t i = 0; i < n; i++)
