@@ -526,16 +526,17 @@ PYBIND11_MODULE(_core, mod) {
         py::arg("points"), py::arg("radius"));
     mod.def(
         "relax_prefixes",
-        [](py::array_t<float, py::array::c_style | py::array::forcecast> points, uint32_t base, uint32_t steps) {
+        [](py::array_t<float, py::array::c_style | py::array::forcecast> points, uint32_t base, uint32_t steps,
+           uint32_t threads) {
             if (points.ndim() != 2 || points.shape(1) != 2)
                 raise_status(DPC_ERROR_INVALID_ARGUMENT, "points must be (m, 2)");
             py::array_t<float> out({points.shape(0), points.shape(1)});
             std::memcpy(out.mutable_data(), points.data(), sizeof(float) * points.size());
             float *p = out.mutable_data();
             const size_t m = points.shape(0);
-            call([&] { return dpc_relax_prefixes(p, m, base, steps); }); /* without the GIL */
+            call([&] { return dpc_relax_prefixes(p, m, base, steps, threads); }); /* without the GIL */
             return out;
         },
-        py::arg("points"), py::arg("base"), py::arg("steps"));
+        py::arg("points"), py::arg("base"), py::arg("steps"), py::arg("threads"));
     register_layer_training(mod);
 }

@@ -85,7 +85,7 @@ def stratify_02(points, up_to: int | None = None) -> np.ndarray:
     return y
 
 
-def relax_prefixes(points, steps: int = 1600, base: int = 16) -> np.ndarray:
+def relax_prefixes(points, steps: int = 1600, base: int = 16, *, threads: int = 0) -> np.ndarray:
     """Every point of the ordered set ``points`` (m, 2) in [0, 1), m >= ``base``, moved at once so
     that each prefix of ``base`` * 2^j points and the whole set are blue noise; (m, 2) float32,
     the same order. libdpc's ``dpc_relax_prefixes`` (docs/model-format.md §6.1): ``steps``
@@ -96,7 +96,8 @@ def relax_prefixes(points, steps: int = 1600, base: int = 16) -> np.ndarray:
     Each step moves point i by 0.1 (falling linearly to 0.02) times minus the gradient, the pair
     terms scaled by s_P^2. What the generator of a model with metadata ``dpc.relax`` (e.g.
     progressive-2d-relaxed) does after its levels, bit for bit; the same bits on every machine.
-    The first n points of the result are not the relaxed set of n (it depends on m)."""
+    The first n points of the result are not the relaxed set of n (it depends on m). ``threads``
+    (0: one per CPU) share the work from 2,048 points on, with the same bits for any count."""
     x = np.asarray(points)
     if isinstance(base, bool) or not isinstance(base, int) or base < 2:
         raise InvalidArgumentError(f"base must be an integer >= 2, got {base!r}")
@@ -107,4 +108,6 @@ def relax_prefixes(points, steps: int = 1600, base: int = 16) -> np.ndarray:
     y = np.ascontiguousarray(x, dtype=np.float32)
     if not np.all((y >= 0) & (y < 1)):
         raise InvalidArgumentError("points must lie in [0, 1) (as float32)")
-    return _core.relax_prefixes(y, base, steps)
+    if isinstance(threads, bool) or not isinstance(threads, int) or not 0 <= threads <= 0xFFFFFFFF:
+        raise InvalidArgumentError(f"threads must be an integer >= 0, got {threads!r}")
+    return _core.relax_prefixes(y, base, steps, threads)

@@ -483,7 +483,7 @@ TEST(Relax, TheModelIsItsLevelsThenTheRelaxation) {
     for (uint64_t seed : {0ull, 9ull, ~0ull})
         for (size_t n : {10u, 64u, 300u}) {
             std::vector<float> x = generate(levels.get(), seed, n);
-            ASSERT_EQ(dpc_relax_prefixes(x.data(), n, 16, 400), n >= 16 ? DPC_OK : DPC_ERROR_INVALID_ARGUMENT);
+            ASSERT_EQ(dpc_relax_prefixes(x.data(), n, 16, 400, 1), n >= 16 ? DPC_OK : DPC_ERROR_INVALID_ARGUMENT);
             if (n >= 16) {
                 EXPECT_EQ(generate(m.get(), seed, n), x) << "seed " << seed << ", n " << n;
             }
@@ -527,23 +527,37 @@ TEST(Relax, SameBitsOnEveryPathThreadCountAndBatch) {
         }
 }
 
+// From 2,048 points the steps are shared by threads, in fixed parts: the same bits for any count.
+TEST(Relax, SameBitsForEveryThreadCount) {
+    std::vector<float> want(2500 * 2);
+    ASSERT_EQ(dpc_uniform(5, 2500, 2, want.data()), DPC_OK);
+    const std::vector<float> start = want;
+    ASSERT_EQ(dpc_relax_prefixes(want.data(), 2500, 16, 30, 1), DPC_OK) << dpc_last_error();
+    EXPECT_NE(want, start);
+    for (uint32_t threads : {0u, 2u, 3u, 8u, 64u}) {
+        std::vector<float> x = start;
+        ASSERT_EQ(dpc_relax_prefixes(x.data(), 2500, 16, 30, threads), DPC_OK) << dpc_last_error();
+        EXPECT_EQ(x, want) << threads << " threads";
+    }
+}
+
 TEST(Relax, BadArgumentsLeaveThePointsAsTheyWere) {
     std::vector<float> x(100 * 2);
     ASSERT_EQ(dpc_uniform(1, 100, 2, x.data()), DPC_OK);
     const std::vector<float> before = x;
-    EXPECT_EQ(dpc_relax_prefixes(nullptr, 100, 16, 10), DPC_ERROR_INVALID_ARGUMENT);
-    EXPECT_EQ(dpc_relax_prefixes(x.data(), 100, 1, 10), DPC_ERROR_INVALID_ARGUMENT); // base < 2
-    EXPECT_EQ(dpc_relax_prefixes(x.data(), 15, 16, 10), DPC_ERROR_INVALID_ARGUMENT); // fewer than base
-    EXPECT_EQ(dpc_relax_prefixes(x.data(), 100, 16, 100001), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(dpc_relax_prefixes(nullptr, 100, 16, 10, 1), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(dpc_relax_prefixes(x.data(), 100, 1, 10, 1), DPC_ERROR_INVALID_ARGUMENT); // base < 2
+    EXPECT_EQ(dpc_relax_prefixes(x.data(), 15, 16, 10, 1), DPC_ERROR_INVALID_ARGUMENT); // fewer than base
+    EXPECT_EQ(dpc_relax_prefixes(x.data(), 100, 16, 100001, 1), DPC_ERROR_INVALID_ARGUMENT);
     EXPECT_NE(std::string(dpc_last_error()).find("100000"), std::string::npos) << dpc_last_error();
-    EXPECT_EQ(dpc_relax_prefixes(x.data(), (size_t)DPC_MAX_POINTS + 1, 16, 10), DPC_ERROR_LIMIT);
+    EXPECT_EQ(dpc_relax_prefixes(x.data(), (size_t)DPC_MAX_POINTS + 1, 16, 10, 1), DPC_ERROR_LIMIT);
     x[77] = 1.0f;
-    EXPECT_EQ(dpc_relax_prefixes(x.data(), 100, 16, 10), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(dpc_relax_prefixes(x.data(), 100, 16, 10, 1), DPC_ERROR_INVALID_ARGUMENT);
     x[77] = before[77];
     EXPECT_EQ(x, before);
-    EXPECT_EQ(dpc_relax_prefixes(x.data(), 100, 16, 0), DPC_OK); // no steps: nothing moves
+    EXPECT_EQ(dpc_relax_prefixes(x.data(), 100, 16, 0, 1), DPC_OK); // no steps: nothing moves
     EXPECT_EQ(x, before);
-    EXPECT_EQ(dpc_relax_prefixes(x.data(), 100, 16, 10), DPC_OK);
+    EXPECT_EQ(dpc_relax_prefixes(x.data(), 100, 16, 10, 1), DPC_OK);
     EXPECT_NE(x, before);
     for (float v : x) EXPECT_TRUE(v >= 0.0f && v < 1.0f);
 }

@@ -328,12 +328,13 @@ DPC_API dpc_status dpc_balance(float *points, size_t n_points, size_t dims, uint
  * every prefix of base * 2^j points and the whole set are blue noise at their own scale
  * (docs/progressive.md, "Jointly relaxed prefixes"); the first n points are then no longer the
  * caller's first n. What the generator of a model with metadata dpc.relax = steps does after its
- * levels (e.g. progressive-2d-relaxed: base 16, 1,600 steps). Sequential double arithmetic with
- * its own exp, sin and cos: the same bits on every machine. Its cost grows as n_points * steps
- * (about 1 s for 1,024 points and 1,600 steps on one core; docs/performance.md). base >= 2,
- * n_points >= base, steps <= 100,000 (0: nothing changes); DPC_ERROR_OUT_OF_MEMORY leaves the
- * points unchanged. */
-DPC_API dpc_status dpc_relax_prefixes(float *points, size_t n_points, uint32_t base, uint32_t steps);
+ * levels (e.g. progressive-2d-relaxed: base 16, 1,600 steps). Sequential double arithmetic in a
+ * fixed order, with its own exp, sin and cos, its work cut into fixed parts that `threads`
+ * threads share (0: one per online CPU; from 2,048 points on): the same bits on every machine
+ * and for every thread count. Its cost grows as n_points * steps (docs/progressive.md has the
+ * measured times). base >= 2, n_points >= base, steps <= 100,000 (0: nothing changes);
+ * DPC_ERROR_OUT_OF_MEMORY leaves the points unchanged. */
+DPC_API dpc_status dpc_relax_prefixes(float *points, size_t n_points, uint32_t base, uint32_t steps, uint32_t threads);
 
 /* ---------------------------------------------------------------------------------------------
  * Sampler: values for (pixel, sample index, dimension), for a renderer

@@ -17,6 +17,7 @@
 
 #include "api/model_handle.h"
 #include "common/error.h"
+#include "common/threads.h"
 #include "cpu/cpu_cascade.h"
 #include "cpu/cpu_layer_train.h"
 #include "model/balance.h"
@@ -459,7 +460,7 @@ dpc_status dpc_balance(float *points, size_t n_points, size_t dims, uint32_t rad
     return st == DPC_OK ? dpc_balance_points(points, n_points, dims, k, 0) : st;
 }
 
-dpc_status dpc_relax_prefixes(float *points, size_t n_points, uint32_t base, uint32_t steps) {
+dpc_status dpc_relax_prefixes(float *points, size_t n_points, uint32_t base, uint32_t steps, uint32_t threads) {
     dpc_clear_error();
     if (!points) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "points is NULL");
     if (base < 2 || n_points < base)
@@ -470,7 +471,8 @@ dpc_status dpc_relax_prefixes(float *points, size_t n_points, uint32_t base, uin
     if (steps > DPC_RELAX_MAX_STEPS)
         return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "steps is %u, at most %u", steps, DPC_RELAX_MAX_STEPS);
     const dpc_status st = check_unit_points(points, n_points, 2);
-    return st == DPC_OK ? dpc_relax_points(points, n_points, base, steps, NULL, NULL) : st;
+    return st == DPC_OK ? dpc_relax_points(points, n_points, base, steps, dpc_threads_resolve(threads), NULL, NULL)
+                        : st;
 }
 
 static double model_max_radius(const dpc_cascade *c) {

@@ -506,7 +506,7 @@ static dpc_status generate_one(const dpc_cascade *c, dpc_input input, const dpc_
     }
     if (st == DPC_OK && c->relax) { /* every prefix relaxed at once (§6.1): the held points move too */
         relax_hook_ctx h = {hook, ctx};
-        st = dpc_relax_points(out, m, c->progressive_base, c->relax, hook ? relax_hook : NULL, &h);
+        st = dpc_relax_points(out, m, c->progressive_base, c->relax, e->threads, hook ? relax_hook : NULL, &h);
     }
     return st;
 }

@@ -27,6 +27,7 @@
 
 #include "common/detmath.h"
 #include "common/error.h"
+#include "common/threads.h"
 
 #define WIDTH 0.72      /* s_P sqrt(|P|) of a proper prefix */
 #define WIDTH_FULL 0.60 /* ... of the whole set */
@@ -39,6 +40,11 @@
 #define MAX_PREFIXES 40    /* base * 2^j <= 2^32 */
 #define MAX_LOW 8          /* integer part of LOW_RADIUS */
 #define MAX_FREQS (17 * 9) /* a in -8..8, b in 0..8 */
+/* The work of a step is cut into CHUNKS fixed parts (of every prefix's pairs, of the points),
+ * each summed in its own order and the parts added in chunk order: the same bits whatever the
+ * number of threads that run them. */
+#define CHUNKS 8
+#define THREADED_POINTS 2048 /* fewer points: one thread (a fork-join per phase costs more) */
 
 typedef struct prefix {
     size_t n;
@@ -54,7 +60,11 @@ typedef struct prefix {
 
 typedef struct relax {
     size_t m;
-    double *x, *force; /* [m][2] */
+    double *x;    /* [m][2] */
+    double *part; /* [CHUNKS][m][2]: each chunk's pair forces */
+    double *csum; /* [CHUNKS][n_prefix][2][n_freq]: each chunk's points' share of every prefix's c_q */
+    double eta;   /* this step's size */
+    unsigned threads;
     size_t n_prefix;
     prefix p[MAX_PREFIXES];
     int low;                 /* the largest integer |q| component of any prefix (0: none) */
@@ -137,11 +147,12 @@ static int search(relax *R, prefix *P) {
     return 1;
 }
 
-/* The pair forces of one prefix: a push along x_i - x_j, weighted by the pair's Gaussian. */
-static void pair_forces(relax *R, const prefix *P) {
+/* Chunk c's share of one prefix's pair forces: a push along x_i - x_j, weighted by the pair's
+ * cut Gaussian, into the chunk's own buffer f. */
+static void pair_forces(const relax *R, const prefix *P, size_t c, double *f) {
     const double *x = R->x;
-    double *f = R->force;
-    for (size_t k = 0; k < P->n_pairs; k++) {
+    const size_t lo = P->n_pairs * c / CHUNKS, hi = P->n_pairs * (c + 1) / CHUNKS;
+    for (size_t k = lo; k < hi; k++) {
         const uint32_t i = P->pairs[2 * k], j = P->pairs[2 * k + 1];
         const double dx = wrap(x[2 * i] - x[2 * j]), dy = wrap(x[2 * i + 1] - x[2 * j + 1]);
         const double d2 = dx * dx + dy * dy;
@@ -183,24 +194,46 @@ static void waves(const relax *R, const double *xi, double *e_re, double *e_im) 
     }
 }
 
-static void low_forces(relax *R) {
-    if (!R->n_freq) return;
-    const size_t F = R->n_freq;
-    double e_re[MAX_FREQS], e_im[MAX_FREQS], sum_re[MAX_FREQS] = {0}, sum_im[MAX_FREQS] = {0}, s[MAX_FREQS];
-    size_t p = 0; /* c_q of each prefix: the running sums in point order, kept at its end */
-    for (size_t i = 0; i < R->m; i++) {
+/* Phase A of a step, chunk c: its share of every prefix's pair forces, and its points' share of
+ * every prefix's c_q (the running sum in point order, kept at each prefix's end). */
+static void phase_a(relax *R, size_t c) {
+    const size_t m = R->m, F = R->n_freq;
+    double *f = R->part + c * 2 * m;
+    memset(f, 0, 2 * m * sizeof *f);
+    for (size_t q = 0; q < R->n_prefix; q++) pair_forces(R, &R->p[q], c, f);
+    if (!F) return;
+    double e_re[MAX_FREQS], e_im[MAX_FREQS], sum_re[MAX_FREQS] = {0}, sum_im[MAX_FREQS] = {0};
+    double *out = R->csum + c * R->n_prefix * 2 * F;
+    const size_t lo = m * c / CHUNKS, hi = m * (c + 1) / CHUNKS;
+    size_t p = 0;
+    for (; p < R->n_prefix && R->p[p].n <= lo; p++) /* prefixes that end before the chunk: no share */
+        memset(out + p * 2 * F, 0, 2 * F * sizeof *out);
+    for (size_t i = lo; i < hi; i++) {
         waves(R, R->x + 2 * i, e_re, e_im);
-        for (size_t f = 0; f < F; f++) {
-            sum_re[f] += e_re[f];
-            sum_im[f] += e_im[f];
+        for (size_t k = 0; k < F; k++) {
+            sum_re[k] += e_re[k];
+            sum_im[k] += e_im[k];
         }
-        while (p < R->n_prefix && R->p[p].n == i + 1) {
-            memcpy(R->c + 2 * p * F, sum_re, F * sizeof *sum_re);
-            memcpy(R->c + (2 * p + 1) * F, sum_im, F * sizeof *sum_im);
-            p++;
+        for (; p < R->n_prefix && R->p[p].n == i + 1; p++) {
+            memcpy(out + p * 2 * F, sum_re, F * sizeof *sum_re);
+            memcpy(out + p * 2 * F + F, sum_im, F * sizeof *sum_im);
         }
     }
-    /* A_q of the points of prefix p's level: the weighted c_q of p and every larger prefix */
+    for (; p < R->n_prefix; p++) { /* prefixes that end after the chunk: all of it */
+        memcpy(out + p * 2 * F, sum_re, F * sizeof *sum_re);
+        memcpy(out + p * 2 * F + F, sum_im, F * sizeof *sum_im);
+    }
+}
+
+/* Between the phases: c_q of every prefix (the chunks' shares in chunk order), then A_q of the
+ * points of prefix p's level: the weighted c_q of p and of every larger prefix. */
+static void weigh(relax *R) {
+    const size_t F = R->n_freq, stride = R->n_prefix * 2 * F;
+    for (size_t k = 0; k < stride; k++) {
+        double v = 0.0;
+        for (size_t c = 0; c < CHUNKS; c++) v += R->csum[c * stride + k];
+        R->c[k] = v;
+    }
     for (size_t q = R->n_prefix; q-- > 0;) {
         const prefix *P = &R->p[q];
         double *re = R->c + 2 * q * F, *im = re + F;
@@ -218,37 +251,80 @@ static void low_forces(relax *R) {
             im[f] = ai;
         }
     }
-    p = 0;
-    for (size_t i = 0; i < R->m; i++) {
-        while (R->p[p].n <= i) p++;
-        const double *Ar = R->c + 2 * p * F, *Ai = Ar + F;
-        waves(R, R->x + 2 * i, e_re, e_im);
-        for (size_t f = 0; f < F; f++) s[f] = Ar[f] * e_im[f] - Ai[f] * e_re[f]; /* Im(conj(A_q) e_q) */
+}
+
+/* Phase B of a step, chunk c's points: the pair forces of every chunk (in chunk order), the
+ * low-frequency force, the move. Point i's force reads only x_i, so it moves at once. */
+static void phase_b(relax *R, size_t c) {
+    const size_t m = R->m, F = R->n_freq;
+    const size_t lo = m * c / CHUNKS, hi = m * (c + 1) / CHUNKS;
+    double e_re[MAX_FREQS], e_im[MAX_FREQS], s[MAX_FREQS];
+    size_t p = 0;
+    for (size_t i = lo; i < hi; i++) {
         double fa = 0.0, fb = 0.0;
-        for (size_t f = 0; f < F; f++) {
-            fa += s[f] * R->newton_a[f];
-            fb += s[f] * R->newton_b[f];
+        for (size_t k = 0; k < CHUNKS; k++) {
+            fa += R->part[(k * m + i) * 2];
+            fb += R->part[(k * m + i) * 2 + 1];
         }
-        R->force[2 * i] += fa;
-        R->force[2 * i + 1] += fb;
+        if (F) {
+            while (R->p[p].n <= i) p++;
+            const double *Ar = R->c + 2 * p * F, *Ai = Ar + F;
+            waves(R, R->x + 2 * i, e_re, e_im);
+            for (size_t f = 0; f < F; f++) s[f] = Ar[f] * e_im[f] - Ai[f] * e_re[f]; /* Im(conj(A_q) e_q) */
+            double la = 0.0, lb = 0.0;
+            for (size_t f = 0; f < F; f++) {
+                la += s[f] * R->newton_a[f];
+                lb += s[f] * R->newton_b[f];
+            }
+            fa += la;
+            fb += lb;
+        }
+        for (int d = 0; d < 2; d++) {
+            double v = R->x[2 * i + d] + R->eta * (d ? fb : fa);
+            v -= floor(v);
+            R->x[2 * i + d] = v < 1.0 ? v : 0.0; /* a tiny negative v rounds up to 1: the torus's 0 */
+        }
     }
+}
+
+typedef struct phase_job {
+    relax *R;
+    void (*run)(relax *, size_t);
+    unsigned workers;
+} phase_job;
+
+static void phase_worker(void *ctx, unsigned slot) {
+    const phase_job *j = (const phase_job *)ctx;
+    for (size_t c = slot; c < CHUNKS; c += j->workers) j->run(j->R, c);
+}
+
+static void phase(relax *R, void (*run)(relax *, size_t)) {
+    phase_job j = {R, run, R->threads};
+    if (R->threads <= 1) {
+        for (size_t c = 0; c < CHUNKS; c++) run(R, c);
+        return;
+    }
+    dpc_run_workers(R->threads, phase_worker, &j);
 }
 
 static void relax_free(relax *R) {
     for (size_t q = 0; q < R->n_prefix; q++) free(R->p[q].pairs);
     free(R->x);
-    free(R->force);
+    free(R->part);
+    free(R->csum);
     free(R->c);
     free(R->cell_start);
     free(R->cell_points);
 }
 
-dpc_status dpc_relax_points(float *x, size_t m, uint32_t base, uint32_t steps, dpc_relax_hook hook, void *ctx) {
+dpc_status dpc_relax_points(float *x, size_t m, uint32_t base, uint32_t steps, unsigned threads, dpc_relax_hook hook,
+                            void *ctx) {
     if (m < 2 || !steps) return DPC_OK;
     if (!base) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "the relaxation's base must be positive");
     relax R;
     memset(&R, 0, sizeof R);
     R.m = m;
+    R.threads = m < THREADED_POINTS ? 1 : threads < CHUNKS ? threads : CHUNKS;
     for (size_t n = base; n < m; n *= 2) { /* the proper prefixes, then the whole set */
         R.p[R.n_prefix++].n = n;
         if (n > SIZE_MAX / 2 || R.n_prefix == MAX_PREFIXES - 1) break;
@@ -287,12 +363,13 @@ dpc_status dpc_relax_points(float *x, size_t m, uint32_t base, uint32_t steps, d
     R.row[R.low + 1] = R.n_freq;
     const size_t cells = (size_t)floor(sqrt((double)m)) + 2;
     R.x = (double *)malloc(2 * m * sizeof *R.x);
-    R.force = (double *)malloc(2 * m * sizeof *R.force);
+    R.part = (double *)malloc(CHUNKS * 2 * m * sizeof *R.part);
+    R.csum = (double *)malloc((CHUNKS * 2 * R.n_prefix * R.n_freq + 1) * sizeof *R.csum);
     R.c = (double *)malloc((2 * R.n_prefix * R.n_freq + 1) * sizeof *R.c);
     R.cell_start = (uint32_t *)malloc((cells * cells + 1) * sizeof *R.cell_start);
     R.cell_points = (uint32_t *)malloc(m * sizeof *R.cell_points);
     dpc_status st = DPC_OK;
-    if (!R.x || !R.force || !R.c || !R.cell_start || !R.cell_points) {
+    if (!R.x || !R.part || !R.csum || !R.c || !R.cell_start || !R.cell_points) {
         st = dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "cannot allocate the relaxation of %zu points", m);
         goto done;
     }
@@ -306,15 +383,10 @@ dpc_status dpc_relax_points(float *x, size_t m, uint32_t base, uint32_t steps, d
                     goto done;
                 }
         }
-        memset(R.force, 0, 2 * m * sizeof *R.force);
-        for (size_t q = 0; q < R.n_prefix; q++) pair_forces(&R, &R.p[q]);
-        low_forces(&R);
-        const double eta = STEP * (1.0 - (1.0 - DECAY) * (double)t / (double)steps);
-        for (size_t i = 0; i < 2 * m; i++) {
-            double v = R.x[i] + eta * R.force[i];
-            v -= floor(v);
-            R.x[i] = v < 1.0 ? v : 0.0; /* a tiny negative v rounds up to 1: the torus's 0 */
-        }
+        R.eta = STEP * (1.0 - (1.0 - DECAY) * (double)t / (double)steps);
+        phase(&R, phase_a);
+        weigh(&R);
+        phase(&R, phase_b);
     }
     for (size_t i = 0; i < 2 * m; i++) {
         const float y = (float)R.x[i];

@@ -20,8 +20,10 @@
 typedef dpc_status (*dpc_relax_hook)(void *ctx);
 
 /* Relax m 2-D points (each coordinate in [0, 1)) in place: the prefixes are base * 2^j < m and
- * the whole set, steps gradient steps (§6.1). DPC_ERROR_OUT_OF_MEMORY leaves the points as they
- * were; a hook's status leaves them partly relaxed. */
-dpc_status dpc_relax_points(float *x, size_t m, uint32_t base, uint32_t steps, dpc_relax_hook hook, void *ctx);
+ * the whole set, steps gradient steps (§6.1), on up to `threads` threads (1 .. DPC_MAX_THREADS;
+ * the same bits for any count). DPC_ERROR_OUT_OF_MEMORY or a hook's status leaves the points as
+ * they were. */
+dpc_status dpc_relax_points(float *x, size_t m, uint32_t base, uint32_t steps, unsigned threads, dpc_relax_hook hook,
+                            void *ctx);
 
 #endif
