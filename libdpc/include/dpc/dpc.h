@@ -341,7 +341,8 @@ DPC_API dpc_status dpc_relax_prefixes(float *points, size_t n_points, uint32_t b
  *
  * A sampler holds, for each of its D dimension slots, a dpc point set of spp points (spp =
  * samples per pixel), generated once when it is created on the CPU backend (whose ISA paths all
- * give the same bits), so the tables are the same on every machine. A lookup for pixel (x, y), sample index i and
+ * give the same bits; up to 16 sets at once, on the first model's threads, one thread per set),
+ * so the tables are the same on every machine. A lookup for pixel (x, y), sample index i and
  * dimension d reads table d mod D at point (i mod spp) rotated by a per-pixel offset, and shifts
  * it toroidally by the pixel's entry of a 32 x 32 screen-space mask (rotated per dimension and
  * moved per dimension and 32 x 32 tile, so no two tiles repeat each other's samples): each
@@ -359,7 +360,8 @@ DPC_API dpc_status dpc_relax_prefixes(float *points, size_t n_points, uint32_t b
  * - Progressive models (dpc.order = "progressive", e.g. progressive-2d; all of the
  *   sampler's models or none): tables are read in order, not rotated per pixel, so a pixel's
  *   first 2^k samples (k >= 4) are a blue-noise set of their own and an adaptive renderer may
- *   stop at any of them; get_1d then uses the stratum of point i's x rank
+ *   stop at any of them (with dpc.relax, e.g. progressive-2d-relaxed, each prefix is better
+ *   blue noise and a table takes about 1 s per 1,024 points to make); get_1d then uses the stratum of point i's x rank
  *   (docs/progressive.md). Net slots are then read in order (the first in the net's Sobol'
  *   order, later ones shuffled within each octave [2^(k-1), 2^k)), so their first 2^k samples
  *   are a (0,k,2)-net.

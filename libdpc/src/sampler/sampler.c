@@ -4,6 +4,7 @@
 
 #include "api/model_handle.h"
 #include "common/error.h"
+#include "common/threads.h"
 #include "sampler/sampler.h"
 
 /* Seed of the s-th set a sampler generates. */
@@ -29,6 +30,27 @@ static void stratify_projections(float *table, uint32_t n, ranked *scratch) {
         qsort(scratch, n, sizeof *scratch, by_value);
         for (uint32_t r = 0; r < n; r++) table[(size_t)scratch[r].i * 2 + c] = ((float)r + 0.5f) / (float)n;
     }
+}
+
+#define SAMPLER_MAX_WORKERS 16u
+
+/* Sets made at once for a sampler's tables: set j (the k[j]-th set, seed set_seed(base, k[j]))
+ * into sets[j], on worker j. */
+typedef struct set_job {
+    const dpc_sampler_options *o;
+    uint64_t base;
+    uint32_t n, widest, count;
+    uint64_t k[SAMPLER_MAX_WORKERS];
+    uint32_t first_slot[SAMPLER_MAX_WORKERS];
+    float *sets;
+    dpc_status status[SAMPLER_MAX_WORKERS];
+} set_job;
+
+static void make_set(void *ctx, unsigned j) {
+    set_job *job = (set_job *)ctx;
+    const dpc_model *m = job->o->models[job->k[j] % job->o->n_models];
+    job->status[j] =
+        dpc_model_generate_cpu(m, set_seed(job->base, job->k[j]), job->n, job->sets + (size_t)j * job->n * job->widest);
 }
 
 dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
@@ -57,7 +79,13 @@ dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
     s->fast_slots = D < DPC_SAMPLER_FAST_SLOTS ? D : DPC_SAMPLER_FAST_SLOTS;
     s->shifted = (float *)malloc((size_t)s->fast_slots * DPC_SAMPLER_TILE * DPC_SAMPLER_TILE *
                                  DPC_SAMPLER_MASK_CHANNELS * sizeof(float));
-    float *set = (float *)malloc((size_t)n * widest * sizeof(float)); /* one set of the widest model */
+    /* sets made at once: the first model's threads (a progressive model's relaxation takes
+     * seconds for large tables), at most one per set slot */
+    unsigned workers = o->models[0]->engine.threads;
+    if (workers > SAMPLER_MAX_WORKERS) workers = SAMPLER_MAX_WORKERS;
+    if (workers > D) workers = D;
+    if (workers < 1) workers = 1;
+    float *set = (float *)malloc((size_t)workers * n * widest * sizeof(float)); /* sets of the widest model */
     ranked *scratch = (ranked *)malloc((size_t)n * sizeof *scratch);
     s->nets = s->net_slots ? (uint32_t *)malloc((size_t)s->net_slots * n * sizeof *s->nets) : NULL;
     dpc_status st = DPC_OK;
@@ -78,24 +106,42 @@ dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
         }
     /* Fill the slots in order: the next model in turn gives a set, its dimension pairs fill slots.
      * A set whose slots are all nets is not made (they are overwritten below); set k keeps its
-     * seed either way, so every other slot's table is the same whatever net_dims is. */
+     * seed either way, so every other slot's table is the same whatever net_dims is. The sets
+     * are made `workers` at a time, one per thread (each the same bits on any thread). */
     uint32_t t = 0;
-    for (uint64_t k = 0; t < D; k++) {
-        const dpc_model *m = o->models[k % o->n_models];
-        const uint32_t dims = m->cascade.dims;
-        if (t + dims / 2 <= s->net_slots) {
-            t += dims / 2;
-            continue;
-        }
-        if ((st = dpc_model_generate_cpu(m, set_seed(s->base, k), n, set)) != DPC_OK) goto done;
-        for (uint32_t a = 0; a + 1 < dims && t < D; a += 2, t++) {
-            float *table = s->tables + (size_t)t * n * 2;
-            for (uint32_t i = 0; i < n; i++) {
-                table[(size_t)i * 2] = set[(size_t)i * dims + a];
-                table[(size_t)i * 2 + 1] = set[(size_t)i * dims + a + 1];
+    set_job job = {.o = o, .base = s->base, .n = n, .widest = widest, .sets = set};
+    for (uint64_t k = 0; t < D || job.count; k++) {
+        if (t < D) {
+            const uint32_t dims = o->models[k % o->n_models]->cascade.dims;
+            if (t + dims / 2 <= s->net_slots) {
+                t += dims / 2;
+                continue;
             }
-            stratify_projections(table, n, scratch);
+            job.k[job.count] = k;
+            job.first_slot[job.count++] = t;
+            t += dims / 2;
+            if (t < D && job.count < workers) continue;
         }
+        dpc_run_workers(job.count, make_set, &job);
+        for (uint32_t j = 0; j < job.count; j++) {
+            const dpc_model *m = o->models[job.k[j] % o->n_models];
+            const uint32_t dims = m->cascade.dims;
+            const float *made = set + (size_t)j * n * widest;
+            if (job.status[j] != DPC_OK) { /* again on this thread, for its message */
+                st = dpc_model_generate_cpu(m, set_seed(s->base, job.k[j]), n, set);
+                if (st == DPC_OK) st = dpc_fail(job.status[j], "making a sampler table failed");
+                goto done;
+            }
+            for (uint32_t a = 0, u = job.first_slot[j]; a + 1 < dims && u < D; a += 2, u++) {
+                float *table = s->tables + (size_t)u * n * 2;
+                for (uint32_t i = 0; i < n; i++) {
+                    table[(size_t)i * 2] = made[(size_t)i * dims + a];
+                    table[(size_t)i * 2 + 1] = made[(size_t)i * dims + a + 1];
+                }
+                stratify_projections(table, n, scratch);
+            }
+        }
+        job.count = 0;
     }
     /* Net slots: the net's cells, as cell centres (what dpc_sampler_table shows; the lookups
      * read the cells). */
