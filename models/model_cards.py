@@ -340,6 +340,10 @@ def torus_scale_note(model) -> str:
         return ("Each level of this progressive model ends with the balance of its prefix (model-format.md "
                 "§5.1, §6), so the last column is 0 at every m, at the price of low-band energy above the "
                 "balanced frequencies (docs/progressive.md, \"Balanced levels\").")
+    if model.order == "progressive" and model.relax:
+        return ("After its levels this progressive model relaxes every prefix jointly (model-format.md §6.1), "
+                "with a term that cancels each prefix's power at 0 < |q| <= min(8, sqrt(n)/4): the last "
+                "column stays near 0 at every m (docs/progressive.md, \"Jointly relaxed prefixes\").")
     if model.order == "progressive":
         return ("A progressive model's levels hold their earlier points in place, so whatever imbalance a "
                 "level's insertion leaves at the torus scale stays in every larger set: the last column "

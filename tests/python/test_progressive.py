@@ -226,19 +226,20 @@ def test_stratify_02_makes_every_power_of_two_prefix_a_net():
             dpc.stratify.stratify_02(**bad)
 
 
-def test_relax_prefixes_lowers_every_prefix_and_the_full_set():
-    """A small case of bench/bench_progressive_relaxed.py: 8 sets of 256 points, relaxed
-    jointly, against the same sets as progressive-2d makes them and a dpc set of each size."""
+def test_relaxed_model_lowers_every_prefix_and_the_full_set():
+    """A small case of bench/bench_progressive_relaxed.py: 8 sets of 256 points of the bundled
+    progressive-2d-relaxed, against the same levels unrelaxed (progressive-2d) and a dpc set of
+    each size: the issue's goal (at most 3x a dpc set's E_low) for every prefix."""
+    relaxed = dpc.load("progressive-2d-relaxed", backend="cpu").generate_batch(8, 0, 256).astype(np.float64)
     sets = dpc.load("progressive-2d", backend="cpu").generate_batch(8, 0, 256).astype(np.float64)
-    relaxed = np.stack([dpc.stratify.relax_prefixes(x, steps=400) for x in sets]).astype(np.float64)
-    assert relaxed.shape == sets.shape
     assert np.all((relaxed >= 0) & (relaxed < 1))
     plain = dpc.load("bnot-2d-stratified", backend="cpu")
-    for n in (32, 64, 128, 256):
+    for n in (16, 32, 64, 128, 256):
         e_relaxed = low_frequency_energy(relaxed[:, :n], 0.5)
         e_plain = low_frequency_energy(plain.generate_batch(8, 0, n).astype(np.float64), 0.5)
         assert e_relaxed < 3.0 * e_plain, n  # the issue's goal for every prefix
-        assert e_relaxed < low_frequency_energy(sets[:, :n], 0.5), n  # better than held levels
+        if n > 16:  # the first level alone is already a set of its own
+            assert e_relaxed < low_frequency_energy(sets[:, :n], 0.5), n  # better than the held levels
         assert min_distance(relaxed[:, :n]).mean_ratio > 0.55, n
 
 
@@ -263,3 +264,22 @@ def test_relax_prefixes_is_deterministic_matches_the_reference_and_checks_its_in
     for kwargs in bad:
         with pytest.raises(dpc.InvalidArgumentError):
             dpc.stratify.relax_prefixes(**kwargs)
+
+
+@pytest.mark.parametrize(
+    "name,kwargs",
+    [("progressive-2d", {}), ("progressive-2d-balanced", {"balance": 8}), ("progressive-2d-relaxed", {"relax": 1600})],
+)
+def test_bundled_progressive_models_are_what_their_script_writes(tmp_path, name, kwargs):
+    """models/make_progressive_2d.py (the command each card names) remakes each file byte for byte."""
+    import sys
+
+    from dpc.model_file import write_model
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "models"))
+    try:
+        import make_progressive_2d
+    finally:
+        sys.path.pop(0)
+    write_model(make_progressive_2d.progressive_spec(name=name, **kwargs), tmp_path / "made.onnx")
+    assert (tmp_path / "made.onnx").read_bytes() == Path(dpc.model_path(name)).read_bytes()
