@@ -90,7 +90,7 @@ def relax_prefixes(points, steps: int = 1600, base: int = 16, *, threads: int = 
     that each prefix of ``base`` * 2^j points and the whole set are blue noise; (m, 2) float32,
     the same order. libdpc's ``dpc_relax_prefixes`` (docs/model-format.md §6.1): ``steps``
     gradient steps on E = sum over those prefixes P of sum_{i<j in P} exp(-|x_i - x_j|^2 /
-    (2 s_P^2)), s_P = 0.72 / sqrt(|P|) (0.60 / sqrt(m) for the whole set), toroidal distances,
+    (2 s_P^2)), s_P = 0.85 / sqrt(|P|) (0.60 / sqrt(m) for the whole set), toroidal distances,
     plus 0.05 * sum_q |sum_{i in P} exp(2 pi i q.x_i)|^2 / (|q|^2 |P|) over 0 < |q| <=
     min(8, sqrt(|P|) / 4), which cancels the torus-scale imbalance that smooth integrands see.
     Each step moves point i by 0.1 (falling linearly to 0.02) times minus the gradient, the pair

@@ -302,7 +302,7 @@ def relax_prefixes(points: np.ndarray, steps: int, base: int) -> np.ndarray:
     over the prefixes P of base * 2^j < m points and all m, ``steps`` steps of
     x += 0.1 (1 - 0.8 t / steps) F, F_i = sum_P sum_{j in P, pair within R_P + 0.4 s_P at the
     last search} d max(0, G(d) - G(R_P)) + sum_P (0.2 pi / |P|) sum_q Im(conj(c_q(P)) e_q(x_i))
-    q / |q|^2, d = x_i - x_j (toroidal), G(d) = exp(-|d|^2 / (2 s_P^2)), s_P = 0.72 / sqrt(|P|)
+    q / |q|^2, d = x_i - x_j (toroidal), G(d) = exp(-|d|^2 / (2 s_P^2)), s_P = 0.85 / sqrt(|P|)
     (0.60 / sqrt(m) for all m), R_P = min(3.5 s_P, 1/2), q over 0 < |q| <= min(8, sqrt(|P|) / 4)
     of a half-plane, pairs searched every 10 steps."""
     from scipy.spatial import cKDTree
@@ -310,7 +310,7 @@ def relax_prefixes(points: np.ndarray, steps: int, base: int) -> np.ndarray:
     x = np.array(points, dtype=np.float64)
     m = len(x)
     sizes = [base << j for j in range(m.bit_length()) if base << j < m] + [m]
-    widths = {n: (0.60 if n == m else 0.72) / np.sqrt(n) for n in sizes}
+    widths = {n: (0.60 if n == m else 0.85) / np.sqrt(n) for n in sizes}
     support = {n: min(3.5 * widths[n], 0.5) for n in sizes}
     cut = {n: np.exp(-(support[n] ** 2) / (2 * widths[n] ** 2)) for n in sizes}
     lows = {n: _relax_low_frequencies(min(8, np.sqrt(n) / 4)) for n in sizes}

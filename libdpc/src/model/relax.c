@@ -3,7 +3,7 @@
  * The energy is a sum over the prefixes P (base * 2^j < m points, and all m) of
  *   sum_{i<j in P} max(0, exp(-|x_i - x_j|^2 / (2 s_P^2)) - exp(-R_P^2 / (2 s_P^2))) * ...
  * in force form: the pair (i, j) pushes x_i along d = x_i - x_j by d max(0, G(d) - G(R_P)),
- * G(d) = exp(-|d|^2 / (2 s_P^2)), s_P = 0.72 / sqrt(|P|) (0.60 / sqrt(m) for all m), toroidal
+ * G(d) = exp(-|d|^2 / (2 s_P^2)), s_P = 0.85 / sqrt(|P|) (0.60 / sqrt(m) for all m), toroidal
  * d, support R_P = min(3.5 s_P, 1/2): the Gaussian energy of blue noise at the prefix's own
  * scale, cut to go to 0 continuously at R_P (so that the result depends continuously on the
  * input: a hard cut-off made 1e-7 changes of the input grow to 1e-3 in 1,600 steps), and at most
@@ -29,7 +29,7 @@
 #include "common/error.h"
 #include "common/threads.h"
 
-#define WIDTH 0.72      /* s_P sqrt(|P|) of a proper prefix */
+#define WIDTH 0.85      /* s_P sqrt(|P|) of a proper prefix */
 #define WIDTH_FULL 0.60 /* ... of the whole set */
 #define STEP 0.1
 #define DECAY 0.2          /* the last step is this fraction of the first */
