@@ -7,8 +7,8 @@ progressive-2d-relaxed's sets (libdpc: progressive-2d's levels, then the prefix 
 docs/model-format.md §6.1, every point moving under the energy of every prefix 16 * 2^j at once),
 measured prefix by prefix as bench_progressive.py measures the progressive samplers (its measures
 and integrands, set i from seed i), beside progressive-2d's sets (the same levels, unrelaxed), a
-dpc set made for each prefix size (bnot-2d-stratified) and PMJ02BN. Seconds per set: the median
-of one-thread generate calls, for both progressive models.
+dpc set made for each prefix size (bnot-2d-stratified), PMJ02BN, scrambled Sobol' and white
+noise. Seconds per set: the median of one-thread generate calls, for both progressive models.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from dpc import baselines
 
 RELAXED_MODEL = "progressive-2d-relaxed"
 RELAXED = "progressive dpc, relaxed"
-SAMPLERS = [RELAXED, "progressive dpc", "dpc set", "pmj02bn"]
+SAMPLERS = [RELAXED, "progressive dpc", "dpc set", "pmj02bn", "sobol", "white"]
 METRICS = [
     ("elow50", "E_low ν<0.5"),
     ("elow75", "E_low ν<0.75"),
@@ -52,7 +52,8 @@ def run(m: int, count: int, seed: int) -> tuple[dict, dict[str, float]]:
     print(
         f"m = {m}: {count} sets, median {t_relaxed:.2f} s per relaxed set, {t_prog * 1e3:.0f} ms per progressive-2d set"
     )
-    full = {RELAXED: relaxed, "progressive dpc": prog, "pmj02bn": baselines.generate("pmj02bn", m, 2, count, seed)}
+    full = {RELAXED: relaxed, "progressive dpc": prog}
+    full.update({name: baselines.generate(name, m, 2, count, seed) for name in ("pmj02bn", "sobol", "white")})
     plain = dpc.load(SET_MODEL, backend="cpu")
     res: dict = {}
     for n in prefixes(m):

@@ -1,13 +1,13 @@
 /* The prefix relaxation of docs/model-format.md §6.1 (relax.h).
  *
- * The energy is a sum over the prefixes P (base * 2^j < m points, and all m) of
- *   sum_{i<j in P} max(0, exp(-|x_i - x_j|^2 / (2 s_P^2)) - exp(-R_P^2 / (2 s_P^2))) * ...
- * in force form: the pair (i, j) pushes x_i along d = x_i - x_j by d max(0, G(d) - G(R_P)),
- * G(d) = exp(-|d|^2 / (2 s_P^2)), s_P = 0.85 / sqrt(|P|) (0.60 / sqrt(m) for all m), toroidal
- * d, support R_P = min(3.5 s_P, 1/2): the Gaussian energy of blue noise at the prefix's own
+ * The force on point i sums over the prefixes P (base * 2^j < m points, and all m) and the
+ * pairs (i, j) of each: d max(0, G(d) - G(R_P)), d = x_i - x_j (toroidal),
+ * G(d) = exp(-|d|^2 / (2 s_P^2)), s_P = 0.85 / sqrt(|P|) (0.60 / sqrt(m) for all m), support
+ * R_P = min(3.5 s_P, 1/2): minus the gradient of the Gaussian energy of blue noise at the prefix's own
  * scale, cut to go to 0 continuously at R_P (so that the result depends continuously on the
  * input: a hard cut-off made 1e-7 changes of the input grow to 1e-3 in 1,600 steps), and at most
- * 1/2 so that it vanishes where the torus's nearest image flips. Plus the low-frequency force of
+ * 1/2 so that it vanishes where the torus's nearest image flips (times s_P^2: every prefix
+ * pushes at its own scale). Plus minus the gradient of
  *   0.05 * sum_q |c_q(P)|^2 / (|q|^2 |P|),  c_q(P) = sum_{i in P} exp(2 pi i q.x_i),
  * over the integer q of a half-plane with 0 < |q| <= min(8, sqrt(|P|) / 4): the torus-scale
  * imbalance a smooth integrand sees. A pair feels every prefix that holds both its points, so
