@@ -241,7 +241,7 @@ def section(res: dict) -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--width", type=int, default=64)
-    ap.add_argument("--seeds", type=int, default=8)
+    ap.add_argument("--seeds", type=int, default=24)
     ap.add_argument("--max-spp", type=int, default=64)
     ap.add_argument("--quick", action="store_true", help="24 x 24 pixels, 2 seeds, up to 16 spp; prints only")
     args = ap.parse_args()
