@@ -44,6 +44,7 @@ PROGRESSIVE = dpc.model_path("progressive-2d")
         ([BNOT], 32, 5, 21, 1, "auto"),  # the default from 32 spp on: every slot a net
         ([BNOT], 16, 3, 21, 1, "auto"),  # below 32 spp: dimension 0 only
         ([PROGRESSIVE], 64, 3, 3, 1, "auto"),  # progressive: dimension 0 only
+        ([dpc.model_path("progressive-2d-relaxed")], 64, 20, 5, 1, 1),  # relaxed tables, made 2+ at once
     ],
 )
 def test_lookups_match_the_reference_bit_for_bit(models, spp, dims, seed, fold_from, net_dims):
