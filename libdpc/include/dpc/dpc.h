@@ -361,7 +361,7 @@ DPC_API dpc_status dpc_relax_prefixes(float *points, size_t n_points, uint32_t b
  *   sampler's models or none): tables are read in order, not rotated per pixel, so a pixel's
  *   first 2^k samples (k >= 4) are a blue-noise set of their own and an adaptive renderer may
  *   stop at any of them (with dpc.relax, e.g. progressive-2d-relaxed, each prefix is better
- *   blue noise and a table takes about 1 s per 1,024 points to make); get_1d then uses the stratum of point i's x rank
+ *   blue noise and a table takes about 1.4 s per 1,024 points to make); get_1d then uses the stratum of point i's x rank
  *   (docs/progressive.md). Net slots are then read in order (the first in the net's Sobol'
  *   order, later ones shuffled within each octave [2^(k-1), 2^k)), so their first 2^k samples
  *   are a (0,k,2)-net.
