@@ -91,13 +91,14 @@ def relax_prefixes(points, steps: int = 1600, base: int = 16, *, threads: int = 
     the same order. libdpc's ``dpc_relax_prefixes`` (docs/model-format.md §6.1): ``steps``
     gradient steps on E = sum over those prefixes P of sum_{i<j in P} exp(-|x_i - x_j|^2 /
     (2 s_P^2)), s_P = 0.85 / sqrt(|P|) (0.60 / sqrt(m) for the whole set), toroidal distances,
-    plus 0.05 * sum_q |sum_{i in P} exp(2 pi i q.x_i)|^2 / (|q|^2 |P|) over 0 < |q| <=
-    min(8, sqrt(|P|) / 4), which cancels the torus-scale imbalance that smooth integrands see.
-    Each step moves point i by 0.1 (falling linearly to 0.02) times minus the gradient, the pair
-    terms scaled by s_P^2. What the generator of a model with metadata ``dpc.relax`` (e.g.
-    progressive-2d-relaxed) does after its levels, bit for bit; the same bits on every machine.
-    The first n points of the result are not the relaxed set of n (it depends on m). ``threads``
-    (0: one per CPU) share the work from 2,048 points on, with the same bits for any count."""
+    each pair's force shifted to reach 0 at min(3.5 s_P, 1/2), plus 0.05 * sum_q
+    |sum_{i in P} exp(2 pi i q.x_i)|^2 / (|q|^2 |P|) over 0 < |q| <= min(8, sqrt(|P|) / 4), which
+    cancels the torus-scale imbalance that smooth integrands see. Each step moves point i by 0.1
+    (falling linearly to 0.02) times minus the gradient, the pair terms scaled by s_P^2. What the
+    generator of a model with metadata ``dpc.relax`` (e.g. progressive-2d-relaxed) does after its
+    levels, bit for bit; the same bits on every machine. The first n points of the result are not
+    the relaxed set of n (it depends on m). ``threads`` (0: one per CPU) share the work from
+    2,048 points on, with the same bits for any count."""
     x = np.asarray(points)
     if isinstance(base, bool) or not isinstance(base, int) or base < 2:
         raise InvalidArgumentError(f"base must be an integer >= 2, got {base!r}")
