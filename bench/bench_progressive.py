@@ -122,30 +122,33 @@ def tradeoff(m: int, count: int, seed: int, model: str = PROGRESSIVE) -> dict[fl
     return out
 
 
+def prefix_goals(res: dict[int, dict], m: int, sampler: str, label: str) -> list[tuple[str, bool, str]]:
+    """The issue's four prefix goals for one sampler's sets of m points (label: the goals' prefix)."""
+    ns = sorted(res)
+    r_dpc = [res[n][sampler]["elow50"] / res[n]["dpc set"]["elow50"] for n in ns]
+    r_pmj = [res[n][sampler]["elow50"] / res[n]["pmj02bn"]["elow50"] for n in ns]
+    r_var = [res[n][sampler]["gauss"] / res[n]["pmj02bn"]["gauss"] for n in ns]
+    r_full = {k: res[m][sampler][k] / res[m]["dpc set"][k] for k in ("elow50", "elow75")}
+
+    def worst(r: list[float]) -> str:
+        return f"worst x{max(r):.2f} at n = {ns[int(np.argmax(r))]}"
+
+    full = f"x{r_full['elow50']:.2f} below nu = 0.5, x{r_full['elow75']:.2f} below 0.75"
+    return [
+        (f"{label}every prefix's E_low nu<0.5 <= 3 x a dpc set's", max(r_dpc) <= 3.0, worst(r_dpc)),
+        (f"{label}every prefix's E_low nu<0.5 <= 0.1 x PMJ02BN's", max(r_pmj) <= 0.1, worst(r_pmj)),
+        (f"{label}the full set within 1.2 x {SET_MODEL}'s E_low (both bands)", max(r_full.values()) <= 1.2, full),
+        (f"{label}every prefix's Gaussian variance <= PMJ02BN's", max(r_var) <= 1.0, worst(r_var)),
+    ]
+
+
 def goals(results: dict[int, dict]) -> list[tuple[str, bool, str]]:
-    out = []
-    for m, res in results.items():
-        ns = sorted(res)
-        for p in PROGRESSIVE_SAMPLERS:
-            r_dpc = [res[n][p]["elow50"] / res[n]["dpc set"]["elow50"] for n in ns]
-            r_pmj = [res[n][p]["elow50"] / res[n]["pmj02bn"]["elow50"] for n in ns]
-            r_var = [res[n][p]["gauss"] / res[n]["pmj02bn"]["gauss"] for n in ns]
-            r_full = max(res[m][p][k] / res[m]["dpc set"][k] for k in ("elow50", "elow75"))
-
-            def worst(r: list[float], ns: list[int] = ns) -> str:
-                return f"worst x{max(r):.2f} at n = {ns[int(np.argmax(r))]}"
-
-            out += [
-                (f"{p}, m = {m}: every prefix's E_low nu<0.5 <= 3 x a dpc set's", max(r_dpc) <= 3.0, worst(r_dpc)),
-                (f"{p}, m = {m}: every prefix's E_low nu<0.5 <= 0.1 x PMJ02BN's", max(r_pmj) <= 0.1, worst(r_pmj)),
-                (
-                    f"{p}, m = {m}: the full set within 1.2 x {SET_MODEL}'s E_low (both bands)",
-                    r_full <= 1.2,
-                    f"x{r_full:.2f}",
-                ),
-                (f"{p}, m = {m}: every prefix's Gaussian variance <= PMJ02BN's", max(r_var) <= 1.0, worst(r_var)),
-            ]
-    return out
+    return [
+        g
+        for m, res in results.items()
+        for p in PROGRESSIVE_SAMPLERS
+        for g in prefix_goals(res, m, p, f"{p}, m = {m}: ")
+    ]
 
 
 def timings(sizes: list[int], repeats: int = 5) -> dict[str, dict[int, float]]:
@@ -221,14 +224,18 @@ def section(
         "prefixes and shapes (1: every prefix a (0,2)-net), the full set's δ_min and its Gaussian "
         "variance over PMJ02BN's.",
         "",
-        "| stratified up to | worst E_low ratio | occupancy | δ_min | Gaussian variance / PMJ02BN's |",
-        "|---:|---:|---:|---:|---:|",
     ]
-    lines += [
-        f"| {t:g} | {r['elow']:.2f} | {r['net']:.3f} | {r['dmin']:.3f} | {r['gauss']:.2f} |" for t, r in curve.items()
-    ]
+    lines += tradeoff_table(curve)
     lines += prefix_tables(results, SAMPLERS, METRICS, "###")
     return "\n".join(lines)
+
+
+def tradeoff_table(curve: dict[float, dict]) -> list[str]:
+    """The stratified variant's trade-off curve (tradeoff()) as a markdown table."""
+    return [
+        "| stratified up to | worst E_low ratio | occupancy | δ_min | Gaussian variance / PMJ02BN's |",
+        "|---:|---:|---:|---:|---:|",
+    ] + [f"| {t:g} | {r['elow']:.2f} | {r['net']:.3f} | {r['dmin']:.3f} | {r['gauss']:.2f} |" for t, r in curve.items()]
 
 
 def prefix_tables(results: dict[int, dict], samplers: list[str], metrics, heading: str) -> list[str]:

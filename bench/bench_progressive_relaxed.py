@@ -18,7 +18,18 @@ import time
 
 import numpy as np
 from bench_generate import cpu_name
-from bench_progressive import DOC, PROGRESSIVE, SET_MODEL, measure, prefix_tables, prefixes, tradeoff, tree
+from bench_progressive import (
+    DOC,
+    PROGRESSIVE,
+    SET_MODEL,
+    measure,
+    prefix_goals,
+    prefix_tables,
+    prefixes,
+    tradeoff,
+    tradeoff_table,
+    tree,
+)
 from doc_sections import replace_section
 
 import dpc
@@ -65,25 +76,7 @@ def run(m: int, count: int, seed: int) -> tuple[dict, dict[str, float]]:
 
 
 def goals(results: dict[int, dict]) -> list[tuple[str, bool, str]]:
-    out = []
-    for m, res in results.items():
-        ns = sorted(res)
-        r_dpc = [res[n][RELAXED]["elow50"] / res[n]["dpc set"]["elow50"] for n in ns]
-        r_pmj = [res[n][RELAXED]["elow50"] / res[n]["pmj02bn"]["elow50"] for n in ns]
-        r_var = [res[n][RELAXED]["gauss"] / res[n]["pmj02bn"]["gauss"] for n in ns]
-        r_full = {k: res[m][RELAXED][k] / res[m]["dpc set"][k] for k in ("elow50", "elow75")}
-
-        def worst(r: list[float], ns: list[int] = ns) -> str:
-            return f"worst x{max(r):.2f} at n = {ns[int(np.argmax(r))]}"
-
-        full = f"x{r_full['elow50']:.2f} below nu = 0.5, x{r_full['elow75']:.2f} below 0.75"
-        out += [
-            (f"m = {m}: every prefix's E_low nu<0.5 <= 3 x a dpc set's", max(r_dpc) <= 3.0, worst(r_dpc)),
-            (f"m = {m}: every prefix's E_low nu<0.5 <= 0.1 x PMJ02BN's", max(r_pmj) <= 0.1, worst(r_pmj)),
-            (f"m = {m}: the full set within 1.2 x {SET_MODEL}'s E_low (both bands)", max(r_full.values()) <= 1.2, full),
-            (f"m = {m}: every prefix's Gaussian variance <= PMJ02BN's", max(r_var) <= 1.0, worst(r_var)),
-        ]
-    return out
+    return [g for m, res in results.items() for g in prefix_goals(res, m, RELAXED, f"m = {m}: ")]
 
 
 def section(
@@ -112,12 +105,8 @@ def section(
         "the elementary-interval occupancy averaged over prefixes and shapes (1: every prefix a (0,2)-net), "
         "the full set's δ_min and its Gaussian variance over PMJ02BN's.",
         "",
-        "| stratified up to | worst E_low ratio | occupancy | δ_min | Gaussian variance / PMJ02BN's |",
-        "|---:|---:|---:|---:|---:|",
     ]
-    lines += [
-        f"| {t:g} | {r['elow']:.2f} | {r['net']:.3f} | {r['dmin']:.3f} | {r['gauss']:.2f} |" for t, r in curve.items()
-    ]
+    lines += tradeoff_table(curve)
     lines += prefix_tables(results, SAMPLERS, METRICS, "####")
     return "\n".join(lines)
 

@@ -467,6 +467,16 @@ py::dict load_defaults() {
     return d;
 }
 
+// Points a host-side step (dpc_balance, dpc_relax_prefixes) changes in place: a copy of the
+// caller's array, which stays as it was.
+using points_in = py::array_t<float, py::array::c_style | py::array::forcecast>;
+
+py::array_t<float> copy_of(const points_in &points) {
+    py::array_t<float> out({points.shape(0), points.shape(1)});
+    std::memcpy(out.mutable_data(), points.data(), sizeof(float) * points.size());
+    return out;
+}
+
 } // namespace
 
 PYBIND11_MODULE(_core, mod) {
@@ -514,27 +524,22 @@ PYBIND11_MODULE(_core, mod) {
         py::arg("seed"), py::arg("m"), py::arg("n"), py::arg("max_bytes"));
     mod.def(
         "balance",
-        [](py::array_t<float, py::array::c_style | py::array::forcecast> points, uint32_t radius) {
+        [](const points_in &points, uint32_t radius) {
             if (points.ndim() != 2) raise_status(DPC_ERROR_INVALID_ARGUMENT, "points must be (m, n)");
-            py::array_t<float> out({points.shape(0), points.shape(1)});
-            std::memcpy(out.mutable_data(), points.data(), sizeof(float) * points.size());
-            float *p = out.mutable_data();
+            py::array_t<float> out = copy_of(points);
             const size_t m = points.shape(0), n = points.shape(1);
-            call([&] { return dpc_balance(p, m, n, radius); });
+            call([&, p = out.mutable_data()] { return dpc_balance(p, m, n, radius); });
             return out;
         },
         py::arg("points"), py::arg("radius"));
     mod.def(
         "relax_prefixes",
-        [](py::array_t<float, py::array::c_style | py::array::forcecast> points, uint32_t base, uint32_t steps,
-           uint32_t threads) {
+        [](const points_in &points, uint32_t base, uint32_t steps, uint32_t threads) {
             if (points.ndim() != 2 || points.shape(1) != 2)
                 raise_status(DPC_ERROR_INVALID_ARGUMENT, "points must be (m, 2)");
-            py::array_t<float> out({points.shape(0), points.shape(1)});
-            std::memcpy(out.mutable_data(), points.data(), sizeof(float) * points.size());
-            float *p = out.mutable_data();
+            py::array_t<float> out = copy_of(points);
             const size_t m = points.shape(0);
-            call([&] { return dpc_relax_prefixes(p, m, base, steps, threads); }); /* without the GIL */
+            call([&, p = out.mutable_data()] { return dpc_relax_prefixes(p, m, base, steps, threads); });
             return out;
         },
         py::arg("points"), py::arg("base"), py::arg("steps"), py::arg("threads"));

@@ -386,22 +386,25 @@ TEST(Progressive, LevelSizesArePrefixesOfLargerSets) {
 }
 
 namespace {
-// A 2-D model's sets of 20,000 points (large enough for the engine's threads inside a set) on
-// every ISA path with 1 and 3 threads, and set 1 of a batch, are the scalar single-thread bits.
-void expect_same_bits_everywhere(const std::string &name) {
+// A 2-D model's sets of `points` points (20,000: large enough for the engine's threads inside a
+// set) on every ISA path with 1 and 3 threads, and set 1 of a batch of `batch_points`, are the
+// scalar single-thread bits.
+void expect_same_bits_everywhere(const std::string &name, size_t points = 20000, size_t batch_points = 500) {
     ModelPtr ref = load(model_path(name), DPC_ISA_SCALAR, 1);
     ASSERT_TRUE(ref);
-    const std::vector<float> want = generate(ref.get(), 4, 20000);
+    const std::vector<float> want = generate(ref.get(), 4, points);
     std::vector<dpc_isa> isas = {DPC_ISA_SCALAR};
     for (dpc_isa v : vector_isas()) isas.push_back(v);
     for (dpc_isa isa : isas)
         for (uint32_t threads : {1u, 3u}) {
             ModelPtr m = load(model_path(name), isa, threads);
             ASSERT_TRUE(m);
-            EXPECT_EQ(generate(m.get(), 4, 20000), want) << isa_name(isa) << ", " << threads << " threads";
-            std::vector<float> batch(3 * 500 * 2);
-            ASSERT_EQ(dpc_generate_batch(m.get(), 7, 3, 500, batch.data()), DPC_OK) << dpc_last_error();
-            EXPECT_EQ(std::vector<float>(batch.begin() + 1000, batch.begin() + 2000), generate(ref.get(), 8, 500));
+            EXPECT_EQ(generate(m.get(), 4, points), want) << isa_name(isa) << ", " << threads << " threads";
+            const ptrdiff_t per = (ptrdiff_t)batch_points * 2;
+            std::vector<float> batch(3 * (size_t)per);
+            ASSERT_EQ(dpc_generate_batch(m.get(), 7, 3, batch_points, batch.data()), DPC_OK) << dpc_last_error();
+            EXPECT_EQ(std::vector<float>(batch.begin() + per, batch.begin() + 2 * per),
+                      generate(ref.get(), 8, batch_points));
         }
 }
 } // namespace
@@ -510,21 +513,9 @@ TEST(Relax, EveryPrefixSpreadsOut) {
     EXPECT_GT(relaxed_sum, 2.0 * levels_sum); // 11.2 against 4.5 when written
 }
 
+// 600 points: below the relaxation's threading threshold (SameBitsForEveryThreadCount covers it).
 TEST(Relax, SameBitsOnEveryPathThreadCountAndBatch) {
-    ModelPtr ref = load(model_path("model_2d_progressive_relaxed"), DPC_ISA_SCALAR, 1);
-    ASSERT_TRUE(ref);
-    const std::vector<float> want = generate(ref.get(), 4, 600);
-    std::vector<dpc_isa> isas = {DPC_ISA_SCALAR};
-    for (dpc_isa v : vector_isas()) isas.push_back(v);
-    for (dpc_isa isa : isas)
-        for (uint32_t threads : {1u, 3u}) {
-            ModelPtr m = load(model_path("model_2d_progressive_relaxed"), isa, threads);
-            ASSERT_TRUE(m);
-            EXPECT_EQ(generate(m.get(), 4, 600), want) << isa_name(isa) << ", " << threads << " threads";
-            std::vector<float> batch(3 * 600 * 2);
-            ASSERT_EQ(dpc_generate_batch(m.get(), 3, 3, 600, batch.data()), DPC_OK) << dpc_last_error();
-            EXPECT_EQ(std::vector<float>(batch.begin() + 1200, batch.begin() + 2400), want) << isa_name(isa);
-        }
+    expect_same_bits_everywhere("model_2d_progressive_relaxed", 600, 600);
 }
 
 // From 2,048 points the steps are shared by threads, in fixed parts: the same bits for any count.

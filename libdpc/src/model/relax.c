@@ -98,6 +98,14 @@ static int close_enough(const double *x, uint32_t i, uint32_t j, double reach2) 
     return dx * dx + dy * dy <= reach2;
 }
 
+/* The cell of point p in a grid of G x G cells over [0, 1)^2, row-major. */
+static size_t cell_of(const double *p, size_t G) {
+    size_t cx = (size_t)(p[0] * (double)G), cy = (size_t)(p[1] * (double)G);
+    cx = cx < G ? cx : G - 1;
+    cy = cy < G ? cy : G - 1;
+    return cy * G + cx;
+}
+
 /* The pairs i < j < n within reach: from a grid of G x G cells of side >= reach, each point
  * against its 3 x 3 cells (G >= 3, so no cell is visited twice), or all pairs for G < 3. */
 static int search(relax *R, prefix *P) {
@@ -116,25 +124,13 @@ static int search(relax *R, prefix *P) {
     }
     uint32_t *start = R->cell_start, *pts = R->cell_points;
     memset(start, 0, (G * G + 1) * sizeof *start);
-    for (size_t i = 0; i < n; i++) { /* counting sort by cell, stable: each cell in index order */
-        size_t cx = (size_t)(x[2 * i] * (double)G), cy = (size_t)(x[2 * i + 1] * (double)G);
-        cx = cx < G ? cx : G - 1;
-        cy = cy < G ? cy : G - 1;
-        start[cy * G + cx + 1]++;
-    }
+    for (size_t i = 0; i < n; i++) start[cell_of(x + 2 * i, G) + 1]++; /* counting sort, stable */
     for (size_t k = 0; k < G * G; k++) start[k + 1] += start[k];
-    for (size_t i = 0; i < n; i++) {
-        size_t cx = (size_t)(x[2 * i] * (double)G), cy = (size_t)(x[2 * i + 1] * (double)G);
-        cx = cx < G ? cx : G - 1;
-        cy = cy < G ? cy : G - 1;
-        pts[start[cy * G + cx]++] = (uint32_t)i;
-    }
+    for (size_t i = 0; i < n; i++) pts[start[cell_of(x + 2 * i, G)]++] = (uint32_t)i;
     for (size_t k = G * G; k > 0; k--) start[k] = start[k - 1]; /* back to the cells' starts */
     start[0] = 0;
     for (uint32_t i = 0; i < n; i++) {
-        size_t cx = (size_t)(x[2 * i] * (double)G), cy = (size_t)(x[2 * i + 1] * (double)G);
-        cx = cx < G ? cx : G - 1;
-        cy = cy < G ? cy : G - 1;
+        const size_t c = cell_of(x + 2 * i, G), cx = c % G, cy = c / G;
         for (size_t oy = 0; oy < 3; oy++)
             for (size_t ox = 0; ox < 3; ox++) {
                 const size_t cell = ((cy + G + oy - 1) % G) * G + (cx + G + ox - 1) % G;
