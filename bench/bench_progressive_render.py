@@ -20,6 +20,13 @@ two rows show what the relaxation does in one sampler, without the dpc plugin's 
 shifts and folding.
 Image MSE against bench_rendering.py's reference (ldsampler at 8,192 spp, two halves of other seeds),
 mean over seeds; a figure of MSE against spp goes to docs/figures/progressive/.
+
+    python bench/bench_progressive_render.py --stop     # a renderer that stops early: own section, ~30 min
+
+The stop-early study: the pool sampler on sequences of 128 points rendered at n < 128 samples
+per pixel reads each sequence's first n points, also between the levels (24, 40, 48, ... spp),
+for progressive-2d and progressive-2d-relaxed as generated and with each level's points in a
+random order (the order before the levels had one), and PMJ02BN.
 """
 
 from __future__ import annotations
@@ -63,14 +70,18 @@ def mix64(z: int) -> int:
 
 def pool_points(kind: str, max_spp: int) -> np.ndarray:
     """The pool of POOL sequences of max_spp points a pool sampler reads: PMJ02BN, or the sets of
-    progressive-2d or progressive-2d-relaxed (its levels relaxed jointly), seeds 0 .. POOL-1."""
+    progressive-2d or progressive-2d-relaxed (its levels relaxed jointly), seeds 0 .. POOL-1;
+    kind "... shuffled": the same sets with each level's points in a random order (the order
+    before docs/model-format.md §6 ordered the levels)."""
     import dpc
+    from bench_progressive_between import shuffled_levels
     from dpc import baselines
 
     if kind == "pmj02bn":
         return baselines.generate("pmj02bn", max_spp, 2, POOL, seed=0)
-    model = "progressive-2d" if kind == "progressive" else "progressive-2d-relaxed"
-    return dpc.load(model, backend="cpu").generate_batch(POOL, 0, max_spp).astype(np.float64)
+    model = "progressive-2d" if kind.startswith("progressive") else "progressive-2d-relaxed"
+    sets = dpc.load(model, backend="cpu").generate_batch(POOL, 0, max_spp).astype(np.float64)
+    return shuffled_levels(sets, 1) if kind.endswith("shuffled") else sets
 
 
 def pool_sampler_class(mi, pool_array: np.ndarray):
@@ -162,6 +173,77 @@ def run(width: int, seeds: int, max_spp: int) -> dict:
     return {"counts": counts, "mse": mse, "ref_mse": ref_mse, "width": width, "seeds": seeds, "cpu": BR.cpu_name()}
 
 
+STOP_TABLE = 128  # the pool sequences' length in the stop-early study
+STOP_COUNTS = [24, 32, 40, 48, 64, 80, 96]
+STOP_WIDTH, STOP_SEEDS = 32, 8  # a Python sampler: 32 x 32 pixels and 8 seeds keep it near 30 minutes
+STOP_SAMPLERS = {  # row: pool kind
+    "dpc progressive, pool": "progressive",
+    "dpc progressive, pool, levels shuffled": "progressive shuffled",
+    "dpc progressive, relaxed": "relaxed",
+    "dpc progressive, relaxed, levels shuffled": "relaxed shuffled",
+    "pmj02bn": "pmj02bn",
+}
+
+
+def run_stop(width: int, seeds: int) -> dict:
+    """A renderer that stops early: pool samplers on sequences of STOP_TABLE points rendered at
+    n < STOP_TABLE samples per pixel read each sequence's first n points (between the levels,
+    too)."""
+    import mitsuba as mi
+
+    mi.set_variant("scalar_rgb")
+    for row, kind in STOP_SAMPLERS.items():
+        cls = pool_sampler_class(mi, pool_points(kind, STOP_TABLE))
+        mi.register_sampler("stop_" + kind.replace(" ", "_"), lambda props, cls=cls: cls(props))
+    ref, ref_mse = BR.reference(mi, SCENE, width)
+    mse: dict[str, list[float]] = {}
+    for row, kind in STOP_SAMPLERS.items():
+        t = time.perf_counter()
+        mse[row] = []
+        for n in STOP_COUNTS:
+            imgs = [render(mi, "stop_" + kind.replace(" ", "_"), n, k, width) for k in range(seeds)]
+            mse[row].append(float(np.mean([((i - ref) ** 2).mean() for i in imgs])))
+        print(f"{row:42s} " + " ".join(f"{v:.2e}" for v in mse[row]) + f"   ({time.perf_counter() - t:.0f} s)")
+    return {"mse": mse, "ref_mse": ref_mse, "width": width, "seeds": seeds, "cpu": BR.cpu_name()}
+
+
+def stop_section(res: dict) -> str:
+    rows = list(STOP_SAMPLERS)
+    lines = [
+        f"Measured by `python bench/bench_progressive_render.py --stop` on {res['cpu']}: Mitsuba 3 `scalar_rgb`, "
+        f"the {SCENE} scene at {res['width']} x {res['width']} pixels, {res['seeds']} seeds per cell; the pool "
+        f"sampler of the table above on sequences of {STOP_TABLE} points, stopped at n samples per pixel (each "
+        'pixel\'s first n points of its sequences). Image MSE; "levels shuffled": the same sets with each '
+        "level's points in a random order.",
+        "",
+        "| sampler | " + " | ".join(f"{n} spp" for n in STOP_COUNTS) + " |",
+        "|---|" + "---:|" * len(STOP_COUNTS),
+    ]
+    for row in rows:
+        lines.append(f"| {row} | " + " | ".join(f"{v:.2e}" for v in res["mse"][row]) + " |")
+    between = [i for i, n in enumerate(STOP_COUNTS) if n & (n - 1)]
+
+    def ratios(a: str, b: str) -> str:
+        r = [res["mse"][a][i] / res["mse"][b][i] for i in between]
+        return f"×{min(r):.2f} .. ×{max(r):.2f}"
+
+    lines += [
+        "",
+        "Between the levels ("
+        + ", ".join(str(STOP_COUNTS[i]) for i in between)
+        + " spp), MSE over the same sets with shuffled levels: progressive-2d "
+        + ratios("dpc progressive, pool", "dpc progressive, pool, levels shuffled")
+        + ", progressive-2d-relaxed "
+        + ratios("dpc progressive, relaxed", "dpc progressive, relaxed, levels shuffled")
+        + "; over PMJ02BN's: progressive-2d "
+        + ratios("dpc progressive, pool", "pmj02bn")
+        + ", progressive-2d-relaxed "
+        + ratios("dpc progressive, relaxed", "pmj02bn")
+        + ".",
+    ]
+    return "\n".join(lines)
+
+
 def figure(res: dict) -> None:
     import matplotlib
 
@@ -244,7 +326,14 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=24)
     ap.add_argument("--max-spp", type=int, default=64)
     ap.add_argument("--quick", action="store_true", help="24 x 24 pixels, 2 seeds, up to 16 spp; prints only")
+    ap.add_argument("--stop", action="store_true", help="the stop-early study instead (pool samplers, n < 128 spp)")
     args = ap.parse_args()
+    if args.stop:
+        res = run_stop(24 if args.quick else STOP_WIDTH, 2 if args.quick else STOP_SEEDS)
+        if not args.quick:
+            replace_section(DOC, "bench_progressive_stop", stop_section(res))
+            print(f"wrote {DOC}")
+        return
     if args.quick:
         args.width, args.seeds, args.max_spp = 24, 2, 16
     res = run(args.width, args.seeds, args.max_spp)

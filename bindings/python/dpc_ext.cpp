@@ -467,7 +467,7 @@ py::dict load_defaults() {
     return d;
 }
 
-// Points a host-side step (dpc_balance, dpc_relax_prefixes) changes in place: a copy of the
+// Points a host-side step (dpc_balance, dpc_relax_prefixes, dpc_order_levels) changes in place: a copy of the
 // caller's array, which stays as it was.
 using points_in = py::array_t<float, py::array::c_style | py::array::forcecast>;
 
@@ -543,5 +543,15 @@ PYBIND11_MODULE(_core, mod) {
             return out;
         },
         py::arg("points"), py::arg("base"), py::arg("steps"), py::arg("threads"));
+    mod.def(
+        "order_levels",
+        [](const points_in &points, uint32_t base) {
+            if (points.ndim() != 2) raise_status(DPC_ERROR_INVALID_ARGUMENT, "points must be (m, n)");
+            py::array_t<float> out = copy_of(points);
+            const size_t m = points.shape(0), n = points.shape(1);
+            call([&, p = out.mutable_data()] { return dpc_order_levels(p, m, n, base); });
+            return out;
+        },
+        py::arg("points"), py::arg("base"));
     register_layer_training(mod);
 }

@@ -1,11 +1,13 @@
 """Post-processes of a progressive point sequence (docs/progressive.md): its (0,2)-stratification
-("Stratified variant") and the joint relaxation of all its prefixes ("Jointly relaxed prefixes").
+("Stratified variant"), the joint relaxation of all its prefixes ("Jointly relaxed prefixes")
+and the order within its levels ("Between the levels").
 
     >>> import dpc
     >>> x = dpc.load("progressive-2d").generate(seed=0, n_points=1024)
     >>> y = dpc.stratify.stratify_02(x)               # every power-of-two prefix a (0,2)-net
     >>> z = dpc.stratify.stratify_02(x, up_to=64)     # only the first 64: the trade-off between the two
     >>> r = dpc.stratify.relax_prefixes(x)            # every point moves; every prefix 16 * 2^j stays blue
+    >>> o = dpc.stratify.order_levels(x)              # x's order already: the generator makes it
 
 A (0,2)-sequence in base 2 (every prefix of 2^k points has one point in each elementary interval
 of area 2^-k, of every shape 2^a x 2^(k-a)) is what scrambled Sobol' and PMJ02 give renderers;
@@ -27,6 +29,11 @@ earlier points in place; relaxed jointly, the full set and every power-of-two pr
 blue as a set made for their size (the measurements in docs/progressive.md), and the first n
 points are no longer the model's set of n. It is libdpc's ``dpc_relax_prefixes``, the last step
 of a model with metadata ``dpc.relax`` (progressive-2d-relaxed: docs/model-format.md §6.1).
+
+:func:`order_levels` puts the points of each level (the first ``base`` points, then blocks that
+double the count) in the order that fills the emptiest place first, so that a prefix ending
+inside a level is spread too. Every progressive model's generator does it after each level
+(docs/model-format.md §6); it is libdpc's ``dpc_order_levels``.
 """
 
 from __future__ import annotations
@@ -37,7 +44,7 @@ from . import _core
 from .baselines import _free_strata, _mark, _pmj02_steps
 from .errors import InvalidArgumentError
 
-__all__ = ["relax_prefixes", "stratify_02"]
+__all__ = ["order_levels", "relax_prefixes", "stratify_02"]
 
 RELAX_MAX_STEPS = 100_000  # libdpc's bound (DPC_RELAX_MAX_STEPS)
 
@@ -112,3 +119,24 @@ def relax_prefixes(points, steps: int = 1600, base: int = 16, *, threads: int = 
     if isinstance(threads, bool) or not isinstance(threads, int) or not 0 <= threads <= 0xFFFFFFFF:
         raise InvalidArgumentError(f"threads must be an integer >= 0, got {threads!r}")
     return _core.relax_prefixes(y, base, steps, threads)
+
+
+def order_levels(points, base: int = 16) -> np.ndarray:
+    """The ordered set ``points`` (m, d) in [0, 1) with the points of each level reordered; (m, d)
+    float32. The levels are the first min(m, ``base``) points, then blocks of min(n, m - n) after
+    the first n. Within a level, each next point is the one of least energy sum b(|x - y|) over
+    the points before it (the earlier levels and the level's points picked so far), with
+    b(r) = (1 - r^2 / R^2)^3 within R = min(2 N^(-1/d), 1/2), N the count the level completes,
+    toroidal distances, ties to the lower index: the emptiest place first. libdpc's
+    ``dpc_order_levels`` (docs/model-format.md §6), what the generator of every progressive model
+    does after each level; each level keeps its set of points, and the order is the same on
+    every machine."""
+    x = np.asarray(points)
+    if isinstance(base, bool) or not isinstance(base, int) or not 1 <= base <= 0xFFFFFFFF:
+        raise InvalidArgumentError(f"base must be an integer >= 1, got {base!r}")
+    if x.ndim != 2 or x.shape[0] == 0 or x.shape[1] == 0:
+        raise InvalidArgumentError(f"points must be (m, d) with m, d >= 1, got shape {x.shape}")
+    y = np.ascontiguousarray(x, dtype=np.float32)
+    if not np.all((y >= 0) & (y < 1)):
+        raise InvalidArgumentError("points must lie in [0, 1) (as float32)")
+    return _core.order_levels(y, base)

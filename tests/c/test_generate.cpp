@@ -7,6 +7,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <numeric>
+#include <random>
 #include <set>
 #include <sstream>
 #include <thread>
@@ -381,6 +383,7 @@ TEST(Progressive, LevelSizesArePrefixesOfLargerSets) {
         // the first level is the cascade on the seed's input points, as for a set model
         std::vector<float> x = input_points(info_of(m.get()), seed, 16);
         ASSERT_EQ(dpc_filter(m.get(), 16, x.data()), DPC_OK) << dpc_last_error();
+        ASSERT_EQ(dpc_order_levels(x.data(), 16, 2, 16), DPC_OK) << dpc_last_error(); // in its order
         EXPECT_EQ(x, head(big, 16));
     }
 }
@@ -457,7 +460,7 @@ TEST(Progressive, RunsOnTheCpuAndVulkanSaysWhy) {
     dpc_model_free(m);
 }
 
-// ---- the prefix relaxation (docs/model-format.md §6.1) ----------------------------------------
+// ---- the order within the levels (docs/model-format.md §6) --------------------------------------
 
 namespace {
 // the smallest toroidal distance among the first n points, times sqrt(n)
@@ -477,7 +480,71 @@ double min_gap(const std::vector<float> &x, size_t n) {
 }
 } // namespace
 
-// dpc.relax = 400: the levels of model_2d_progressive, then dpc_relax_prefixes on all points.
+namespace {
+// each level of a set of m points (base 16) sorted as (x, y) pairs: its set of points
+std::vector<std::vector<std::pair<float, float>>> level_sets(const std::vector<float> &x, size_t m) {
+    std::vector<std::vector<std::pair<float, float>>> out;
+    for (size_t n = 0, a = std::min<size_t>(m, 16); n < m; n += a, a = std::min(n, m - n)) {
+        std::vector<std::pair<float, float>> level;
+        for (size_t i = n; i < n + a; i++) level.emplace_back(x[2 * i], x[2 * i + 1]);
+        std::sort(level.begin(), level.end());
+        out.push_back(level);
+    }
+    return out;
+}
+} // namespace
+
+// The generator's levels come out in their order: ordering them again changes nothing.
+TEST(OrderLevels, TheGeneratorLeavesEveryLevelInItsOrder) {
+    for (const char *name : {"model_2d_progressive", "model_2d_progressive_balanced", "model_2d_progressive_relaxed"}) {
+        ModelPtr m = load(model_path(name));
+        ASSERT_TRUE(m);
+        for (size_t n : {12u, 100u, 300u}) {
+            std::vector<float> x = generate(m.get(), 4, n);
+            const std::vector<float> want = x;
+            ASSERT_EQ(dpc_order_levels(x.data(), n, 2, 16), DPC_OK) << dpc_last_error();
+            EXPECT_EQ(x, want) << name << ", " << n << " points";
+        }
+    }
+}
+
+// Each level keeps its set of points, in a new order (the prefixes' quality is measured on the
+// bundled models in Python: tests/python/test_progressive.py), and the first level of a set of
+// fewer than base points is one level.
+TEST(OrderLevels, EachLevelKeepsItsPoints) {
+    for (uint64_t seed = 0; seed < 4; seed++)
+        for (size_t n : {256u, 200u, 12u}) {
+            std::vector<float> x(n * 2);
+            ASSERT_EQ(dpc_uniform(seed, n, 2, x.data()), DPC_OK);
+            const std::vector<float> y = x;
+            ASSERT_EQ(dpc_order_levels(x.data(), n, 2, 16), DPC_OK) << dpc_last_error();
+            EXPECT_EQ(level_sets(x, n), level_sets(y, n));
+            EXPECT_NE(x, y);
+        }
+}
+
+TEST(OrderLevels, BadArgumentsLeaveThePointsAsTheyWere) {
+    std::vector<float> x(100 * 3);
+    ASSERT_EQ(dpc_uniform(1, 100, 3, x.data()), DPC_OK);
+    const std::vector<float> before = x;
+    EXPECT_EQ(dpc_order_levels(nullptr, 100, 3, 16), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(dpc_order_levels(x.data(), 0, 3, 16), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(dpc_order_levels(x.data(), 100, 0, 16), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(dpc_order_levels(x.data(), 100, DPC_MAX_DIMS + 1, 16), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(dpc_order_levels(x.data(), 100, 3, 0), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(dpc_order_levels(x.data(), (size_t)DPC_MAX_POINTS + 1, 3, 16), DPC_ERROR_LIMIT);
+    x[77] = 1.0f;
+    EXPECT_EQ(dpc_order_levels(x.data(), 100, 3, 16), DPC_ERROR_INVALID_ARGUMENT);
+    x[77] = before[77];
+    EXPECT_EQ(x, before);
+    EXPECT_EQ(dpc_order_levels(x.data(), 100, 3, 16), DPC_OK); // 3-D: the cells split x and y
+    EXPECT_NE(x, before);
+}
+
+// ---- the prefix relaxation (docs/model-format.md §6.1) ----------------------------------------
+
+// dpc.relax = 400: the levels of model_2d_progressive, then dpc_relax_prefixes on all points and
+// dpc_order_levels.
 TEST(Relax, TheModelIsItsLevelsThenTheRelaxation) {
     ModelPtr m = load(model_path("model_2d_progressive_relaxed"));
     ModelPtr levels = load(model_path("model_2d_progressive"));
@@ -487,7 +554,8 @@ TEST(Relax, TheModelIsItsLevelsThenTheRelaxation) {
         for (size_t n : {10u, 64u, 300u}) {
             std::vector<float> x = generate(levels.get(), seed, n);
             ASSERT_EQ(dpc_relax_prefixes(x.data(), n, 16, 400, 1), n >= 16 ? DPC_OK : DPC_ERROR_INVALID_ARGUMENT);
-            if (n >= 16) {
+            if (n >= 16) { // the points moved: each level ordered again (§6)
+                ASSERT_EQ(dpc_order_levels(x.data(), n, 2, 16), DPC_OK) << dpc_last_error();
                 EXPECT_EQ(generate(m.get(), seed, n), x) << "seed " << seed << ", n " << n;
             }
         }

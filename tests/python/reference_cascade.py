@@ -230,12 +230,14 @@ def generate_progressive(model: RefModel, seed: int, m: int, base: int, radius: 
     then levels that add min(n, m - n) input points of seed + level * golden to the n so far and
     run every layer on all of them, the first n put back after each layer. With a balance radius
     (§5.1) each level ends with the balance of its prefix, only the level's own points moving
-    (float32 in between, as libdpc). With relax steps (§6.1) the levels' float32 points are then
-    relaxed jointly."""
+    (float32 in between, as libdpc). Each level's points are then put in their order (order_level,
+    on the float32 points as libdpc). With relax steps (§6.1) the levels' float32 points are then
+    relaxed jointly, and every level ordered again."""
     n = min(m, base)
     y = run_cascade(model, initial_points(model, seed, n))
     if radius:
         y = balance(y.astype(np.float32), radius).astype(np.float32).astype(np.float64)
+    y = y[order_level(y.astype(np.float32), 0, n)]
     level = 1
     while n < m:
         add = min(n, m - n)
@@ -247,9 +249,10 @@ def generate_progressive(model: RefModel, seed: int, m: int, base: int, radius: 
             x = z
         if radius:
             x = balance(x.astype(np.float32), radius, first=n).astype(np.float32).astype(np.float64)
+        x[n:] = x[n:][order_level(x.astype(np.float32), n, add)]
         y, n, level = x, n + add, level + 1
     if relax:
-        y = relax_prefixes(y.astype(np.float32), relax, base)
+        y = order_levels(relax_prefixes(y.astype(np.float32), relax, base).astype(np.float32), base)
     return y
 
 
@@ -336,3 +339,90 @@ def relax_prefixes(points: np.ndarray, steps: int, base: int) -> np.ndarray:
         x = (x + 0.1 * (1 - 0.8 * step / steps) * force) % 1.0
         x[x >= 1.0] = 0.0  # (x % 1.0) rounds a tiny negative x up to 1.0
     return x
+
+
+def order_level(x: np.ndarray, n: int, a: int) -> np.ndarray:
+    """The order within a progressive level (§6) of x[n : n + a] after the held x[:n], as the
+    indices 0 .. a-1 of the level's points in picking order. Energy of a point: the sum of b over
+    the held points (in index order), then over the picks before it (in picking order),
+    b = (1 - d^2 / R^2)^3 within R (else 0), d^2 the toroidal squared distance summed over the
+    coordinates in order, R^2 = min((2 r)^2, 1/4), r = (n + a)^(-1/dims) by 64 halvings. Quota:
+    cells of depth t split the first two coordinates (one in 1-D) into 2^t parts each; D is the
+    largest depth whose cells number at most a / 8. Each pick starts at the whole torus and, at
+    depths 1 .. D, enters the child cell (among those with unpicked points) of the largest
+    (picks in the parent + 1) * (points in the child) - (picks in the child) * (points in the
+    parent), ties to the child whose least (energy, index) unpicked point is least; in the last
+    cell it picks that point. +, -, *, / and exact cells only, so libdpc's order is this one
+    exactly (no shortcut here: the reference reads as the rule)."""
+    y = np.asarray(x, dtype=np.float64)
+    dims = y.shape[1]
+    lo, hi = 0.0, 1.0
+    for _ in range(64):
+        mid = 0.5 * (lo + hi)
+        p = mid
+        for _ in range(dims - 1):
+            p *= mid
+        lo, hi = (lo, mid) if p * float(n + a) >= 1.0 else (mid, hi)
+    r2 = min((2.0 * hi) ** 2, 0.25)
+    level = y[n : n + a]
+    split = min(dims, 2)
+    depth = 0
+    while 8 << (split * (depth + 1)) <= a:
+        depth += 1
+
+    def cells(t: int) -> np.ndarray:  # a cell id per point at depth t
+        c = np.minimum(np.floor(level[:, :split] * 2.0**t), 2**t - 1).astype(np.int64)
+        return c[:, 0] * (2**t) + (c[:, 1] if split == 2 else 0)
+
+    cell = [cells(t) for t in range(depth + 1)]
+
+    def bump(p: np.ndarray) -> np.ndarray:
+        d2 = None
+        for k in range(dims):
+            d = level[:, k] - p[k]
+            d = np.where(d > 0.5, d - 1.0, np.where(d < -0.5, d + 1.0, d))
+            d2 = d * d if d2 is None else d2 + d * d
+        t = 1.0 - d2 / r2
+        return np.where(d2 < r2, t * t * t, 0.0)
+
+    def least(mask: np.ndarray) -> tuple[float, int]:  # least (energy, index) among mask
+        idx = np.flatnonzero(mask)
+        k = int(np.argmin(e[idx]))  # argmin: the first of equal minima, the lowest index
+        return float(e[idx[k]]), int(idx[k])
+
+    e = np.zeros(a)
+    for j in range(n):
+        e = e + bump(y[j])
+    picked = np.zeros(a, dtype=bool)
+    order = []
+    for _ in range(a):
+        inside = np.ones(a, dtype=bool)  # the current cell's points
+        for t in range(1, depth + 1):
+            n_parent, k_parent = int(inside.sum()), int((inside & picked).sum())
+            best = None
+            for child in np.unique(cell[t][inside & ~picked]):
+                members = inside & (cell[t] == child)
+                deficit = (k_parent + 1) * int(members.sum()) - int((members & picked).sum()) * n_parent
+                key = (-deficit, *least(members & ~picked))
+                if best is None or key < best[0]:
+                    best = (key, members)
+            inside = best[1]
+        i = least(inside & ~picked)[1]
+        order.append(i)
+        picked[i] = True
+        e = np.where(picked, e, e + bump(level[i]))
+    return np.array(order, dtype=np.int64)
+
+
+def order_levels(x: np.ndarray, base: int) -> np.ndarray:
+    """Every level of the ordered set x reordered by order_level (§6): the first min(m, base)
+    points, then blocks of min(n, m - n) after the first n."""
+    y = np.array(x, dtype=np.float64)
+    m = len(y)
+    n = min(m, base)
+    y[:n] = y[:n][order_level(y, 0, n)]
+    while n < m:
+        a = min(n, m - n)
+        y[n : n + a] = y[n : n + a][order_level(y, n, a)]
+        n += a
+    return y

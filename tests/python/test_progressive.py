@@ -56,11 +56,14 @@ def test_prefixes_of_level_sizes_are_the_smaller_sets(prog_path, seed):
 
 
 def test_the_first_level_is_a_set_of_its_own(prog_path):
-    # below the base count the model is an ordinary set model: all points move together
+    # below the base count the model is an ordinary set model (all points move together), in the
+    # order of its level
     m, plain = dpc.load(prog_path), dpc.load(DATA / "model_2d.onnx")
-    assert np.array_equal(m.generate(3, 12), plain.generate(3, 12))
-    assert np.array_equal(m.generate(3, 16), plain.generate(3, 16))
-    assert not np.array_equal(m.generate(3, 40), plain.generate(3, 40))
+    for n in (12, 16):
+        want = plain.generate(3, n)
+        assert np.array_equal(m.generate(3, n), dpc.stratify.order_levels(want))
+        assert not np.array_equal(m.generate(3, n), want)
+    assert not np.array_equal(np.sort(m.generate(3, 40), 0), np.sort(plain.generate(3, 40), 0))
 
 
 @pytest.mark.parametrize("isa", ["scalar"] + VECTOR_ISAS)
@@ -155,15 +158,16 @@ RELAXED = DATA / "model_2d_progressive_relaxed.onnx"  # model_2d_progressive wit
 
 @pytest.mark.parametrize("seed,m", [(0, 300), (5, 64), (2**64 - 1, 10)])
 def test_relaxed_model_is_its_levels_then_the_relaxation_and_matches_the_reference(seed, m):
-    """§6.1: the generator runs the levels, then relaxes all prefixes; against the float64
-    reference (levels and relaxation both in float64, float32 between them as libdpc)."""
+    """§6.1: the generator runs the levels, then relaxes all prefixes and orders each level again;
+    against the float64 reference (levels and relaxation both in float64, float32 between them as
+    libdpc)."""
     model, levels = dpc.load(RELAXED), dpc.load(DATA / "model_2d_progressive.onnx")
     assert (model.order, model.progressive_base, model.relax) == ("progressive", 16, 400)
     assert (levels.relax, dpc.load(DATA / "model_2d.onnx").relax) == (0, 0)
     got = model.generate(seed, m)
     x = levels.generate(seed, m)
-    if m >= 16:
-        assert np.array_equal(got, dpc.stratify.relax_prefixes(x, steps=400))
+    if m >= 16:  # the points moved: each level in its order again (§6)
+        assert np.array_equal(got, dpc.stratify.order_levels(dpc.stratify.relax_prefixes(x, steps=400)))
     want = rc.generate_progressive(rc.load_reference(RELAXED), seed, m, 16, relax=400)
     assert rc.torus_diff(got, want).max() < 1e-5
     assert not np.array_equal(got, x)
@@ -185,6 +189,84 @@ def test_relaxed_model_gives_the_same_bits_everywhere():
             model = dpc.load(RELAXED, isa=isa, threads=threads)
             assert np.array_equal(model.generate(4, 700), want), (isa, threads)
             assert np.array_equal(model.generate_batch(3, 3, 700)[1], want), (isa, threads)
+
+
+def level_sets(x: np.ndarray, base: int = 16) -> list[np.ndarray]:
+    """Each level of an ordered set (the first base points, then blocks doubling the count) as a
+    sorted array of its points."""
+    out, n, a = [], 0, min(len(x), base)
+    while n < len(x):
+        level = x[n : n + a]
+        out.append(level[np.lexsort(level.T[::-1])])
+        n, a = n + a, min(n + a, len(x) - n - a)
+    return out
+
+
+@pytest.mark.parametrize(
+    "dims,m,base", [(2, 300, 16), (2, 700, 16), (1, 200, 16), (3, 300, 16), (2, 100, 8), (2, 5, 16)]
+)
+def test_order_levels_is_the_reference_bit_for_bit_and_keeps_each_level(dims, m, base):
+    """§6's order within the levels: +, -, *, / and exact cells only, so libdpc's order is the
+    float64 reference's exactly, in any dimension; each level keeps its points."""
+    x = np.random.default_rng(dims * m).random((m, dims)).astype(np.float32)
+    got = dpc.stratify.order_levels(x, base)
+    assert np.array_equal(got, rc.order_levels(x, base).astype(np.float32))
+    assert all(np.array_equal(p, q) for p, q in zip(level_sets(got, base), level_sets(x, base), strict=True))
+    assert not np.array_equal(got, x) or m < 3
+
+
+@pytest.mark.parametrize("path", [DATA / "model_2d_progressive.onnx", BALANCED, RELAXED])
+def test_the_generator_leaves_every_level_in_its_order(path):
+    x = dpc.load(path).generate(8, 500)
+    assert np.array_equal(dpc.stratify.order_levels(x), x)
+
+
+def test_order_levels_checks_its_input():
+    x = dpc.load("progressive-2d").generate(5, 40)
+    bad = [
+        dict(points=x[:, 0]),
+        dict(points=x[:0]),
+        dict(points=x + 1.0),
+        dict(points=x, base=0),
+        dict(points=x, base=2.5),
+        dict(points=np.full((20, 2), 0.99999999, dtype=np.float64)),  # 1.0 as float32
+    ]
+    for kwargs in bad:
+        with pytest.raises(dpc.InvalidArgumentError):
+            dpc.stratify.order_levels(**kwargs)
+    assert np.array_equal(dpc.stratify.order_levels(x.astype(np.float64)), x)  # float32, its order already
+
+
+def shuffled_levels(sets: np.ndarray, seed: int, base: int = 16) -> np.ndarray:
+    """Each set's levels in a random order: the order before §6 had one."""
+    rng, out = np.random.default_rng(seed), sets.copy()
+    for s in out:
+        n, a = 0, min(len(s), base)
+        while n < len(s):
+            s[n : n + a] = s[n : n + a][rng.permutation(a)]
+            n, a = n + a, min(n + a, len(s) - n - a)
+    return out
+
+
+def test_prefixes_between_the_levels_are_spread():
+    """A small case of bench/bench_progressive_between.py: 32 sets of 256 points of the bundled
+    progressive-2d, prefixes that end inside a level. Their E_low is below the same sets' with
+    each level in a random order and below PMJ02BN's at the same n, and so is their Gaussian
+    variance summed over the prefixes."""
+    from dpc import baselines
+    from dpc.analysis.integration import integrands, relative_variance
+
+    sets = dpc.load("progressive-2d", backend="cpu").generate_batch(32, 0, 256).astype(np.float64)
+    shuffled = shuffled_levels(sets, 1)
+    pmj = baselines.generate("pmj02bn", 256, 2, 32, 0)
+    gauss = integrands("gaussian", 16, seed=7)
+    var = {"dpc": 0.0, "shuffled": 0.0, "pmj": 0.0}
+    for n in (20, 24, 28, 40, 48, 56, 80, 96, 112, 160, 192, 224):
+        e = {k: low_frequency_energy(v[:, :n], 0.5) for k, v in [("dpc", sets), ("shuffled", shuffled), ("pmj", pmj)]}
+        assert e["dpc"] < e["shuffled"] and e["dpc"] < e["pmj"], (n, e)
+        for k, v in [("dpc", sets), ("shuffled", shuffled), ("pmj", pmj)]:
+            var[k] += float(relative_variance(v[:, :n], gauss).mean())
+    assert var["dpc"] < 0.8 * var["shuffled"] and var["dpc"] < var["pmj"], var
 
 
 def test_runs_on_the_cpu_and_says_so_for_vulkan(prog_path):

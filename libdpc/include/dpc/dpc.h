@@ -336,6 +336,16 @@ DPC_API dpc_status dpc_balance(float *points, size_t n_points, size_t dims, uint
  * DPC_ERROR_OUT_OF_MEMORY leaves the points unchanged. */
 DPC_API dpc_status dpc_relax_prefixes(float *points, size_t n_points, uint32_t base, uint32_t steps, uint32_t threads);
 
+/* The order within the levels of a progressive set (docs/model-format.md §6), in place on an
+ * ordered set of n_points x dims points in [0, 1): the levels are the first min(n_points, base)
+ * points, then blocks that double the count (the last one: what is left); within each, the
+ * points are reordered so that each next one fills the emptiest place left among the points
+ * before it, so every prefix, not only the level sizes, is spread. Each level keeps its set of
+ * points. What the generator of a progressive model does after each level. Plain double
+ * arithmetic (+, -, *, /): the same order on every machine. base >= 1;
+ * DPC_ERROR_OUT_OF_MEMORY leaves the points unchanged. */
+DPC_API dpc_status dpc_order_levels(float *points, size_t n_points, size_t dims, uint32_t base);
+
 /* ---------------------------------------------------------------------------------------------
  * Sampler: values for (pixel, sample index, dimension), for a renderer
  *
@@ -360,7 +370,8 @@ DPC_API dpc_status dpc_relax_prefixes(float *points, size_t n_points, uint32_t b
  * - Progressive models (dpc.order = "progressive", e.g. progressive-2d; all of the
  *   sampler's models or none): tables are read in order, not rotated per pixel, so a pixel's
  *   first 2^k samples (k >= 4) are a blue-noise set of their own and an adaptive renderer may
- *   stop at any of them (with dpc.relax, e.g. progressive-2d-relaxed, each prefix is better
+ *   stop at any of them, or between them (each level's points come in the order that fills the
+ *   emptiest place first: dpc_order_levels) (with dpc.relax, e.g. progressive-2d-relaxed, each prefix is better
  *   blue noise and a table takes about 1.4 s per 1,024 points to make); get_1d then uses the stratum of point i's x rank
  *   (docs/progressive.md). Net slots are then read in order (the first in the net's Sobol'
  *   order, later ones shuffled within each octave [2^(k-1), 2^k)), so their first 2^k samples

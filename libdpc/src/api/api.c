@@ -22,6 +22,7 @@
 #include "cpu/cpu_layer_train.h"
 #include "model/balance.h"
 #include "model/input.h"
+#include "model/level_order.h"
 #include "model/plan.h"
 #include "model/relax.h"
 
@@ -473,6 +474,18 @@ dpc_status dpc_relax_prefixes(float *points, size_t n_points, uint32_t base, uin
     const dpc_status st = check_unit_points(points, n_points, 2);
     return st == DPC_OK ? dpc_relax_points(points, n_points, base, steps, dpc_threads_resolve(threads), NULL, NULL)
                         : st;
+}
+
+dpc_status dpc_order_levels(float *points, size_t n_points, size_t dims, uint32_t base) {
+    dpc_clear_error();
+    if (!points) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "points is NULL");
+    if (n_points == 0 || dims == 0 || dims > DPC_MAX_DIMS || base == 0)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "n_points and base must be positive and dims in 1..%u",
+                        DPC_MAX_DIMS);
+    if (n_points > DPC_MAX_POINTS)
+        return dpc_fail(DPC_ERROR_LIMIT, "%zu points, at most %u per set", n_points, DPC_MAX_POINTS);
+    const dpc_status st = check_unit_points(points, n_points, dims);
+    return st == DPC_OK ? dpc_order_level_points(points, n_points, (uint32_t)dims, base) : st;
 }
 
 static double model_max_radius(const dpc_cascade *c) {

@@ -20,6 +20,7 @@
 #include "cpu/cpu_lists.h"
 #include "model/balance.h"
 #include "model/input.h"
+#include "model/level_order.h"
 #include "model/plan.h"
 #include "model/relax.h"
 
@@ -460,10 +461,9 @@ dpc_status dpc_cpu_filter_frozen(const dpc_cascade *c, const dpc_cpu_engine *e, 
 
 /* ---- whole sets: input points, then the cascade; batches fanned out over threads ------------ */
 
-/* The levels of a progressive set of m points (format §6): the first holds min(m, base)
- * points, each next one adds min(n, m - n) to the n so far. */
-static size_t first_level(const dpc_cascade *c, size_t m) { return m < c->progressive_base ? m : c->progressive_base; }
-static size_t level_size(size_t n, size_t m) { return n < m - n ? n : m - n; }
+/* The levels of a progressive set of m points (format §6): level_order.h. */
+static size_t first_level(const dpc_cascade *c, size_t m) { return dpc_first_level(m, c->progressive_base); }
+static size_t level_size(size_t n, size_t m) { return dpc_level_size(n, m); }
 
 /* The output balance of a set's first m points (format §5.1), the points from first on moving
  * (0: all; a progressive level: its own points, §6); nothing when the model has no dpc.balance. */
@@ -491,22 +491,27 @@ static dpc_status generate_one(const dpc_cascade *c, dpc_input input, const dpc_
         return st == DPC_OK ? balance_prefix(c, out, m, 0) : st;
     }
     /* Progressive: level j >= 1 adds its input points, of seed + j * 0x9E3779B97F4A7C15, to the
-     * n points so far and filters them past those, which stay where they are. */
+     * n points so far and filters them past those, which stay where they are. Each level's
+     * points are then put in the order that fills the largest gaps first. */
     size_t n = first_level(c, m);
     dpc_input_fill(c, input, seed, n, out);
     dpc_status st = dpc_cpu_filter_hooked(c, e, n, out, hook, ctx);
     if (st == DPC_OK) st = balance_prefix(c, out, n, 0);
+    if (st == DPC_OK) st = dpc_order_level(out, 0, n, c->dims);
     for (uint64_t level = 1; st == DPC_OK && n < m; level++) {
         const size_t add = level_size(n, m);
         dpc_input_fill(c, input, seed + level * 0x9E3779B97F4A7C15ull, add, out + n * c->dims);
         st = dpc_cpu_filter_frozen(c, e, n + add, n, out, hook, ctx);
         if (st == DPC_OK) /* the level's new points balance the whole prefix; the held ones stay */
             st = balance_prefix(c, out, n + add, n);
+        if (st == DPC_OK) st = dpc_order_level(out, n, add, c->dims);
         n += add;
     }
     if (st == DPC_OK && c->relax) { /* every prefix relaxed at once (§6.1): the held points move too */
         relax_hook_ctx h = {hook, ctx};
         st = dpc_relax_points(out, m, c->progressive_base, c->relax, e->threads, hook ? relax_hook : NULL, &h);
+        if (st == DPC_OK) /* the points moved: each level's order again, for the places they took */
+            st = dpc_order_level_points(out, m, c->dims, c->progressive_base);
     }
     return st;
 }
