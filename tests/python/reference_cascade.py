@@ -230,14 +230,13 @@ def generate_progressive(model: RefModel, seed: int, m: int, base: int, radius: 
     then levels that add min(n, m - n) input points of seed + level * golden to the n so far and
     run every layer on all of them, the first n put back after each layer. With a balance radius
     (§5.1) each level ends with the balance of its prefix, only the level's own points moving
-    (float32 in between, as libdpc). Each level's points are then put in their order (order_level,
-    on the float32 points as libdpc). With relax steps (§6.1) the levels' float32 points are then
-    relaxed jointly, and every level ordered again."""
+    (float32 in between, as libdpc). With relax steps (§6.1) the levels' float32 points are then
+    relaxed jointly. Last, every level is put in its order (order_levels, on the float32 points
+    as libdpc)."""
     n = min(m, base)
     y = run_cascade(model, initial_points(model, seed, n))
     if radius:
         y = balance(y.astype(np.float32), radius).astype(np.float32).astype(np.float64)
-    y = y[order_level(y.astype(np.float32), 0, n)]
     level = 1
     while n < m:
         add = min(n, m - n)
@@ -249,11 +248,10 @@ def generate_progressive(model: RefModel, seed: int, m: int, base: int, radius: 
             x = z
         if radius:
             x = balance(x.astype(np.float32), radius, first=n).astype(np.float32).astype(np.float64)
-        x[n:] = x[n:][order_level(x.astype(np.float32), n, add)]
         y, n, level = x, n + add, level + 1
     if relax:
-        y = order_levels(relax_prefixes(y.astype(np.float32), relax, base).astype(np.float32), base)
-    return y
+        y = relax_prefixes(y.astype(np.float32), relax, base)
+    return order_levels(y.astype(np.float32), base)
 
 
 def balance_frequencies(k: int, n: int) -> np.ndarray:

@@ -491,29 +491,26 @@ static dpc_status generate_one(const dpc_cascade *c, dpc_input input, const dpc_
         return st == DPC_OK ? balance_prefix(c, out, m, 0) : st;
     }
     /* Progressive: level j >= 1 adds its input points, of seed + j * 0x9E3779B97F4A7C15, to the
-     * n points so far and filters them past those, which stay where they are. Each level's
-     * points are then put in the order that fills the largest gaps first. */
+     * n points so far and filters them past those, which stay where they are. */
     size_t n = first_level(c, m);
     dpc_input_fill(c, input, seed, n, out);
     dpc_status st = dpc_cpu_filter_hooked(c, e, n, out, hook, ctx);
     if (st == DPC_OK) st = balance_prefix(c, out, n, 0);
-    if (st == DPC_OK) st = dpc_order_level(out, 0, n, c->dims);
     for (uint64_t level = 1; st == DPC_OK && n < m; level++) {
         const size_t add = level_size(n, m);
         dpc_input_fill(c, input, seed + level * 0x9E3779B97F4A7C15ull, add, out + n * c->dims);
         st = dpc_cpu_filter_frozen(c, e, n + add, n, out, hook, ctx);
         if (st == DPC_OK) /* the level's new points balance the whole prefix; the held ones stay */
             st = balance_prefix(c, out, n + add, n);
-        if (st == DPC_OK) st = dpc_order_level(out, n, add, c->dims);
         n += add;
     }
     if (st == DPC_OK && c->relax) { /* every prefix relaxed at once (§6.1): the held points move too */
         relax_hook_ctx h = {hook, ctx};
         st = dpc_relax_points(out, m, c->progressive_base, c->relax, e->threads, hook ? relax_hook : NULL, &h);
-        if (st == DPC_OK) /* the points moved: each level's order again, for the places they took */
-            st = dpc_order_level_points(out, m, c->dims, c->progressive_base);
     }
-    return st;
+    /* last, each level's points in the order that fills the emptiest place first (§6): the
+     * levels and the relaxation never see it */
+    return st == DPC_OK ? dpc_order_level_points(out, m, c->dims, c->progressive_base) : st;
 }
 
 size_t dpc_cpu_filter_runs(const dpc_cascade *c, size_t m) {

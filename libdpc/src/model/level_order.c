@@ -60,10 +60,8 @@ static double reach2(size_t count, uint32_t dims) {
         const double mid = 0.5 * (lo + hi);
         double p = mid;
         for (uint32_t k = 1; k < dims; k++) p *= mid;
-        if (p * (double)count >= 1.0)
-            hi = mid;
-        else
-            lo = mid;
+        if (p * (double)count >= 1.0) hi = mid;
+        else lo = mid;
     }
     const double r = REACH * hi;
     return r * r < 0.25 ? r * r : 0.25;
@@ -82,7 +80,9 @@ static double bump(const level *L, const float *p, const float *q) {
     return t * t * t;
 }
 
-static size_t node_base(const level *L, unsigned t) { return (((size_t)1 << (L->bits * t)) - 1) / ((1u << L->bits) - 1); }
+static size_t node_base(const level *L, unsigned t) {
+    return (((size_t)1 << (L->bits * t)) - 1) / ((1u << L->bits) - 1);
+}
 
 /* the cell at depth t of the point (coordinate 0's bits above coordinate 1's at each depth):
  * floor(v 2^t) is exact, so every machine puts a point in the same cell */
@@ -193,91 +193,105 @@ static uint32_t next_pick(const level *L) {
     return L->best_s[node_base(L, L->depth) + c];
 }
 
-static void free_level(level *L) {
-    free(L->pt);
-    free(L->leaf);
-    free(L->e);
-    free(L->picked);
-    free(L->leaf_start);
-    free(L->count);
-    free(L->taken);
-    free(L->best_e);
-    free(L->best_s);
-    free(L->dirty);
-    free(L->is_dirty);
+static unsigned depth_for(size_t a, unsigned bits) {
+    unsigned d = 0;
+    while (((size_t)LEAF_POINTS << (bits * (d + 1))) <= a) d++;
+    return d;
 }
 
-dpc_status dpc_order_level(float *x, size_t n, size_t a, uint32_t dims) {
-    if (a < 2) return DPC_OK;
+/* Reorder the level x[n .. n + a) after the held points x[0 .. n), in L's buffers (sized for
+ * the largest level) and `sorted` (a * dims floats). */
+static void order_level(level *L, float *sorted, float *x, size_t n, size_t a) {
+    const uint32_t dims = L->dims;
     float *level_x = x + n * dims;
-    level L = {.x = level_x, .a = a, .dims = dims, .r2 = reach2(n + a, dims), .bits = dims > 1 ? 2 : 1};
-    while (((size_t)LEAF_POINTS << (L.bits * (L.depth + 1))) <= a) L.depth++;
-    const double r = sqrt(L.r2); /* the search's cells: at least R wide (2^-t >= R / GRID_SLACK) */
-    while (L.search < L.depth && (double)((size_t)1 << (L.search + 1)) * r <= GRID_SLACK) L.search++;
-    const size_t leaves = (size_t)1 << (L.bits * L.depth), nodes = node_base(&L, L.depth) + leaves;
-    float *sorted = malloc(a * dims * sizeof *sorted);
-    L.pt = malloc(a * sizeof *L.pt);
-    L.leaf = malloc(a * sizeof *L.leaf);
-    L.e = calloc(a, sizeof *L.e);
-    L.picked = calloc(a, 1);
-    L.leaf_start = calloc(leaves + 1, sizeof *L.leaf_start);
-    L.count = calloc(nodes, sizeof *L.count);
-    L.taken = calloc(nodes, sizeof *L.taken);
-    L.best_e = malloc(nodes * sizeof *L.best_e);
-    L.best_s = malloc(nodes * sizeof *L.best_s);
-    L.dirty = malloc(leaves * sizeof *L.dirty);
-    L.is_dirty = calloc(leaves, 1);
-    if (!sorted || !L.pt || !L.leaf || !L.e || !L.picked || !L.leaf_start || !L.count || !L.taken || !L.best_e ||
-        !L.best_s || !L.dirty || !L.is_dirty) {
-        free(sorted);
-        free_level(&L);
-        return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory ordering a level of %zu points", a);
-    }
-    for (size_t k = 0; k < a; k++) L.leaf_start[cell_of(&L, level_x + k * dims, L.depth) + 1]++; /* counting sort */
-    for (size_t f = 0; f < leaves; f++) L.leaf_start[f + 1] += L.leaf_start[f];
+    L->x = level_x, L->a = a, L->r2 = reach2(n + a, dims), L->depth = depth_for(a, L->bits), L->search = 0;
+    const double r = sqrt(L->r2); /* the search's cells: at least R wide (2^-t >= R / GRID_SLACK) */
+    while (L->search < L->depth && (double)((size_t)1 << (L->search + 1)) * r <= GRID_SLACK) L->search++;
+    const size_t leaves = (size_t)1 << (L->bits * L->depth), nodes = node_base(L, L->depth) + leaves;
+    memset(L->e, 0, a * sizeof *L->e);
+    memset(L->picked, 0, a);
+    memset(L->leaf_start, 0, (leaves + 1) * sizeof *L->leaf_start);
+    memset(L->taken, 0, nodes * sizeof *L->taken);
+    memset(L->is_dirty, 0, leaves);
+    L->n_dirty = 0;
+    for (size_t k = 0; k < a; k++) L->leaf_start[cell_of(L, level_x + k * dims, L->depth) + 1]++; /* counting sort */
+    for (size_t f = 0; f < leaves; f++) L->leaf_start[f + 1] += L->leaf_start[f];
     for (size_t k = 0; k < a; k++) {
-        const size_t f = cell_of(&L, level_x + k * dims, L.depth);
-        const uint32_t s = L.leaf_start[f]++;
-        L.pt[s] = (uint32_t)k, L.leaf[s] = (uint32_t)f;
+        const size_t f = cell_of(L, level_x + k * dims, L->depth);
+        const uint32_t s = L->leaf_start[f]++;
+        L->pt[s] = (uint32_t)k, L->leaf[s] = (uint32_t)f;
     }
-    for (size_t f = leaves; f > 0; f--) L.leaf_start[f] = L.leaf_start[f - 1]; /* the cursors ran to each end */
-    L.leaf_start[0] = 0;
-    for (unsigned t = 0; t <= L.depth; t++) /* cell counts: a cell's points are its leaves' */
-        for (size_t c = 0; c < ((size_t)1 << (L.bits * t)); c++) {
-            const size_t shift = (size_t)L.bits * (L.depth - t);
-            L.count[node_base(&L, t) + c] = L.leaf_start[(c + 1) << shift] - L.leaf_start[c << shift];
+    for (size_t f = leaves; f > 0; f--) L->leaf_start[f] = L->leaf_start[f - 1]; /* the cursors ran to each end */
+    L->leaf_start[0] = 0;
+    for (unsigned t = 0; t <= L->depth; t++) /* cell counts: a cell's points are its leaves' */
+        for (size_t c = 0; c < ((size_t)1 << (L->bits * t)); c++) {
+            const size_t shift = (size_t)L->bits * (L->depth - t);
+            L->count[node_base(L, t) + c] = L->leaf_start[(c + 1) << shift] - L->leaf_start[c << shift];
         }
-    for (size_t k = 0; k < nodes; k++) L.best_e[k] = 0.0, L.best_s[k] = NONE;
-    for (size_t j = 0; j < n; j++) spread(&L, x + j * dims); /* the held points, in index order */
-    L.n_dirty = 0;
-    memset(L.is_dirty, 0, leaves);
-    for (size_t f = 0; f < leaves; f++) refresh(&L, (uint32_t)f);
+    for (size_t k = 0; k < nodes; k++) L->best_e[k] = 0.0, L->best_s[k] = NONE;
+    for (size_t j = 0; j < n; j++) spread(L, x + j * dims); /* the held points, in index order */
+    L->n_dirty = 0;
+    memset(L->is_dirty, 0, leaves);
+    for (size_t f = 0; f < leaves; f++) refresh(L, (uint32_t)f);
     for (size_t out = 0; out < a; out++) {
-        const uint32_t s = next_pick(&L);
-        L.picked[s] = 1;
-        for (unsigned t = 0; t <= L.depth; t++) L.taken[node_base(&L, t) + (L.leaf[s] >> (L.bits * (L.depth - t)))]++;
-        const float *p = level_x + (size_t)L.pt[s] * dims;
+        const uint32_t s = next_pick(L);
+        L->picked[s] = 1;
+        for (unsigned t = 0; t <= L->depth; t++)
+            L->taken[node_base(L, t) + (L->leaf[s] >> (L->bits * (L->depth - t)))]++;
+        const float *p = level_x + (size_t)L->pt[s] * dims;
         memcpy(sorted + out * dims, p, dims * sizeof *sorted);
-        if (!L.is_dirty[L.leaf[s]]) {
-            L.is_dirty[L.leaf[s]] = 1;
-            L.dirty[L.n_dirty++] = L.leaf[s];
+        if (!L->is_dirty[L->leaf[s]]) {
+            L->is_dirty[L->leaf[s]] = 1;
+            L->dirty[L->n_dirty++] = L->leaf[s];
         }
-        spread(&L, p);
-        refresh_dirty(&L);
+        spread(L, p);
+        refresh_dirty(L);
     }
     memcpy(level_x, sorted, a * dims * sizeof *sorted);
-    free(sorted);
-    free_level(&L);
-    return DPC_OK;
 }
 
 dpc_status dpc_order_level_points(float *x, size_t m, uint32_t dims, size_t base) {
-    size_t n = dpc_first_level(m, base);
-    dpc_status st = dpc_order_level(x, 0, n, dims);
-    while (st == DPC_OK && n < m) {
-        const size_t a = dpc_level_size(n, m);
-        st = dpc_order_level(x, n, a, dims);
-        n += a;
+    size_t largest = dpc_first_level(m, base);
+    for (size_t n = largest; n < m; n += dpc_level_size(n, m))
+        if (dpc_level_size(n, m) > largest) largest = dpc_level_size(n, m);
+    if (largest < 2) return DPC_OK; /* no level to reorder */
+    /* buffers for the largest level, all taken before any point moves */
+    level L = {.dims = dims, .bits = dims > 1 ? 2 : 1};
+    L.depth = depth_for(largest, L.bits);
+    const size_t leaves = (size_t)1 << (L.bits * L.depth), nodes = node_base(&L, L.depth) + leaves;
+    float *sorted = malloc(largest * dims * sizeof *sorted);
+    L.pt = malloc(largest * sizeof *L.pt);
+    L.leaf = malloc(largest * sizeof *L.leaf);
+    L.e = malloc(largest * sizeof *L.e);
+    L.picked = malloc(largest);
+    L.leaf_start = malloc((leaves + 1) * sizeof *L.leaf_start);
+    L.count = malloc(nodes * sizeof *L.count);
+    L.taken = malloc(nodes * sizeof *L.taken);
+    L.best_e = malloc(nodes * sizeof *L.best_e);
+    L.best_s = malloc(nodes * sizeof *L.best_s);
+    L.dirty = malloc(leaves * sizeof *L.dirty);
+    L.is_dirty = malloc(leaves);
+    dpc_status st = DPC_OK;
+    if (!sorted || !L.pt || !L.leaf || !L.e || !L.picked || !L.leaf_start || !L.count || !L.taken || !L.best_e ||
+        !L.best_s || !L.dirty || !L.is_dirty)
+        st = dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory ordering levels of up to %zu points", largest);
+    else {
+        size_t n = dpc_first_level(m, base);
+        if (n > 1) order_level(&L, sorted, x, 0, n);
+        for (size_t a; n < m; n += a)
+            if ((a = dpc_level_size(n, m)) > 1) order_level(&L, sorted, x, n, a);
     }
+    free(sorted);
+    free(L.pt);
+    free(L.leaf);
+    free(L.e);
+    free(L.picked);
+    free(L.leaf_start);
+    free(L.count);
+    free(L.taken);
+    free(L.best_e);
+    free(L.best_s);
+    free(L.dirty);
+    free(L.is_dirty);
     return st;
 }

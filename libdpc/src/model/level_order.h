@@ -11,16 +11,15 @@
 
 #include "dpc/dpc.h"
 
-/* Reorder the level x[n .. n + a) (dims floats per point, each in [0, 1)) after the held points
- * x[0 .. n). DPC_ERROR_OUT_OF_MEMORY leaves the points as they were. */
-dpc_status dpc_order_level(float *x, size_t n, size_t a, uint32_t dims);
-
 /* The levels of a progressive set of m points: the first holds min(m, base) points, each next
  * one adds min(n, m - n) to the n so far (§6). */
 static inline size_t dpc_first_level(size_t m, size_t base) { return m < base ? m : base; }
 static inline size_t dpc_level_size(size_t n, size_t m) { return n < m - n ? n : m - n; }
 
-/* Every level of the m points x in order (what dpc_order_levels does). */
+/* Reorder each level of the m points x (dims floats per point, each in [0, 1)), the first level
+ * first: a level's order depends on the levels before it as ordered. What dpc_order_levels and
+ * the generator of a progressive model (last) do. DPC_ERROR_OUT_OF_MEMORY leaves the level it
+ * happens in as it was. */
 dpc_status dpc_order_level_points(float *x, size_t m, uint32_t dims, size_t base);
 
 #endif
