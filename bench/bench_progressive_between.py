@@ -11,14 +11,17 @@ progressive-2d and progressive-2d-relaxed as generated and with each level's poi
 order (what the generator gave before the order, a control: the same sets), and for PMJ02BN,
 scrambled Sobol' and white noise at the same n: E_low nu<0.5 over a dpc set made for n
 (bnot-2d-stratified) and the Gaussian integrands' relative variance (16 integrands, as
-bench_progressive.py). Set i from seed i.
+bench_progressive.py). Set i from seed i. Also the order's share of progressive-2d's generation
+time on one thread.
 """
 
 from __future__ import annotations
 
 import argparse
+import time
 
 import numpy as np
+from bench_generate import cpu_name
 from bench_progressive import DOC, FAMILIES, tree
 from doc_sections import replace_section
 
@@ -73,7 +76,26 @@ def run(count: int, m: int) -> tuple[list[str], dict[str, dict[int, tuple[float,
     return list(samplers), out
 
 
-def section(names: list[str], res: dict, count: int, m: int) -> str:
+def timings(sizes=(1024, 16384, 65536), repeats: int = 3) -> dict[int, tuple[float, float]]:
+    """Median seconds, on one thread, of progressive-2d's generate (which includes the order) and
+    of dpc.stratify.order_levels alone on its output, per set size."""
+    model = dpc.load("progressive-2d", backend="cpu", threads=1)
+    out = {}
+    for m in sizes:
+        gen, order = [], []
+        for r in range(repeats):
+            t = time.perf_counter()
+            x = model.generate(r, m)
+            gen.append(time.perf_counter() - t)
+            t = time.perf_counter()
+            dpc.stratify.order_levels(x)
+            order.append(time.perf_counter() - t)
+        out[m] = (float(np.median(gen)), float(np.median(order)))
+        print(f"m = {m:6d}: generate {out[m][0] * 1e3:8.1f} ms, of which the order {out[m][1] * 1e3:6.1f} ms")
+    return out
+
+
+def section(names: list[str], res: dict, count: int, m: int, times: dict[int, tuple[float, float]]) -> str:
     ns = sorted(next(iter(res.values())))
     cols = " | ".join(names)
     head = ["| prefix n | " + cols + " |", "|---:|" + "---:|" * len(names)]
@@ -99,6 +121,15 @@ def section(names: list[str], res: dict, count: int, m: int) -> str:
         )
         + ".",
         "",
+        "The order's cost, on one thread of "
+        + cpu_name()
+        + " (median of 3): "
+        + "; ".join(
+            f"{m:,} points: {o * 1e3:.1f} ms of progressive-2d's {g * 1e3:.0f} ms ({100 * o / g:.1f} %)"
+            for m, (g, o) in times.items()
+        )
+        + ".",
+        "",
         f"#### E_low ν<0.5 of the first n points over a {SET_MODEL} set of n points",
         "",
         *head,
@@ -118,7 +149,8 @@ def main() -> None:
     args = ap.parse_args()
     m = 1024
     names, res = run(args.sets, m)
-    replace_section(DOC, "bench_progressive_between", section(names, res, args.sets, m))
+    times = timings()
+    replace_section(DOC, "bench_progressive_between", section(names, res, args.sets, m, times))
     print(f"wrote {DOC}")
 
 

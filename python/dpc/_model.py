@@ -236,7 +236,8 @@ class Model:
         self.metadata: dict[str, str] = dict(self._h.metadata())
         self.name: str = self.metadata.get("dpc.name", self.path.stem)
         # "progressive": generate() returns ordered points, the first n of a set of m being the
-        # set of n for n = progressive_base * 2^j <= m (docs/progressive.md); "set" otherwise
+        # set of n for n = progressive_base * 2^j <= m, and each level's points in the order that
+        # fills the emptiest place first (docs/progressive.md); "set" otherwise
         self.order: str = self.metadata.get("dpc.order", "set")
         self.progressive_base: int | None = (
             int(self.metadata["dpc.progressive_base"]) if self.order == "progressive" else None
