@@ -222,9 +222,10 @@ def stop_section(res: dict) -> str:
     for row in rows:
         lines.append(f"| {row} | " + " | ".join(f"{v:.2e}" for v in res["mse"][row]) + " |")
     between = [i for i, n in enumerate(STOP_COUNTS) if n & (n - 1)]
+    levels = [i for i, n in enumerate(STOP_COUNTS) if not n & (n - 1)]
 
-    def ratios(a: str, b: str) -> str:
-        r = [res["mse"][a][i] / res["mse"][b][i] for i in between]
+    def ratios(a: str, b: str, at: list[int] = between) -> str:
+        r = [res["mse"][a][i] / res["mse"][b][i] for i in at]
         return f"×{min(r):.2f} .. ×{max(r):.2f}"
 
     lines += [
@@ -239,7 +240,13 @@ def stop_section(res: dict) -> str:
         + ratios("dpc progressive, pool", "pmj02bn")
         + ", progressive-2d-relaxed "
         + ratios("dpc progressive, relaxed", "pmj02bn")
-        + ".",
+        + " (at the level sizes, "
+        + ", ".join(str(STOP_COUNTS[i]) for i in levels)
+        + " spp: "
+        + ratios("dpc progressive, pool", "pmj02bn", levels)
+        + " and "
+        + ratios("dpc progressive, relaxed", "pmj02bn", levels)
+        + ").",
     ]
     return "\n".join(lines)
 

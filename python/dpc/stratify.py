@@ -32,7 +32,7 @@ of a model with metadata ``dpc.relax`` (progressive-2d-relaxed: docs/model-forma
 
 :func:`order_levels` puts the points of each level (the first ``base`` points, then blocks that
 double the count) in the order that fills the emptiest place first, so that a prefix ending
-inside a level is spread too. Every progressive model's generator does it after each level
+inside a level is spread too. Every progressive model's generator does it as its last step
 (docs/model-format.md §6); it is libdpc's ``dpc_order_levels``.
 """
 
@@ -124,12 +124,14 @@ def relax_prefixes(points, steps: int = 1600, base: int = 16, *, threads: int = 
 def order_levels(points, base: int = 16) -> np.ndarray:
     """The ordered set ``points`` (m, d) in [0, 1) with the points of each level reordered; (m, d)
     float32. The levels are the first min(m, ``base``) points, then blocks of min(n, m - n) after
-    the first n. Within a level, each next point is the one of least energy sum b(|x - y|) over
-    the points before it (the earlier levels and the level's points picked so far), with
-    b(r) = (1 - r^2 / R^2)^3 within R = min(2 N^(-1/d), 1/2), N the count the level completes,
-    toroidal distances, ties to the lower index: the emptiest place first. libdpc's
-    ``dpc_order_levels`` (docs/model-format.md §6), what the generator of every progressive model
-    does after each level; each level keeps its set of points, and the order is the same on
+    the first n, ordered first to last. Within a level each pick is the emptiest place left: the
+    point of least energy, the sum of b(r) = (1 - r^2 / R^2)^3 (0 beyond R) over the points
+    before it (the earlier levels and the level's picks so far), R = min(2 N^(-1/d), 1/2) for the
+    N points the level completes, toroidal distances, ties to the lower index; taken within a
+    quota that keeps each prefix's picks in proportion to the level's points in every cell of a
+    tree of cells (x and y halved at each depth) down to cells of about 8 of its points.
+    libdpc's ``dpc_order_levels`` (docs/model-format.md §6): what the generator of every
+    progressive model does last. Each level keeps its set of points, and the order is the same on
     every machine."""
     x = np.asarray(points)
     if isinstance(base, bool) or not isinstance(base, int) or not 1 <= base <= 0xFFFFFFFF:
