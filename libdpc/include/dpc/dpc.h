@@ -343,7 +343,7 @@ DPC_API dpc_status dpc_relax_prefixes(float *points, size_t n_points, uint32_t b
  * before it, so every prefix, not only the level sizes, is spread. Each level keeps its set of
  * points. What the generator of a progressive model does last. Plain double arithmetic
  * (+, -, *, /): the same order on every machine. Its cost per point grows with the points that
- * share a cell of about 8 mean spacings' area (a few for well-spread sets: 1-3 % of
+ * share a cell of about 8 mean spacings' area (a few for well-spread sets: about 3 % of
  * progressive-2d's generation time; clustered points cost more). base >= 1;
  * DPC_ERROR_OUT_OF_MEMORY leaves the points unchanged. */
 DPC_API dpc_status dpc_order_levels(float *points, size_t n_points, size_t dims, uint32_t base);
