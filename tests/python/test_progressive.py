@@ -1,7 +1,8 @@
 """Progressive models (docs/model-format.md §6, docs/progressive.md): the ordering contract (the
-first n points of a set of m are the set of n exactly for the level sizes n = base * 2^j),
-libdpc against the independent float64 reference of §6, the same bits on every ISA path, thread
-count and batch, refused metadata, and the bundled model's prefix quality on a small case."""
+first n points of a set of m are the set of n exactly for the level sizes n = base * 2^j), the
+order within each level (bit for bit the reference's), libdpc against the independent float64
+reference of §6, the same bits on every ISA path, thread count and batch, refused metadata, and
+the bundled models' prefix quality on a small case, at the level sizes and between them."""
 
 from __future__ import annotations
 
