@@ -467,13 +467,17 @@ py::dict load_defaults() {
     return d;
 }
 
-// Points a host-side step (dpc_balance, dpc_relax_prefixes, dpc_order_levels) changes in place: a copy of the
-// caller's array, which stays as it was.
+// Points a host-side step (dpc_balance, dpc_relax_prefixes, dpc_order_levels) changes in place.
 using points_in = py::array_t<float, py::array::c_style | py::array::forcecast>;
 
-py::array_t<float> copy_of(const points_in &points) {
+// The step on a copy of the caller's (m, n) points, which stay as they were:
+// step(float *copy, m, n) -> dpc_status.
+template <class Step> py::array_t<float> changed_copy(const points_in &points, Step step) {
+    if (points.ndim() != 2) raise_status(DPC_ERROR_INVALID_ARGUMENT, "points must be (m, n)");
     py::array_t<float> out({points.shape(0), points.shape(1)});
     std::memcpy(out.mutable_data(), points.data(), sizeof(float) * points.size());
+    const size_t m = points.shape(0), n = points.shape(1);
+    call([&, p = out.mutable_data()] { return step(p, m, n); });
     return out;
 }
 
@@ -525,11 +529,7 @@ PYBIND11_MODULE(_core, mod) {
     mod.def(
         "balance",
         [](const points_in &points, uint32_t radius) {
-            if (points.ndim() != 2) raise_status(DPC_ERROR_INVALID_ARGUMENT, "points must be (m, n)");
-            py::array_t<float> out = copy_of(points);
-            const size_t m = points.shape(0), n = points.shape(1);
-            call([&, p = out.mutable_data()] { return dpc_balance(p, m, n, radius); });
-            return out;
+            return changed_copy(points, [&](float *p, size_t m, size_t n) { return dpc_balance(p, m, n, radius); });
         },
         py::arg("points"), py::arg("radius"));
     mod.def(
@@ -537,20 +537,14 @@ PYBIND11_MODULE(_core, mod) {
         [](const points_in &points, uint32_t base, uint32_t steps, uint32_t threads) {
             if (points.ndim() != 2 || points.shape(1) != 2)
                 raise_status(DPC_ERROR_INVALID_ARGUMENT, "points must be (m, 2)");
-            py::array_t<float> out = copy_of(points);
-            const size_t m = points.shape(0);
-            call([&, p = out.mutable_data()] { return dpc_relax_prefixes(p, m, base, steps, threads); });
-            return out;
+            return changed_copy(
+                points, [&](float *p, size_t m, size_t) { return dpc_relax_prefixes(p, m, base, steps, threads); });
         },
         py::arg("points"), py::arg("base"), py::arg("steps"), py::arg("threads"));
     mod.def(
         "order_levels",
         [](const points_in &points, uint32_t base) {
-            if (points.ndim() != 2) raise_status(DPC_ERROR_INVALID_ARGUMENT, "points must be (m, n)");
-            py::array_t<float> out = copy_of(points);
-            const size_t m = points.shape(0), n = points.shape(1);
-            call([&, p = out.mutable_data()] { return dpc_order_levels(p, m, n, base); });
-            return out;
+            return changed_copy(points, [&](float *p, size_t m, size_t n) { return dpc_order_levels(p, m, n, base); });
         },
         py::arg("points"), py::arg("base"));
     register_layer_training(mod);

@@ -412,15 +412,19 @@ def order_level(x: np.ndarray, n: int, a: int) -> np.ndarray:
     return np.array(order, dtype=np.int64)
 
 
-def order_levels(x: np.ndarray, base: int) -> np.ndarray:
-    """Every level of the ordered set x reordered by order_level (§6): the first min(m, base)
+def levels(m: int, base: int) -> list[tuple[int, int]]:
+    """(start, count) of each level of a progressive set of m points (§6): the first min(m, base)
     points, then blocks of min(n, m - n) after the first n."""
+    out = [(0, min(m, base))]
+    while sum(out[-1]) < m:
+        n = sum(out[-1])
+        out.append((n, min(n, m - n)))
+    return out
+
+
+def order_levels(x: np.ndarray, base: int) -> np.ndarray:
+    """Every level of the ordered set x reordered by order_level (§6), the first level first."""
     y = np.array(x, dtype=np.float64)
-    m = len(y)
-    n = min(m, base)
-    y[:n] = y[:n][order_level(y, 0, n)]
-    while n < m:
-        a = min(n, m - n)
+    for n, a in levels(len(y), base):
         y[n : n + a] = y[n : n + a][order_level(y, n, a)]
-        n += a
     return y

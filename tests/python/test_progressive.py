@@ -194,14 +194,14 @@ def test_relaxed_model_gives_the_same_bits_everywhere():
 
 
 def level_sets(x: np.ndarray, base: int = 16) -> list[np.ndarray]:
-    """Each level of an ordered set (the first base points, then blocks doubling the count) as a
-    sorted array of its points."""
-    out, n, a = [], 0, min(len(x), base)
-    while n < len(x):
-        level = x[n : n + a]
-        out.append(level[np.lexsort(level.T[::-1])])
-        n, a = n + a, min(n + a, len(x) - n - a)
-    return out
+    """Each level of an ordered set (rc.levels) as a sorted array of its points."""
+    return [x[n : n + a][np.lexsort(x[n : n + a].T[::-1])] for n, a in rc.levels(len(x), base)]
+
+
+def assert_refused(fn, cases: list[dict]) -> None:
+    for kwargs in cases:
+        with pytest.raises(dpc.InvalidArgumentError):
+            fn(**kwargs)
 
 
 @pytest.mark.parametrize(
@@ -233,9 +233,7 @@ def test_order_levels_checks_its_input():
         dict(points=x, base=2.5),
         dict(points=np.full((20, 2), 0.99999999, dtype=np.float64)),  # 1.0 as float32
     ]
-    for kwargs in bad:
-        with pytest.raises(dpc.InvalidArgumentError):
-            dpc.stratify.order_levels(**kwargs)
+    assert_refused(dpc.stratify.order_levels, bad)
     assert np.array_equal(dpc.stratify.order_levels(x.astype(np.float64)), x)  # float32, its order already
 
 
@@ -243,10 +241,8 @@ def shuffled_levels(sets: np.ndarray, seed: int, base: int = 16) -> np.ndarray:
     """Each set's levels in a random order: the order before §6 had one."""
     rng, out = np.random.default_rng(seed), sets.copy()
     for s in out:
-        n, a = 0, min(len(s), base)
-        while n < len(s):
+        for n, a in rc.levels(len(s), base):
             s[n : n + a] = s[n : n + a][rng.permutation(a)]
-            n, a = n + a, min(n + a, len(s) - n - a)
     return out
 
 
@@ -305,9 +301,8 @@ def test_stratify_02_makes_every_power_of_two_prefix_a_net():
     part = dpc.stratify.stratify_02(x, up_to=64)
     assert np.array_equal(part[:64], y[:64]) and np.array_equal(part[64:], x[64:])
     assert baselines.net_occupancy(x[:256]) < baselines.net_occupancy(y[:256]) == 1.0
-    for bad in [dict(points=x[:, :1]), dict(points=x + 1.0), dict(points=x, up_to=0), dict(points=x, up_to=2.5)]:
-        with pytest.raises(dpc.InvalidArgumentError):
-            dpc.stratify.stratify_02(**bad)
+    bad = [dict(points=x[:, :1]), dict(points=x + 1.0), dict(points=x, up_to=0), dict(points=x, up_to=2.5)]
+    assert_refused(dpc.stratify.stratify_02, bad)
 
 
 def test_relaxed_model_lowers_every_prefix_and_the_full_set():
@@ -345,9 +340,7 @@ def test_relax_prefixes_is_deterministic_matches_the_reference_and_checks_its_in
         dict(points=x, base=1),
         dict(points=np.full((20, 2), 0.99999999, dtype=np.float64)),  # 1.0 as float32
     ]
-    for kwargs in bad:
-        with pytest.raises(dpc.InvalidArgumentError):
-            dpc.stratify.relax_prefixes(**kwargs)
+    assert_refused(dpc.stratify.relax_prefixes, bad)
 
 
 @pytest.mark.parametrize(

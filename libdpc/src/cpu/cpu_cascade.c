@@ -461,10 +461,6 @@ dpc_status dpc_cpu_filter_frozen(const dpc_cascade *c, const dpc_cpu_engine *e, 
 
 /* ---- whole sets: input points, then the cascade; batches fanned out over threads ------------ */
 
-/* The levels of a progressive set of m points (format §6): level_order.h. */
-static size_t first_level(const dpc_cascade *c, size_t m) { return dpc_first_level(m, c->progressive_base); }
-static size_t level_size(size_t n, size_t m) { return dpc_level_size(n, m); }
-
 /* The output balance of a set's first m points (format §5.1), the points from first on moving
  * (0: all; a progressive level: its own points, §6); nothing when the model has no dpc.balance. */
 static dpc_status balance_prefix(const dpc_cascade *c, float *x, size_t m, size_t first) {
@@ -492,12 +488,12 @@ static dpc_status generate_one(const dpc_cascade *c, dpc_input input, const dpc_
     }
     /* Progressive: level j >= 1 adds its input points, of seed + j * 0x9E3779B97F4A7C15, to the
      * n points so far and filters them past those, which stay where they are. */
-    size_t n = first_level(c, m);
+    size_t n = dpc_first_level(m, c->progressive_base);
     dpc_input_fill(c, input, seed, n, out);
     dpc_status st = dpc_cpu_filter_hooked(c, e, n, out, hook, ctx);
     if (st == DPC_OK) st = balance_prefix(c, out, n, 0);
     for (uint64_t level = 1; st == DPC_OK && n < m; level++) {
-        const size_t add = level_size(n, m);
+        const size_t add = dpc_level_size(n, m);
         dpc_input_fill(c, input, seed + level * 0x9E3779B97F4A7C15ull, add, out + n * c->dims);
         st = dpc_cpu_filter_frozen(c, e, n + add, n, out, hook, ctx);
         if (st == DPC_OK) /* the level's new points balance the whole prefix; the held ones stay */
@@ -516,7 +512,7 @@ static dpc_status generate_one(const dpc_cascade *c, dpc_input input, const dpc_
 size_t dpc_cpu_filter_runs(const dpc_cascade *c, size_t m) {
     size_t runs = 1;
     if (c->progressive_base)
-        for (size_t n = first_level(c, m); n < m; n += level_size(n, m)) runs++;
+        for (size_t n = dpc_first_level(m, c->progressive_base); n < m; n += dpc_level_size(n, m)) runs++;
     return runs;
 }
 

@@ -32,7 +32,6 @@
 
 typedef struct level {
     const float *x; /* the level's points, dims floats each */
-    size_t a;
     uint32_t dims;
     double r2;              /* R^2 */
     unsigned bits;          /* 2: a cell has 4 children (the first two coordinates halved); 1 in 1-D */
@@ -84,24 +83,23 @@ static size_t node_base(const level *L, unsigned t) {
     return (((size_t)1 << (L->bits * t)) - 1) / ((1u << L->bits) - 1);
 }
 
-/* the cell at depth t of the point (coordinate 0's bits above coordinate 1's at each depth):
- * floor(v 2^t) is exact, so every machine puts a point in the same cell */
-static size_t cell_of(const level *L, const float *p, unsigned t) {
-    const size_t g = (size_t)1 << t;
-    size_t cx = (size_t)((double)p[0] * (double)g), code = 0;
-    if (cx >= g) cx = g - 1;
-    if (L->bits == 1) return cx;
-    size_t cy = (size_t)((double)p[1] * (double)g);
-    if (cy >= g) cy = g - 1;
-    for (unsigned b = 0; b < t; b++) code |= ((cx >> b) & 1u) << (2 * b + 1) | ((cy >> b) & 1u) << (2 * b);
-    return code;
+/* floor(v 2^t), at most 2^t - 1: exact, so every machine puts a point in the same cell */
+static size_t axis_cell(float v, unsigned t) {
+    const size_t g = (size_t)1 << t, c = (size_t)((double)v * (double)g);
+    return c < g ? c : g - 1;
 }
 
+/* the cell at depth t of axis cells (cx, cy): coordinate 0's bit above coordinate 1's at each
+ * depth, so a cell's children are 4 consecutive cells of the next depth */
 static size_t cell_from_xy(const level *L, size_t cx, size_t cy, unsigned t) {
     if (L->bits == 1) return cx;
     size_t code = 0;
     for (unsigned b = 0; b < t; b++) code |= ((cx >> b) & 1u) << (2 * b + 1) | ((cy >> b) & 1u) << (2 * b);
     return code;
+}
+
+static size_t cell_of(const level *L, const float *p, unsigned t) {
+    return cell_from_xy(L, axis_cell(p[0], t), L->bits == 2 ? axis_cell(p[1], t) : 0, t);
 }
 
 /* (e, index) order: the least energy, then the lower index */
@@ -115,9 +113,7 @@ static int before(const level *L, double e, uint32_t s, double e2, uint32_t s2) 
 static void spread(level *L, const float *p) {
     const unsigned t = L->search;
     const size_t g = (size_t)1 << t, shift = (size_t)L->bits * (L->depth - t);
-    size_t cx = (size_t)((double)p[0] * (double)g), cy = L->bits == 2 ? (size_t)((double)p[1] * (double)g) : 0;
-    if (cx >= g) cx = g - 1;
-    if (cy >= g) cy = g - 1;
+    const size_t cx = axis_cell(p[0], t), cy = L->bits == 2 ? axis_cell(p[1], t) : 0;
     const size_t n0 = g < 3 ? g : 3, n1 = L->bits == 2 ? n0 : 1; /* distinct cells per axis */
     for (size_t u = 0; u < n0; u++) {
         const size_t ux = g < 3 ? u : (cx + g - 1 + u) % g;
@@ -204,16 +200,14 @@ static unsigned depth_for(size_t a, unsigned bits) {
 static void order_level(level *L, float *sorted, float *x, size_t n, size_t a) {
     const uint32_t dims = L->dims;
     float *level_x = x + n * dims;
-    L->x = level_x, L->a = a, L->r2 = reach2(n + a, dims), L->depth = depth_for(a, L->bits), L->search = 0;
+    L->x = level_x, L->r2 = reach2(n + a, dims), L->depth = depth_for(a, L->bits), L->search = 0;
     const double r = sqrt(L->r2); /* the search's cells: at least R wide (2^-t >= R / GRID_SLACK) */
     while (L->search < L->depth && (double)((size_t)1 << (L->search + 1)) * r <= GRID_SLACK) L->search++;
     const size_t leaves = (size_t)1 << (L->bits * L->depth), nodes = node_base(L, L->depth) + leaves;
     memset(L->e, 0, a * sizeof *L->e);
     memset(L->picked, 0, a);
     memset(L->leaf_start, 0, (leaves + 1) * sizeof *L->leaf_start);
-    memset(L->taken, 0, nodes * sizeof *L->taken);
-    memset(L->is_dirty, 0, leaves);
-    L->n_dirty = 0;
+    memset(L->taken, 0, nodes * sizeof *L->taken); /* no leaf is dirty: every level ends with refresh_dirty */
     for (size_t k = 0; k < a; k++) L->leaf_start[cell_of(L, level_x + k * dims, L->depth) + 1]++; /* counting sort */
     for (size_t f = 0; f < leaves; f++) L->leaf_start[f + 1] += L->leaf_start[f];
     for (size_t k = 0; k < a; k++) {
@@ -230,9 +224,9 @@ static void order_level(level *L, float *sorted, float *x, size_t n, size_t a) {
         }
     for (size_t k = 0; k < nodes; k++) L->best_e[k] = 0.0, L->best_s[k] = NONE;
     for (size_t j = 0; j < n; j++) spread(L, x + j * dims); /* the held points, in index order */
+    for (size_t k = 0; k < L->n_dirty; k++) L->is_dirty[L->dirty[k]] = 0;
     L->n_dirty = 0;
-    memset(L->is_dirty, 0, leaves);
-    for (size_t f = 0; f < leaves; f++) refresh(L, (uint32_t)f);
+    for (size_t f = 0; f < leaves; f++) refresh(L, (uint32_t)f); /* every leaf, touched or not */
     for (size_t out = 0; out < a; out++) {
         const uint32_t s = next_pick(L);
         L->picked[s] = 1;
@@ -270,7 +264,7 @@ dpc_status dpc_order_level_points(float *x, size_t m, uint32_t dims, size_t base
     L.best_e = malloc(nodes * sizeof *L.best_e);
     L.best_s = malloc(nodes * sizeof *L.best_s);
     L.dirty = malloc(leaves * sizeof *L.dirty);
-    L.is_dirty = malloc(leaves);
+    L.is_dirty = calloc(leaves, 1);
     dpc_status st = DPC_OK;
     if (!sorted || !L.pt || !L.leaf || !L.e || !L.picked || !L.leaf_start || !L.count || !L.taken || !L.best_e ||
         !L.best_s || !L.dirty || !L.is_dirty)
