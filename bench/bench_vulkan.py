@@ -112,7 +112,7 @@ def main() -> None:
         "the points in host memory.", "",
         f"Machine: {cpu_name()}, {os.cpu_count()} logical CPUs, {platform.system()} {platform.machine()}. "
         f"Vulkan device: **{device}**. CPU backend: one thread, `{isa}` path.", "",
-        "| case | CPU backend | Vulkan backend | Vulkan / CPU | max \|Vulkan - CPU\| |",
+        r"| case | CPU backend | Vulkan backend | Vulkan / CPU | max \|Vulkan - CPU\| |",
         "|---|---:|---:|---:|---:|",
     ]
     for label, c, v, per, _ in cases:
@@ -146,7 +146,10 @@ def main() -> None:
         verdicts = [f"{label}: {ms(v['median_s'])} against <= {ms(goal)}, "
                     + ("**met**" if v["median_s"] <= goal else "**missed**")
                     for label, _, v, _, goal in cases if goal is not None]
-        lines += [f"Goals of issue 6 on an H100-class GPU, measured on {device}: " + "; ".join(verdicts) + ".", ""]
+        lines += [f"Goals of issue 6 on an H100-class GPU, measured on {device}: " + "; ".join(verdicts) + ".", "",
+                  "Made with `bash bench/gpu_kit.sh` (a Release build and the Vulkan loader, here) and "
+                  "`bash bench/gpu_run.sh` on the GPU machine, which also runs the Vulkan C tests there; "
+                  "the CPU column is that machine's CPU.", ""]
     section = "\n".join(lines)
     print(section)
     out = Path(args.out)

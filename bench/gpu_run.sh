@@ -2,7 +2,8 @@
 # Runs on a GPU machine lent through the device tool, after bench/gpu_kit.sh here:
 #   run(command="bash bench/gpu_run.sh", carry=[".gpu", ".gl"], timeout_s=600)
 # 1. the Vulkan C tests (parity with the CPU on every test model, errors, threads) on the GPU;
-# 2. bench/bench_vulkan.py with the prebuilt benchmark, which judges issue 6's goals.
+# 2. bench/bench_vulkan.py with the prebuilt benchmark, which judges issue 6's goals;
+# 3. bench/vulkan_quality.py dump: every bundled model's sets on both backends (compare them here).
 # DPC_BENCH_ARGS=--quick skips the 1,048,576-point cases. Logs, the test report and the updated docs/performance.md come back in $OUT.
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -10,22 +11,37 @@ out=${OUT:-build/gpu-out}  # $OUT: the device tool's folder that comes back
 mkdir -p "$out"
 for f in .gl/*.deb; do dpkg -x "$f" /; done
 ldconfig
+# The mounted driver's own manifest names the library that this driver version ships; a copy
+# elsewhere in the image can name one that is absent (vkCreateInstance: VK_ERROR_INCOMPATIBLE_DRIVER).
 icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
-if [ -f "$icd" ] && ! grep -qls nvidia /usr/share/vulkan/icd.d/* /etc/vulkan/icd.d/* 2>/dev/null; then
-  export VK_DRIVER_FILES=$icd  # the driver's manifest is outside the loader's search path
-fi
-{ nvidia-smi -L; echo "Vulkan driver manifests:"; ls /usr/share/vulkan/icd.d /etc/vulkan/icd.d \
-    /usr/local/nvidia/share/vulkan/icd.d; echo "VK_DRIVER_FILES=${VK_DRIVER_FILES:-}"; } 2>&1 | tee "$out/gpu.txt"
+[ -f "$icd" ] && export VK_DRIVER_FILES=${VK_DRIVER_FILES:-$icd}
+egl=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
+[ -f "$egl" ] && export __EGL_VENDOR_LIBRARY_FILENAMES=${__EGL_VENDOR_LIBRARY_FILENAMES:-$egl}
 export LD_LIBRARY_PATH=$PWD/.gpu${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
 export DPC_TEST_DATA_DIR=$PWD/tests/data PYTHONUNBUFFERED=1
+{ nvidia-smi -L; echo "Vulkan driver manifests:"
+  for f in /usr/share/vulkan/icd.d/* /etc/vulkan/icd.d/* /usr/local/nvidia/share/vulkan/icd.d/*; do
+    [ -f "$f" ] && { echo "$f:"; cat "$f"; }; done
+  echo "VK_DRIVER_FILES=${VK_DRIVER_FILES:-}"; ldconfig -p | grep -E "libvulkan|libGLX_nvidia|libGLdispatch"
+  # The loader's own account of which drivers it found and why one failed, on the smallest model.
+  VK_LOADER_DEBUG=error,warn,driver .gpu/dpc_bench_vulkan tests/data/model_2d.onnx vulkan 1 64 2>&1 \
+    | grep -iE "error|fail|driver|icd|nvidia|median" | head -40
+} 2>&1 | head -c 20000 | tee "$out/gpu.txt"
 DPC_ISA= .gpu/dpc_test_vulkan --gtest_output=xml:"$out/test_vulkan.xml" 2>&1 | tee "$out/test_vulkan.log"
 tests=${PIPESTATUS[0]}
-# A machine without the loader, simulated (the one test the run above skips).
+# A machine without the loader, simulated (one of the two tests the run above skips).
 DPC_ISA= DPC_VULKAN_LOADER=/nonexistent/libvulkan.so.1 .gpu/dpc_test_vulkan --gtest_filter='NoVulkanLoader.*' \
   2>&1 | tee -a "$out/test_vulkan.log"
 [ "${PIPESTATUS[0]}" -eq 0 ] || tests=1
+# A machine with the loader but no driver, simulated (libdpc reads the driver choice once per process).
+DPC_ISA= VK_DRIVER_FILES=/nonexistent/no_icd.json VK_ICD_FILENAMES=/nonexistent/no_icd.json \
+  .gpu/dpc_test_vulkan --gtest_filter='NoVulkanDriver.*' 2>&1 | tee -a "$out/test_vulkan.log"
+[ "${PIPESTATUS[0]}" -eq 0 ] || tests=1
 python3 bench/bench_vulkan.py --exe .gpu ${DPC_BENCH_ARGS:-} 2>&1 | tee "$out/bench_vulkan.log"
 bench=${PIPESTATUS[0]}
+# Every bundled model's sets on both backends, for `python bench/vulkan_quality.py compare` here.
+python3 bench/vulkan_quality.py dump --lib .gpu/libdpc.so.0 --out "$out/vulkan_sets.npz" 2>&1 | tee "$out/vulkan_quality.log"
+[ "${PIPESTATUS[0]}" -eq 0 ] || bench=1
 cp docs/performance.md "$out/"
 echo "dpc_test_vulkan exit $tests, bench_vulkan.py exit $bench"
 [ "$tests" -eq 0 ] && [ "$bench" -eq 0 ]

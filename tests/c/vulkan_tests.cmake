@@ -28,6 +28,14 @@ set_tests_properties(vulkan.no_loader PROPERTIES
   ENVIRONMENT "DPC_ISA=;DPC_VULKAN_LOADER=/nonexistent/dpc-test/libvulkan.so.1"
   LABELS "dpc;c;vulkan" SKIP_REGULAR_EXPRESSION "\\[  SKIPPED \\]")
 
+# A machine with the loader but no driver, simulated: the environment names a missing manifest
+# before the process starts (libdpc reads it once, at its one Vulkan instance).
+add_test(NAME vulkan.no_driver
+         COMMAND dpc_test_vulkan --gtest_filter=NoVulkanDriver.*)
+set_tests_properties(vulkan.no_driver PROPERTIES
+  ENVIRONMENT "DPC_ISA=;VK_DRIVER_FILES=/nonexistent/dpc-test/no_icd.json;VK_ICD_FILENAMES=/nonexistent/dpc-test/no_icd.json"
+  LABELS "dpc;c;vulkan" SKIP_REGULAR_EXPRESSION "\\[  SKIPPED \\]")
+
 if(DPC_VULKAN AND DPC_GLSLC)
   # The checked-in SPIR-V is what the checked-in GLSL compiles to (skipped when this glslc is not
   # the version that wrote the header: other versions emit other words).

@@ -113,7 +113,10 @@ DPC_API int dpc_isa_supported(dpc_isa isa);
  * - VULKAN: the Vulkan backend on the best device present, software drivers included. Without a
  *   usable device, or in a build without the Vulkan backend, loading fails with
  *   DPC_ERROR_UNSUPPORTED and a message saying why. The Vulkan loader (libvulkan.so.1) is opened
- *   at run time, so a build with the backend still loads where Vulkan is missing.
+ *   at run time, so a build with the backend still loads where Vulkan is missing. The first
+ *   Vulkan model makes one Vulkan instance for the process and it is kept (drivers can fail
+ *   after many load / unload cycles): the loader's environment (VK_DRIVER_FILES, ...) is read
+ *   then, once. A failed attempt is not kept; the next load tries again.
  * Every model on the Vulkan backend owns its device queue, command buffer and work buffers (kept
  * at the size of its largest call until the model is freed), guarded by one mutex per model:
  * concurrent calls on one model are safe and wait for each other; different models run

@@ -65,7 +65,7 @@ typedef struct vk_buffer {
 
 struct dpc_vk_engine {
     dpc_vk_fns fn;
-    VkInstance instance;
+    VkInstance instance; /* shared_instance(): not the engine's to destroy */
     VkPhysicalDevice phys;
     VkDevice device;
     VkQueue queue;
@@ -153,6 +153,30 @@ static dpc_status create_instance(dpc_vk_fns *fn, VkInstance *out) {
     return st;
 }
 
+/* One instance per process, made by the first model that needs it and never destroyed (like the
+ * loader's handle, vk_loader.c). Destroying the last instance lets the loader unload the driver,
+ * and drivers do not all survive that: NVIDIA's (on an H200) failed vkCreateInstance with
+ * VK_ERROR_INCOMPATIBLE_DRIVER after about 25 load / unload cycles in one process, and lavapipe
+ * leaks on each. So the environment that chooses drivers (VK_DRIVER_FILES, ...) is read once, by
+ * the first success; a failure is not kept, and the next model tries again. Devices stay per
+ * model. vkEnumeratePhysicalDevices and vkCreateDevice need no external synchronisation of the
+ * instance, so models use it from any thread. */
+static pthread_mutex_t g_instance_lock = PTHREAD_MUTEX_INITIALIZER;
+static dpc_vk_fns g_instance_fns;
+static VkInstance g_instance;
+
+static dpc_status shared_instance(dpc_vk_fns *fn, VkInstance *out) {
+    dpc_status st = DPC_OK;
+    pthread_mutex_lock(&g_instance_lock);
+    if (!g_instance) st = create_instance(&g_instance_fns, &g_instance);
+    if (st == DPC_OK) {
+        *fn = g_instance_fns;
+        *out = g_instance;
+    }
+    pthread_mutex_unlock(&g_instance_lock);
+    return st;
+}
+
 /* The physical devices; *out is malloc'ed. */
 static dpc_status list_devices(const dpc_vk_fns *fn, VkInstance instance, VkPhysicalDevice **out, uint32_t *count) {
     *out = NULL;
@@ -201,7 +225,7 @@ static int g_gpu_present;
 static void probe(void) {
     dpc_vk_fns fn;
     VkInstance instance = VK_NULL_HANDLE;
-    if (create_instance(&fn, &instance) != DPC_OK) return;
+    if (shared_instance(&fn, &instance) != DPC_OK) return;
     VkPhysicalDevice *devs = NULL;
     uint32_t count = 0;
     if (list_devices(&fn, instance, &devs, &count) == DPC_OK) {
@@ -212,7 +236,6 @@ static void probe(void) {
         }
     }
     free(devs);
-    fn.vkDestroyInstance(instance, NULL);
 }
 
 int dpc_vk_gpu_present(void) {
@@ -494,7 +517,6 @@ void dpc_vk_engine_destroy(dpc_vk_engine *e) {
         if (e->set_layout) e->fn.vkDestroyDescriptorSetLayout(e->device, e->set_layout, NULL);
         e->fn.vkDestroyDevice(e->device, NULL);
     }
-    if (e->instance) e->fn.vkDestroyInstance(e->instance, NULL);
     pthread_mutex_destroy(&e->lock);
     free(e->layer_off);
     free(e);
@@ -508,7 +530,7 @@ dpc_status dpc_vk_engine_create(const dpc_cascade *c, int gpu_only, dpc_vk_engin
         free(e);
         return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "cannot create the Vulkan backend's mutex");
     }
-    dpc_status st = create_instance(&e->fn, &e->instance);
+    dpc_status st = shared_instance(&e->fn, &e->instance);
     if (st == DPC_OK) st = pick_device(e, gpu_only);
     if (st == DPC_OK) st = create_device(e);
     if (st == DPC_OK) st = create_layout(e);
