@@ -118,8 +118,8 @@ def main() -> None:
     for label, c, v, per, _ in cases:
         lines.append(f"| {label} | {ms(c['median_s'] / per)} ({ms(c['process_cpu_median_s'] / per)}) | "
                      f"{ms(v['median_s'] / per)} ({ms(v['process_cpu_median_s'] / per)}) | "
-                     f"{v['median_s'] / c['median_s']:.2f}x | {v['max_abs_diff_vs_cpu']:.2g} |")
-    lines += ["", f"Runs per case (CPU / Vulkan): "
+                     f"{v['median_s'] / c['median_s']:.3g}x | {v['max_abs_diff_vs_cpu']:.2g} |")
+    lines += ["", "Runs per case (CPU / Vulkan): "
               + ", ".join(f"{c['runs']} / {v['runs']}" for _, c, v, _, _ in cases) + ". "
               f"Load average (1 min) {load_before[0]:.2f} before and {load_after[0]:.2f} after, on "
               f"{os.cpu_count()} CPUs: with other work on the machine, wall times are inflated and "
