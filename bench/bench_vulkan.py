@@ -14,8 +14,9 @@ present: on a machine without a GPU that is lavapipe, Mesa's Vulkan driver that 
 3. models/repulsion-2d.onnx, dpc_generate_batch of 64 sets of 1,024 points (one submission on
    Vulkan), reported per set.
 Medians over repeated runs after a warm-up. Each Vulkan row also gives the largest toroidal
-difference from the CPU backend's points for the same seed. Only the "## Vulkan" section of the
-output file is replaced; the other sections belong to bench_generate.py and bench_training.py.
+difference from the CPU backend's points for the same seed. Then each model's load time. Only the
+"## Vulkan" section of the output file is replaced; the other sections belong to bench_generate.py
+and bench_training.py.
 Issue 6's goals (1,048,576 2-D points through 40 layers in <= 50 ms, 8,192 10-D points in <= 20 ms,
 on an H100-class GPU) are judged on the 40-layer rows when the device is not a software driver.
 """
@@ -130,6 +131,20 @@ def main() -> None:
               "differences (docs/training.md, \"Precision sensitivity\"), so their points agree "
               "in distribution, not point by point: the CPU's own ISA paths differ from each other "
               "by as much (`pytest tests/python/test_models.py -k same_quality -s` prints both, and checks that the point sets' quality agrees).", ""]
+    # Load times: the first row of each model and backend (every row of one run carries them).
+    loads = {}
+    for label, c, v, _, _ in cases:
+        name = label.split("`")[1]
+        loads.setdefault(name, (c, v))
+    lines += [
+        "Model load (`dpc_model_load_file`), median of 5 loads after the process's first; the first "
+        "in parentheses (on Vulkan it also makes the process's one Vulkan instance):", "",
+        "| model | CPU backend | Vulkan backend |",
+        "|---|---:|---:|",
+        *(f"| `{n}` | {ms(c['load_median_s'])} ({ms(c['load_first_s'])}) | "
+          f"{ms(v['load_median_s'])} ({ms(v['load_first_s'])}) |" for n, (c, v) in loads.items()),
+        "",
+    ]
     if software:
         lines += [
             f"{device} is a software driver: the shaders run on this machine's CPU cores (on all of "
