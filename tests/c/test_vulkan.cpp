@@ -262,7 +262,7 @@ TEST(NoVulkanDriver, VkResultIsInTheMessage) {
                 msg.find("no Vulkan device") != std::string::npos)
         << msg;
     std::printf("[ info ] without a driver: %s: %s\n", dpc_status_string(st), msg.c_str());
-    // A failure is not kept: the next load tries again (and fails again here, the same way).
+    // A second load gets the same status and message (vk_engine.c tries again; nothing is cached).
     EXPECT_EQ(load_with(model_path("model_2d"), DPC_BACKEND_VULKAN, &raw), DPC_ERROR_UNSUPPORTED);
     EXPECT_EQ(dpc_last_error(), msg);
 }
