@@ -29,14 +29,16 @@ export DPC_TEST_DATA_DIR=$PWD/tests/data PYTHONUNBUFFERED=1
 } 2>&1 | head -c 20000 | tee "$out/gpu.txt"
 DPC_ISA= .gpu/dpc_test_vulkan --gtest_output=xml:"$out/test_vulkan.xml" 2>&1 | tee "$out/test_vulkan.log"
 tests=${PIPESTATUS[0]}
-# A machine without the loader, simulated (one of the two tests the run above skips).
-DPC_ISA= DPC_VULKAN_LOADER=/nonexistent/libvulkan.so.1 .gpu/dpc_test_vulkan --gtest_filter='NoVulkanLoader.*' \
-  2>&1 | tee -a "$out/test_vulkan.log"
-[ "${PIPESTATUS[0]}" -eq 0 ] || tests=1
-# A machine with the loader but no driver, simulated (libdpc reads the driver choice once per process).
-DPC_ISA= VK_DRIVER_FILES=/nonexistent/no_icd.json VK_ICD_FILENAMES=/nonexistent/no_icd.json \
-  .gpu/dpc_test_vulkan --gtest_filter='NoVulkanDriver.*' 2>&1 | tee -a "$out/test_vulkan.log"
-[ "${PIPESTATUS[0]}" -eq 0 ] || tests=1
+# The two tests the run above skips, each in a process of its own with the environment that
+# simulates a machine without the loader, then one with the loader but no driver (libdpc reads
+# the driver choice once per process).
+alone() { # gtest filter, then VAR=value ...
+  local filter=$1; shift
+  env DPC_ISA= "$@" .gpu/dpc_test_vulkan --gtest_filter="$filter" 2>&1 | tee -a "$out/test_vulkan.log"
+  [ "${PIPESTATUS[0]}" -eq 0 ] || tests=1
+}
+alone 'NoVulkanLoader.*' DPC_VULKAN_LOADER=/nonexistent/libvulkan.so.1
+alone 'NoVulkanDriver.*' VK_DRIVER_FILES=/nonexistent/no_icd.json VK_ICD_FILENAMES=/nonexistent/no_icd.json
 python3 bench/bench_vulkan.py --exe .gpu ${DPC_BENCH_ARGS:-} 2>&1 | tee "$out/bench_vulkan.log"
 bench=${PIPESTATUS[0]}
 # Every bundled model's sets on both backends, for `python bench/vulkan_quality.py compare` here.

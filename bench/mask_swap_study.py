@@ -26,17 +26,11 @@ from pathlib import Path
 import numpy as np
 
 from dpc import baselines, masks
-from dpc.analysis.dither import mask_quality
+from dpc.analysis.dither import mask_quality, rank_normalise
 
 ROOT = Path(__file__).resolve().parents[1]
 N, SIGMA, REACH = 64, 1.5, 8
 LEVELS = np.arange(1, 16) / 16.0
-
-
-def rank(m: np.ndarray) -> np.ndarray:
-    r = np.empty(m.size)
-    r[np.argsort(m.ravel(), kind="stable")] = (np.arange(m.size) + 0.5) / m.size
-    return r.reshape(m.shape)
 
 
 def refine(v: np.ndarray, swaps: int, seed: int) -> tuple[np.ndarray, int]:
@@ -91,7 +85,7 @@ def main() -> None:
     rows = [row("void-and-cluster (σ = 1.5)", baselines.void_and_cluster(N), "—")]
     starts = [("white noise", np.random.default_rng(0).random((N, N))), ("`mask-64`", masks.mask("mask-64", seed=0))]
     for label, m0 in starts:
-        v0 = rank(m0)
+        v0 = rank_normalise(m0)
         rows.append(row(label, v0, "—"))
         t = time.perf_counter()
         v, taken = refine(v0, args.swaps, seed=0)

@@ -110,23 +110,23 @@ def compare(npzs: list[str], doc: Path) -> None:
         d = np.abs(gpu - cpu)
         d = np.minimum(d, 1.0 - d).max(axis=2)
         cells = [f"`{name}`", f"{cpu.shape[1]:,} x {cpu.shape[2]}-D", f"{d.max():.2g}"]
+        m, n = cpu.shape[1:]
+        nu = 0.5 if 0.5 * m ** (1 / n) > 1 else 1.25 / m ** (1 / n)  # some |q| = 1 below nu
+        measures = [
+            (
+                lambda x: np.array([analysis.low_frequency_energy(s[None], nu) for s in x]),
+                "" if nu == 0.5 else f", nu < {nu:.2g}",
+            ),
+            (lambda x: analysis.min_distance(x).ratios, ""),
+        ]
         flags = []
-        for metric in ("elow", "dmin"):
-            if metric == "elow":
-                m, n = cpu.shape[1:]
-                nu = 0.5 if 0.5 * m ** (1 / n) > 1 else 1.25 / m ** (1 / n)  # some |q| = 1 below nu
-                a = np.array([analysis.low_frequency_energy(s[None], nu) for s in cpu])
-                b = np.array([analysis.low_frequency_energy(s[None], nu) for s in gpu])
-            else:
-                a, b = analysis.min_distance(cpu).ratios, analysis.min_distance(gpu).ratios
+        for measure, note in measures:
+            a, b = measure(cpu), measure(gpu)
             se = np.hypot(a.std(ddof=1), b.std(ddof=1)) / np.sqrt(SETS)
             z = abs(b.mean() - a.mean()) / se if se > 0 else 0.0
             worst = max(worst, z)
             flags.append(z > 4)
-            cells.append(
-                f"{a.mean():.4g} / {b.mean():.4g} ({z:.1f})"
-                + (f", nu < {nu:.2g}" if metric == "elow" and nu != 0.5 else "")
-            )
+            cells.append(f"{a.mean():.4g} / {b.mean():.4g} ({z:.1f}){note}")
         cells.append("**differs**" if any(flags) else "same")
         rows.append("| " + " | ".join(cells) + " |")
         print(rows[-1], flush=True)
