@@ -26,6 +26,7 @@ import numpy as np  # noqa: E402
 
 import dpc  # noqa: E402
 from dpc import baselines as B  # noqa: E402
+from dpc import mask_design as MD  # noqa: E402
 from dpc import masks as M  # noqa: E402
 from dpc.analysis import dither as D  # noqa: E402
 from dpc.analysis import masks as AM  # noqa: E402
@@ -38,6 +39,7 @@ KEYS = ("scalar", "vector", "st", "cost")
 SCALAR_MODEL = "mask-64"
 VECTOR_MODEL = "mask-vector-64"
 ST_MODEL = "mask-st-32x16"
+ANNEALED = "annealed"  # dpc.mask_design's spectral annealing (bundled at some sizes)
 COUNT = 8            # masks per row (scalar, vector); volumes per row: ST_COUNT
 WIDE_BAND = 12.0     # the scalar tables also report the measures over 0 < |q| <= 12
 ST_COUNT = 4
@@ -46,8 +48,12 @@ ST_COUNT = 4
 def write_section(key: str, lines: list[str]) -> None:
     """Replace (or add) the section between <!-- key --> markers; sections keep KEYS order."""
     text = PAGE.read_text() if PAGE.exists() else ""
-    head = text.split("<!-- ", 1)[0] if "<!-- " in text else text
-    tail = text.rsplit("-->\n", 1)[1] if "<!-- /" in text else ""
+    # head: everything before the first report section (other markers, e.g. bench scripts'
+    # <!-- name:begin --> sections, belong to the head); tail: everything after the last one
+    starts = [text.find(f"<!-- {k} -->\n") for k in KEYS if f"<!-- {k} -->\n" in text]
+    head = text[: min(starts)] if starts else text
+    ends = [text.find(f"<!-- /{k} -->\n") + len(f"<!-- /{k} -->\n") for k in KEYS if f"<!-- /{k} -->\n" in text]
+    tail = text[max(ends) :] if ends else ""
     sections = dict(re.findall(r"<!-- (\w+) -->\n(.*?)<!-- /\1 -->\n", text, flags=re.S))
     sections[key] = "\n".join(lines) + "\n"
     body = "".join(f"<!-- {k} -->\n{sections[k]}<!-- /{k} -->\n" for k in KEYS if k in sections)
@@ -131,6 +137,14 @@ def scalar_rows(label: str, ms: np.ndarray, secs: float) -> tuple[str, dict]:
             f"{q['levels_peak_mean']:.1f} | {seam:.2f} | {secs:.2f} |"), q
 
 
+def goal_line(n: int, name: str, q: dict, q_vc: dict) -> str:
+    ok = all(q[k] <= q_vc[k] for k in ("mask_elow", "levels_elow_mean", "levels_elow_max"))
+    return (f"{n} × {n}: {name} mask E_low {q['mask_elow']:.5f} vs {q_vc['mask_elow']:.5f}, thresholded "
+            f"mean {q['levels_elow_mean']:.4f} vs {q_vc['levels_elow_mean']:.4f}, worst level "
+            f"{q['levels_elow_max']:.4f} vs {q_vc['levels_elow_max']:.4f}: "
+            + ("at or below void-and-cluster" if ok else "**worse than void-and-cluster**"))
+
+
 def scalar() -> None:
     header = ["| mask | masks | mask E_low | thresholded 1/8 … 7/8: mean E_low | worst level | "
               f"mask E_low, \\|q\\| ≤ {WIDE_BAND:g} | thresholded mean, \\|q\\| ≤ {WIDE_BAND:g} | "
@@ -139,7 +153,8 @@ def scalar() -> None:
     lines = ["## Scalar masks", "",
              "`python models/mask_report.py scalar`. Per size: the dpc models (at their trained "
              "grid, or filtered at another size with radii that scale with the point count), "
-             "void-and-cluster (σ = 1.5), white noise and Bayer; seeds 0 … count−1. Seam ratio: "
+             "the annealed masks of `dpc.mask_design` (the bundled designs where there are some, "
+             "else designed here; their design times are in the cost section), void-and-cluster (σ = 1.5), white noise and Bayer; seeds 0 … count−1. Seam ratio: "
              "`dpc.analysis.masks.seam_ratio` (≈ 1: tiles seamlessly; a 32 × 32 crop of a 64 × 64 "
              "void-and-cluster mask scores > 1.5 in the tests). Seconds: wall time on the shared "
              "2-core machine, including loading the model (a model at another size runs libdpc's "
@@ -155,6 +170,15 @@ def scalar() -> None:
         vc, t_vc = timed(lambda: np.stack([B.void_and_cluster(n, seed=s) for s in range(COUNT)]))
         row_vc, q_vc = scalar_rows("void-and-cluster", vc, t_vc / COUNT)
         rows = []
+        bundled = MD.BUNDLED.get((n, None), range(0))
+        count = len(bundled) if len(bundled) else COUNT
+        ms, t = timed(lambda: np.stack([M.mask(ANNEALED, size=n, seed=s) for s in range(count)]))
+        how = "bundled designs: load time" if len(bundled) else "designed here"
+        row, q = scalar_rows(f"**{ANNEALED}** ({how})", ms, t / count)
+        rows.append(row)
+        verdict.append(goal_line(n, ANNEALED, q, q_vc))
+        if n == 64:
+            figs[ANNEALED] = ms[0]
         for name in models:
             ms, t = timed(lambda: np.stack([M.mask(name, size=n, seed=s) for s in range(COUNT)]))
             trained = dpc.load(name).grid_shape[0] == n
@@ -162,14 +186,7 @@ def scalar() -> None:
             row, q = scalar_rows(label, ms, t / COUNT)
             rows.append(row)
             if name == SCALAR_MODEL:
-                ok = (q["mask_elow"] <= q_vc["mask_elow"] and
-                      q["levels_elow_mean"] <= q_vc["levels_elow_mean"] and
-                      q["levels_elow_max"] <= q_vc["levels_elow_max"])
-                verdict.append(f"{n} × {n}: {name} mask E_low {q['mask_elow']:.5f} vs "
-                               f"{q_vc['mask_elow']:.5f}, thresholded mean {q['levels_elow_mean']:.4f}"
-                               f" vs {q_vc['levels_elow_mean']:.4f}, worst level "
-                               f"{q['levels_elow_max']:.4f} vs {q_vc['levels_elow_max']:.4f}: "
-                               + ("at or below void-and-cluster" if ok else "**worse than void-and-cluster**"))
+                verdict.append(goal_line(n, name, q, q_vc))
                 if n == 64:
                     figs[name] = ms[0]
         wh, t_wh = timed(lambda: np.stack([B.white_mask((n, n), seed=s) for s in range(COUNT)]))
@@ -206,7 +223,8 @@ def vector() -> None:
     entries = []
     if model_available(VECTOR_MODEL):
         entries.append((f"**{VECTOR_MODEL}**", lambda s: M.mask(VECTOR_MODEL, seed=s)))
-    entries += [("void-and-cluster × 2 (independent)", lambda s: B.vector_void_and_cluster(n, s)),
+    entries += [(f"**{ANNEALED}** × 2 (independent designs)", lambda s: M.mask(ANNEALED, size=n, seed=s, channels=2)),
+                ("void-and-cluster × 2 (independent)", lambda s: B.vector_void_and_cluster(n, s)),
                 ("white noise × 2", lambda s: B.white_mask((n, n, 2), s))]
     pats = {}
     for label, fn in entries:
@@ -263,6 +281,8 @@ def st() -> None:
             other = dpc.load(ST_MODEL).grid_shape[0] != n
             entries.append((f"**{ST_MODEL}**" + (" (other size)" if other else ""),
                             lambda s: M.mask(ST_MODEL, size=n, frames=t, seed=s)))
+        how = "bundled designs" if len(MD.BUNDLED.get((n, t), ())) >= count else "designed here"
+        entries.append((f"**{ANNEALED}** ({how})", lambda s: M.mask(ANNEALED, size=n, frames=t, seed=s)))
         entries += [("STBN (scalar, after Wolfe et al. 2022)", lambda s: B.stbn_scalar(n, t, s)),
                     ("void-and-cluster, independent per frame",
                      lambda s: np.stack([B.void_and_cluster(n, s * 1000 + k) for k in range(t)])),
@@ -308,6 +328,11 @@ def cost() -> None:
     for n, t in ((16, 16), (32, 16), (64, 16)):
         _, s = timed(B.stbn_scalar, n, t, 0)
         lines.append(f"| STBN scalar (numpy, O((T·N²)²)) | {n} × {n} × {t} | {s:.2f} |")
+        print(lines[-1], flush=True)
+    for n, t in ((32, None), (64, None), (128, None), (32, 16)):
+        _, s = timed(MD.anneal_mask, n, t, 0)
+        shape = f"{n} × {n}" + ("" if t is None else f" × {t}")
+        lines.append(f"| {ANNEALED} (dpc.mask_design, {MD.STEPS_PER_PIXEL} proposed swaps per pixel) | {shape} | {s:.2f} |")
         print(lines[-1], flush=True)
     for name in (SCALAR_MODEL, VECTOR_MODEL, ST_MODEL):
         if not model_available(name):

@@ -380,7 +380,7 @@ def fig23() -> None:
     path = savefig(fig, "fig23.png")
     print("\n".join(rows))
     write_section("fig23", ["## Fig. 23: dithering", "",
-                            "`python models/results.py fig23` (same as `dpc dither IMAGE -o out.png`): "
+                            "`python models/results.py fig23` (same as `dpc dither IMAGE -m dither-32 -o out.png`): "
                             "matplotlib's sample photograph dithered with the dither-32 mask (seed 0), "
                             "a white-noise mask and the 32 × 32 Bayer matrix. The error column "
                             "compares the dithered and original images after the same Gaussian blur "

@@ -9,6 +9,7 @@ Arrays follow scipy.stats.qmc: C-contiguous ``(m, n)`` points in [0, 1), batches
 """
 
 from . import (
+    mask_design,  # annealed masks: the mask designer, docs/masks.md
     masks,  # blue-noise threshold masks, docs/masks.md
     stratify,  # progressive sequences: (0,2)-stratification, joint relaxation; docs/progressive.md
     training,  # the float64 layer ops (dpc_layer_forward / _backward)
@@ -74,6 +75,7 @@ __all__ = [
     "Backend",
     "Input",
     "training",
+    "mask_design",
     "masks",
     "stratify",
     "mask",

@@ -839,10 +839,10 @@ def _compare_plots(results, out: Path, nu_max: float, formats=("png",), targets=
     "-m",
     "--mask",
     "name",
-    default="mask-64",
+    default="annealed",
     show_default=True,
-    help="Gridded mask model (bundled name or .onnx) or a baseline: void-and-cluster, "
-    "stbn, white, bayer (see 'dpc mask --list').",
+    help="annealed (dpc's designed masks, the best here), a gridded mask model (bundled name or "
+    ".onnx) or a baseline: void-and-cluster, stbn, white, bayer (see 'dpc mask --list').",
 )
 @click.option(
     "-n",
@@ -855,13 +855,13 @@ def _compare_plots(results, out: Path, nu_max: float, formats=("png",), targets=
     "--frames",
     type=click.IntRange(min=1),
     default=None,
-    help="Frames of a spatiotemporal mask (default: the model's; stbn needs it).",
+    help="Frames of a spatiotemporal mask (default: the model's; stbn needs it, annealed takes it).",
 )
 @click.option(
     "--channels",
     type=click.IntRange(min=1, max=4),
     default=None,
-    help="Values per pixel, for baselines (white, void-and-cluster).",
+    help="Values per pixel, for baselines (white, void-and-cluster) and annealed (2).",
 )
 @click.option(
     "-s", "--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seed of the mask realisation."
@@ -925,10 +925,10 @@ def mask_cmd(name, size, frames, channels, seed, output, bits, list_):
 @click.option(
     "-m",
     "--model",
-    default="dither-32",
+    default="annealed",
     show_default=True,
-    help="Mask: a gridded mask model (bundled name or .onnx) or a baseline "
-    "(void-and-cluster, stbn, white, bayer; see 'dpc mask --list').",
+    help="Mask: annealed (dpc's designed masks), a gridded mask model (bundled name or .onnx) or "
+    "a baseline (void-and-cluster, stbn, white, bayer; see 'dpc mask --list').",
 )
 @click.option(
     "-n",

@@ -20,6 +20,10 @@ Sources (:func:`available`):
   ``model.generate(seed)``; at another size the same input construction (libdpc's uniform points
   of ``seed``, grid axes set to cell centres, docs/model-format.md §5) is filtered with
   ``model.filter``, whose radii scale with the point count (quality there: docs/masks.md).
+* ``annealed``: masks designed by dpc's spectral annealing (:mod:`dpc.mask_design`), scalar or
+  spatiotemporal (``frames``) or vector (``channels=2``, blue per channel and jointly). Sizes and seeds
+  in :data:`dpc.mask_design.BUNDLED` load from the package; others are designed on the spot
+  (about 10 s for 64 × 64, minutes at 128 × 128).
 * baselines from :mod:`dpc.baselines`: ``void-and-cluster`` (Ulichney 1993; with ``channels=2``
   two independent masks, with ``frames=T`` T independent masks), ``stbn`` (scalar spatiotemporal
   blue noise after Wolfe et al. 2022; needs ``frames``), ``white``, ``bayer``.
@@ -43,6 +47,10 @@ BASELINE_MASKS = {
     "with a spatial and a temporal Gaussian energy, sigma 1.9; needs frames",
     "white": "white noise, rank-normalised (any shape)",
     "bayer": "Bayer ordered-dither matrix (N a power of two)",
+}
+DESIGNED_MASKS = {
+    "annealed": "dpc's spectral annealing (dpc.mask_design): below void-and-cluster from 48 x 48 up; "
+    "frames=T: blue in space and time; channels=2: blue per channel and jointly; default 64 x 64",
 }
 MASK_EXTENSIONS = (".npy", ".png", ".exr")
 
@@ -177,6 +185,18 @@ def _baseline_mask(name: str, size, frames, channels, seed: int) -> np.ndarray:
     raise InvalidArgumentError(f"unknown mask {name!r}")
 
 
+def _annealed_mask(size, frames, channels, seed: int) -> np.ndarray:
+    from . import mask_design
+
+    n = 64 if size is None else _bl._check_mask_size(size, "size", 8)
+    t = None if frames is None else _bl._check_mask_size(frames, "frames", 1)
+    if channels not in (None, 1, 2):
+        raise InvalidArgumentError(f"annealed masks have 1 or 2 channels, got {channels!r}")
+    if channels == 2 and t is not None:
+        raise InvalidArgumentError("annealed: give channels or frames, not both")
+    return mask_design.mask(n, t, seed, 2 if channels == 2 else None)
+
+
 def available() -> dict[str, str]:
     """Mask sources: the bundled gridded models and the baselines, with one line each."""
     import dpc
@@ -190,6 +210,7 @@ def available() -> dict[str, str]:
             continue
         shape = "x".join(str(g) for g in model.grid_shape)
         out[name] = f"dpc model, {kind}, trained at {shape}"
+    out.update(DESIGNED_MASKS)
     out.update(BASELINE_MASKS)
     return out
 
@@ -207,13 +228,16 @@ def mask(
         raise InvalidArgumentError(f"mask name must be a string, got {type(name).__name__}")
     if str(name) in BASELINE_MASKS:
         return _baseline_mask(str(name), size, frames, channels, s)
+    if str(name) in DESIGNED_MASKS:
+        return _annealed_mask(size, frames, channels, s)
     import dpc
 
     try:
         model = dpc.load(str(name))
     except ModelNotFoundError:
         raise InvalidArgumentError(
-            f"unknown mask {name!r}: not a bundled model, a model file or one of {', '.join(BASELINE_MASKS)}"
+            f"unknown mask {name!r}: not a bundled model, a model file or one of "
+            f"{', '.join([*DESIGNED_MASKS, *BASELINE_MASKS])}"
         ) from None
     if not model.grid_axes:
         raise InvalidArgumentError(f"model {name} is not gridded: it has no pixel grid")
