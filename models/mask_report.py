@@ -170,7 +170,7 @@ def scalar() -> None:
         vc, t_vc = timed(lambda: np.stack([B.void_and_cluster(n, seed=s) for s in range(COUNT)]))
         row_vc, q_vc = scalar_rows("void-and-cluster", vc, t_vc / COUNT)
         rows = []
-        bundled = MD.BUNDLED.get((n, None), range(0))
+        bundled = MD.BUNDLED.get((n, None, None), range(0))
         count = len(bundled) if len(bundled) else COUNT
         ms, t = timed(lambda: np.stack([M.mask(ANNEALED, size=n, seed=s) for s in range(count)]))
         how = "bundled designs: load time" if len(bundled) else "designed here"
@@ -223,7 +223,7 @@ def vector() -> None:
     entries = []
     if model_available(VECTOR_MODEL):
         entries.append((f"**{VECTOR_MODEL}**", lambda s: M.mask(VECTOR_MODEL, seed=s)))
-    entries += [(f"**{ANNEALED}** × 2 (independent designs)", lambda s: M.mask(ANNEALED, size=n, seed=s, channels=2)),
+    entries += [(f"**{ANNEALED}** (channels=2, bundled designs)", lambda s: M.mask(ANNEALED, size=n, seed=s, channels=2)),
                 ("void-and-cluster × 2 (independent)", lambda s: B.vector_void_and_cluster(n, s)),
                 ("white noise × 2", lambda s: B.white_mask((n, n, 2), s))]
     pats = {}
@@ -281,7 +281,7 @@ def st() -> None:
             other = dpc.load(ST_MODEL).grid_shape[0] != n
             entries.append((f"**{ST_MODEL}**" + (" (other size)" if other else ""),
                             lambda s: M.mask(ST_MODEL, size=n, frames=t, seed=s)))
-        how = "bundled designs" if len(MD.BUNDLED.get((n, t), ())) >= count else "designed here"
+        how = "bundled designs" if len(MD.BUNDLED.get((n, t, None), ())) >= count else "designed here"
         entries.append((f"**{ANNEALED}** ({how})", lambda s: M.mask(ANNEALED, size=n, frames=t, seed=s)))
         entries += [("STBN (scalar, after Wolfe et al. 2022)", lambda s: B.stbn_scalar(n, t, s)),
                     ("void-and-cluster, independent per frame",
