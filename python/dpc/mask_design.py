@@ -1,33 +1,36 @@
 """Threshold masks designed by simulated annealing of their spectra (docs/masks.md, "Annealed masks").
 
     >>> from dpc import mask_design
-    >>> m = mask_design.anneal_mask(64, seed=0)               # (64, 64), about a minute on one core
+    >>> m = mask_design.anneal_mask(64, seed=0)               # (64, 64), about 15 s on one core
     >>> st = mask_design.anneal_mask(32, frames=16, seed=0)   # (16, 32, 32), blue in space and time
+    >>> v = mask_design.anneal_mask(64, seed=0, channels=2)   # (64, 64, 2), blue per channel and jointly
 
 The paper's cascades are "not the best fit" for masks, and it expects specialised optimisers to
 do better (Leimkühler et al. 2019, Sec. 7); dpc's gridded mask models indeed stay far above
-void-and-cluster (docs/masks.md). This is that specialised optimiser. It starts from a
-void-and-cluster mask (one per frame) and swaps pairs of ranks within a frame under a Metropolis
-rule on the energy
+void-and-cluster (docs/masks.md). This is that specialised optimiser. It starts from
+void-and-cluster masks (one per frame or channel) and swaps pairs of ranks within a frame (or
+channel) under a Metropolis rule on the energy
 
     E = mean over frames [λ_m Σ_q w(q) P_mask(q) + Σ_L Σ_q w(q) P_L(q) / #levels] / Σ_q w(q)
-        + λ_t mean over pixels Σ_L Σ_k w_t(k) P_pixel,L(k) / (#levels Σ_k w_t(k)),
+        + λ_t mean over pixels Σ_L Σ_k w_t(k) P_pixel,L(k) / (#levels Σ_k w_t(k))
+        + λ_j Σ_ab Σ_q w(q) P_ab(q) / (#boxes Σ_q w(q)),
 
 every P normalised so that white noise scores 1 at every frequency: P_mask the rank-normalised
-mask's power, P_L that of its thresholded pattern [mask < L] at the 63 levels L = 1/64 … 63/64,
-and (spatiotemporal masks) P_pixel,L that of a pixel's sequence [value_t < L] − L along time,
-k = 0 included (each pixel should fall below each level its share of the frames, early frames
-too). w(q) = exp(−|q|²/2σ_q²) with σ_q = 6·N/64 cycles per tile (a spatial Gaussian of about
-1.7 pixels, near void-and-cluster's 1.5); w_t(k) = exp(−k²/2σ_t²), σ_t = T/4. Half the proposed swaps pair a
-random pixel with one at most 8 pixels away, half with the pixel of a nearby rank (± S/64); the
-temperature falls geometrically from 0.003 to 0.0001 of the mean energy increase of random swaps.
-The inner loop is C++ (dpc._mask_anneal): a step costs O(frequencies), because each level's
-pattern spectrum is kept as prefix sums over levels.
+mask's power, P_L that of its thresholded pattern [mask < L] at the 63 levels L = 1/64 … 63/64;
+for spatiotemporal masks P_pixel,L, that of a pixel's sequence [value_t < L] − L along time, k = 0
+included (each pixel should fall below each level its share of the frames); for 2-value masks
+P_ab, that of the box pattern [u < a][v < b], a, b = 1/8 … 7/8. w(q) = exp(−|q|²/2σ_q²) with
+σ_q = 6·N/64 cycles per tile (a spatial Gaussian of about 1.7 pixels, near void-and-cluster's
+1.5); w_t(k) = exp(−k²/2σ_t²), σ_t = T/8, with k = 0 weighted 2 like each ±k pair. Half the proposed swaps pair
+a random pixel with one at most 8 pixels away, half with the pixel of a nearby rank (± N²/64);
+the temperature falls geometrically from 0.003 to 0.0001 of the mean energy increase of random
+swaps, over 600 proposals per pixel. The inner loop is C++ (dpc._mask_anneal): a step costs
+O(frequencies), because pattern spectra are kept as prefix sums over levels.
 
-Cost: about 2,400 proposed swaps per pixel, O(σ_q²) frequencies each: ~45 s for 64 × 64 on one
-core, ~16× that at 128 × 128 (bench/mask_anneal.py prints the times). The bundled masks
-(``dpc.masks.mask("annealed", ...)`` at the sizes in :data:`BUNDLED`) are this function's output,
-so they load instantly.
+Cost: O(N⁴) (N² pixels × 600 proposals × O(N²) frequencies): about 15 s for 64 × 64 on one core,
+4 minutes at 128 × 128 (`python models/mask_report.py cost` prints the times). The bundled masks
+(``dpc.masks.mask("annealed", ...)`` at the sizes and seeds in :data:`BUNDLED`) are this
+function's output, so they load instantly.
 """
 
 from __future__ import annotations
@@ -165,6 +168,7 @@ def anneal_mask(
 def mask(size: int = 64, frames: int | None = None, seed: int = 0, channels: int | None = None) -> np.ndarray:
     """The bundled design for (size, frames, seed, channels) when there is one, else
     :func:`anneal_mask`."""
+    channels = None if channels == 1 else channels
     if seed in BUNDLED.get((size, frames, channels), ()):
         ranks = np.load(bundled_path(size, frames, seed, channels))
         return (ranks.astype(np.float64) + 0.5) / (size * size)
