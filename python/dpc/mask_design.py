@@ -50,6 +50,7 @@ TIME_DC_WEIGHT = 2.0  # extra weight of k = 0 (a pixel's share of frames below e
 JOINT_WEIGHT = 0.1  # λ_j: a vector mask's joint box patterns against its channels' spectra
 JOINT_LEVELS = 8  # box corners (a, b), a, b = k / JOINT_LEVELS, k = 1 … JOINT_LEVELS − 1
 LEVELS = 64  # thresholds L = k / LEVELS, k = 1 … LEVELS − 1
+MAX_STATE_BYTES = 8 << 30  # the annealer's spectra (prefix sums) must fit in this
 STEPS_PER_PIXEL = 600
 REACH = 8  # pixels, for the spatial half of the proposals
 T_START, T_END = 0.003, 0.0001
@@ -149,6 +150,12 @@ def anneal_mask(
     start = [_bl.void_and_cluster(n, s + 1_000_003 * k) for k in range(t)]
     ranks = np.stack([np.argsort(np.argsort(m.ravel(), kind="stable")).reshape(n, n) for m in start])
     terms = energy_terms(n, t, joint)
+    state = 16 * LEVELS * (t * len(terms["qx"]) + n * n * len(terms["w_time"]))  # complex float64
+    if state > MAX_STATE_BYTES:
+        raise InvalidArgumentError(
+            f"a {n} x {n} x {t} design needs {state / 2**30:.1f} GiB of spectra (limit "
+            f"{MAX_STATE_BYTES / 2**30:.0f} GiB): use fewer frames or a smaller size"
+        )
     out, _accepted, _e0, _e1 = _mask_anneal.anneal(
         ranks.astype(np.int32),
         steps=steps * n * n * t,

@@ -92,6 +92,8 @@ def test_annealer_rejects_bad_input():
         MD.anneal_mask(16, frames=0)
     with pytest.raises(InvalidArgumentError):
         MD.anneal_mask(16, seed=-1)
+    with pytest.raises(InvalidArgumentError, match="GiB"):
+        MD.anneal_mask(512, frames=64)  # refused before anything is allocated
 
 
 def test_annealed_mask_at_least_as_good_as_void_and_cluster_at_48():
