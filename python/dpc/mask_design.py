@@ -147,8 +147,6 @@ def anneal_mask(
     if joint:
         t = 2
     steps = _bl._check_mask_size(steps_per_pixel, "steps_per_pixel", 0) if steps_per_pixel else 0
-    start = [_bl.void_and_cluster(n, s + 1_000_003 * k) for k in range(t)]
-    ranks = np.stack([np.argsort(np.argsort(m.ravel(), kind="stable")).reshape(n, n) for m in start])
     terms = energy_terms(n, t, joint)
     state = 16 * LEVELS * (t * len(terms["qx"]) + n * n * len(terms["w_time"]))  # complex float64
     if state > MAX_STATE_BYTES:
@@ -156,6 +154,8 @@ def anneal_mask(
             f"a {n} x {n} x {t} design needs {state / 2**30:.1f} GiB of spectra (limit "
             f"{MAX_STATE_BYTES / 2**30:.0f} GiB): use fewer frames or a smaller size"
         )
+    start = [_bl.void_and_cluster(n, s + 1_000_003 * k) for k in range(t)]
+    ranks = np.stack([np.argsort(np.argsort(m.ravel(), kind="stable")).reshape(n, n) for m in start])
     out, _accepted, _e0, _e1 = _mask_anneal.anneal(
         ranks.astype(np.int32),
         steps=steps * n * n * t,
