@@ -23,7 +23,7 @@ Sources (:func:`available`):
 * ``annealed``: masks designed by dpc's spectral annealing (:mod:`dpc.mask_design`), scalar or
   spatiotemporal (``frames``) or vector (``channels=2``, blue per channel and jointly). Sizes and seeds
   in :data:`dpc.mask_design.BUNDLED` load from the package; others are designed on the spot
-  (about 10 s for 64 × 64, minutes at 128 × 128).
+  (about 15 s for 64 × 64, 4 minutes at 128 × 128).
 * baselines from :mod:`dpc.baselines`: ``void-and-cluster`` (Ulichney 1993; with ``channels=2``
   two independent masks, with ``frames=T`` T independent masks), ``stbn`` (scalar spatiotemporal
   blue noise after Wolfe et al. 2022; needs ``frames``), ``white``, ``bayer``.
@@ -49,7 +49,7 @@ BASELINE_MASKS = {
     "bayer": "Bayer ordered-dither matrix (N a power of two)",
 }
 DESIGNED_MASKS = {
-    "annealed": "dpc's spectral annealing (dpc.mask_design): below void-and-cluster from 48 x 48 up; "
+    "annealed": "dpc's spectral annealing (dpc.mask_design): below void-and-cluster at 48, 64, 128 (not 32); "
     "frames=T: blue in space and time; channels=2: blue per channel and jointly; default 64 x 64",
 }
 MASK_EXTENSIONS = (".npy", ".png", ".exr")
