@@ -155,7 +155,7 @@ def anneal_mask(
             f"{MAX_STATE_BYTES / 2**30:.0f} GiB): use fewer frames or a smaller size"
         )
     start = [_bl.void_and_cluster(n, s + 1_000_003 * k) for k in range(t)]
-    ranks = np.stack([np.argsort(np.argsort(m.ravel(), kind="stable")).reshape(n, n) for m in start])
+    ranks = np.rint(np.stack(start) * (n * n) - 0.5)  # void-and-cluster's values are (rank + ½)/S
     out, _accepted, _e0, _e1 = _mask_anneal.anneal(
         ranks.astype(np.int32),
         steps=steps * n * n * t,
