@@ -3,9 +3,10 @@
     python models/make_annealed_masks.py            # every bundled design, one process per core
     python models/make_annealed_masks.py --check    # remake them and compare with the files
 
-Each file is one design of dpc.mask_design.anneal_mask, stored as its uint16 ranks
-(value = (rank + 1/2) / N²). The designs are deterministic for a seed on a given machine (float64,
-no threads); --check says whether this machine remakes the files bit for bit.
+Each file is one design of dpc.mask_design.anneal_mask (libdpc's dpc_mask_design), stored as its
+uint16 ranks (value = (rank + 1/2) / N²). A design is the same bits for a seed on every machine
+(float64 in a fixed order, libdpc's own exp, sin and cos, no threads); --check remakes the files
+and compares.
 """
 
 from __future__ import annotations

@@ -481,6 +481,48 @@ template <class Step> py::array_t<float> changed_copy(const points_in &points, S
     return out;
 }
 
+// ---- threshold masks (dpc_mask_design) ----------------------------------------------------------
+
+// Polled by libdpc every 65,536 proposals: a pending Ctrl-C stops the design (the call then
+// raises KeyboardInterrupt instead of CancelledError).
+int mask_progress(void *user, uint64_t, uint64_t) {
+    py::gil_scoped_acquire gil;
+    if (PyErr_CheckSignals() == 0) return 0;
+    *static_cast<bool *>(user) = true;
+    return 1;
+}
+
+// (ranks (frames, size, size, channels) uint32, {energy_start, energy_end, accepted}).
+py::tuple mask_design(uint32_t size, uint32_t frames, uint32_t channels, uint32_t steps_per_pixel, py::handle seed) {
+    dpc_mask_options o;
+    dpc_mask_options_init(&o);
+    o.size = size, o.frames = frames, o.channels = channels, o.steps_per_pixel = steps_per_pixel;
+    const uint64_t s = to_mask(seed, "seed");
+    size_t count = 0;
+    const dpc_status checked = dpc_mask_count(&o, &count); // every option error, before allocating
+    if (checked != DPC_OK) raise_status(checked, dpc_last_error());
+    py::array_t<uint32_t> out({size_t(frames), size_t(size), size_t(size), size_t(channels)});
+    bool interrupted = false;
+    o.progress = mask_progress;
+    o.user = &interrupted;
+    dpc_mask_stats stats{};
+    uint32_t *dst = out.mutable_data();
+    dpc_status st;
+    std::string message;
+    {
+        py::gil_scoped_release release;
+        st = dpc_mask_design(&o, s, dst, &stats);
+        if (st != DPC_OK) message = dpc_last_error();
+    }
+    if (interrupted) throw py::error_already_set();
+    if (st != DPC_OK) raise_status(st, message);
+    py::dict d;
+    d["energy_start"] = stats.energy_start;
+    d["energy_end"] = stats.energy_end;
+    d["accepted"] = stats.accepted;
+    return py::make_tuple(out, d);
+}
+
 } // namespace
 
 PYBIND11_MODULE(_core, mod) {
@@ -516,6 +558,11 @@ PYBIND11_MODULE(_core, mod) {
         .def("get", &Sampler::get, py::arg("x"), py::arg("y"), py::arg("index"), py::arg("dim"), py::arg("width"))
         .def("table", &Sampler::table, py::arg("t"));
     mod.def("sampler_mask", &sampler_mask);
+    mod.def("mask_design", &mask_design, py::arg("size"), py::arg("frames"), py::arg("channels"),
+            py::arg("steps_per_pixel"), py::arg("seed"));
+    mod.attr("MASK_MAX_SIZE") = DPC_MASK_MAX_SIZE;
+    mod.attr("MASK_MAX_FRAMES") = DPC_MASK_MAX_FRAMES;
+    mod.attr("MASK_MAX_STATE") = DPC_MASK_MAX_STATE;
     mod.def(
         "isa_supported", [](dpc_isa isa) { return dpc_isa_supported(isa) != 0; }, py::arg("isa"));
     mod.def(

@@ -1,13 +1,15 @@
-"""Annealed masks (dpc.mask_design, issue 13): the C++ annealer's bookkeeping against a direct
-evaluation of its energy, the designs' quality against void-and-cluster and STBN, the bundled
+"""Annealed masks (dpc.mask_design, issue 13): libdpc's annealer (dpc_mask_design) against a
+direct evaluation of its energy, the designs' quality against void-and-cluster and STBN, the bundled
 files, and the mask sources that serve them."""
 
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
 import pytest
 
-from dpc import _mask_anneal
+from dpc import _core
 from dpc import baselines as B
 from dpc import mask_design as MD
 from dpc import masks as M
@@ -21,77 +23,87 @@ def _exact_levels(a: np.ndarray) -> bool:
     return np.array_equal(np.sort(a.ravel()), (np.arange(a.size) + 0.5) / a.size)
 
 
-def _direct_energy(
-    ranks, qx, qy, w_mask, w_level, thresholds, kappa, w_time, kappa_time, joint_thresholds, joint_kappa, w_joint
-) -> float:
-    """The annealer's energy (bindings/python/mask_anneal.cpp, header) evaluated from scratch."""
-    t, n, _ = ranks.shape
-    ys, xs = np.mgrid[0:n, 0:n]
-    e = 0.0
-    for f in range(t):
-        for i in range(len(qx)):
-            ph = np.exp(-2j * np.pi * (qx[i] * xs + qy[i] * ys) / n)
-            e += w_mask[i] * abs((ranks[f] * ph).sum()) ** 2
-            for g in range(len(w_level)):
-                for lv, th in enumerate(thresholds):
-                    e += w_level[g, i] * kappa[g, lv] * abs(((ranks[f] < th) * ph).sum()) ** 2
-    for i in range(len(w_joint)):  # box patterns of a 2-channel mask
-        ph = np.exp(-2j * np.pi * (qx[i] * xs + qy[i] * ys) / n)
-        for a, ta in enumerate(joint_thresholds):
-            for b, tb in enumerate(joint_thresholds):
-                box = (ranks[0] < ta) & (ranks[1] < tb)
-                e += w_joint[i] * joint_kappa[a, b] * abs((box * ph).sum()) ** 2
-    for k in range(len(w_time)):
-        ph = np.exp(-2j * np.pi * k * np.arange(t) / t)[:, None, None]
-        for lv, th in enumerate(thresholds):
-            c = ((ranks < th) - th / (n * n)) * ph
-            e += w_time[k] * kappa_time[lv] * (np.abs(c.sum(axis=0)) ** 2).sum()
+def _direct_energy(ranks: np.ndarray) -> float:
+    """The annealer's energy (dpc.mask_design's module doc, libdpc/src/mask/mask_design.c) from
+    scratch with numpy FFTs: ranks (frames, n, n, channels) as _core.mask_design returns them."""
+    t, n, _, c = ranks.shape
+    frames = np.moveaxis(ranks, -1, 1).reshape(t * c, n, n).astype(np.float64)  # the annealer's frames
+    s, sigma = n * n, 6.0 * n / 64
+    f = np.arange(-(n // 2) + 1, n // 2 + 1)
+    qy, qx = (a.ravel() for a in np.meshgrid(f, f, indexing="ij"))
+    r2 = (qx * qx + qy * qy).astype(np.float64)
+    keep = ((qy > 0) | ((qy == 0) & (qx > 0))) & (r2 <= 16 * sigma * sigma)
+    qx, qy, w = qx[keep] % n, qy[keep] % n, np.exp(-0.5 * r2[keep] / sigma**2)
+    spatial = 1.0 / (w.sum() * len(frames))
+
+    def power(img):  # |DFT|^2 at the kept frequencies
+        return np.abs(np.fft.fft2(img)[..., qy, qx]) ** 2
+
+    levels = np.arange(1, 64) / 64
+    thr = np.floor(levels * s + 0.5)
+    kappa = spatial / (s * levels * (1 - levels) * len(levels))
+    e = 0.5 * spatial * (w * power(frames)).sum() / (s * (s * s - 1) / 12.0)
+    for th, k in zip(thr, kappa):
+        e += k * (w * power((frames < th).astype(float))).sum()
+    if c == 1 and t > 1:  # each pixel's sequence along time, k = 0 ... t/2
+        kt = np.arange(t // 2 + 1)
+        wt = np.exp(-0.5 * (kt / (0.125 * t)) ** 2) * np.where((kt > 0) & (2 * kt != t), 2.0, 1.0)
+        wt[0] *= 2.0
+        ktime = 2.0 / (wt.sum() * s * t * levels * (1 - levels) * len(levels))
+        for th, k in zip(thr, ktime):
+            seq = np.abs(np.fft.fft((frames < th) - th / s, axis=0)[: t // 2 + 1]) ** 2  # (k, n, n)
+            e += k * (wt[:, None, None] * seq).sum()
+    if c == 2:  # joint box patterns
+        corners = np.floor(np.arange(1, 8) / 8 * s + 0.5)
+        for i, a in enumerate(corners):
+            for j, b in enumerate(corners):
+                share = (i + 1) * (j + 1) / 64
+                box = ((frames[0] < a) & (frames[1] < b)).astype(float)
+                e += 0.1 / (w.sum() * s * share * (1 - share) * 49) * (w * power(box)).sum()
     return float(e)
 
 
-@pytest.mark.parametrize("kind", ["scalar", "spatiotemporal", "vector"])
-def test_annealer_energy_matches_a_direct_evaluation(kind):
-    """Incremental updates (prefix sums over levels, per group, per pixel and per box row) must
-    track the energy exactly: compare the start and end energies with a from-scratch evaluation."""
-    rng = np.random.default_rng(len(kind))
-    frames = {"scalar": 1, "spatiotemporal": 4, "vector": 2}[kind]
-    n = 8
-    ranks = np.stack([rng.permutation(n * n).reshape(n, n) for _ in range(frames)]).astype(np.int32)
-    terms = dict(
-        qx=np.array([1, 0, 1, 2, -1, 3], np.int32),
-        qy=np.array([0, 1, 1, 1, 2, 0], np.int32),
-        w_mask=rng.random(6),
-        w_level=rng.random((2, 6)),
-        thresholds=np.array([8, 16, 32, 48, 56], np.int32),
-        kappa=rng.random((2, 5)),
-        w_time=rng.random(3) if kind == "spatiotemporal" else np.zeros(0),
-        kappa_time=rng.random(5) if kind == "spatiotemporal" else np.zeros(0),
-        joint_thresholds=np.array([16, 32, 48], np.int32) if kind == "vector" else np.zeros(0, np.int32),
-        joint_kappa=3 * rng.random((3, 3)) if kind == "vector" else np.zeros((0, 0)),
-        w_joint=rng.random(6) if kind == "vector" else np.zeros(0),
-    )
-    terms["kappa"][0, 1] = 0.0  # a level outside a group
-    out, accepted, e0, e1 = _mask_anneal.anneal(
-        ranks, **terms, steps=4000, reach=2, rank_reach=3, t_start=0.3, t_end=1e-3, seed=1
-    )
-    assert accepted > 100
-    assert e0 == pytest.approx(_direct_energy(ranks, **terms), rel=1e-10)
-    assert e1 == pytest.approx(_direct_energy(out, **terms), rel=1e-10)
-    assert e1 < 0.2 * e0
-    assert all(np.array_equal(np.sort(f.ravel()), np.arange(n * n)) for f in out)
+@pytest.mark.parametrize("shape", [(16, 1, 1), (16, 4, 1), (16, 1, 2)], ids=["scalar", "spatiotemporal", "vector"])
+def test_annealer_energy_matches_a_direct_evaluation(shape):
+    """Incremental updates (prefix sums over levels, per pixel and per box row) must track the
+    energy exactly: libdpc's start and end energies against a from-scratch evaluation of the
+    void-and-cluster start (steps 0) and of the design."""
+    n, t, c = shape
+    start, s0 = _core.mask_design(n, t, c, 0, 5)
+    out, s1 = _core.mask_design(n, t, c, 600, 5)
+    assert s0["energy_start"] == s1["energy_start"] and s0["accepted"] == 0
+    assert s1["accepted"] > 1000
+    assert s1["energy_start"] == pytest.approx(_direct_energy(start), rel=1e-10)
+    assert s1["energy_end"] == pytest.approx(_direct_energy(out), rel=1e-10)
+    assert s1["energy_end"] < s1["energy_start"]
+    assert all(np.array_equal(np.sort(out[f, ..., k].ravel()), np.arange(n * n)) for f in range(t) for k in range(c))
+
+
+def test_design_is_the_same_on_every_machine():
+    """Plain double arithmetic in a fixed order with libdpc's own exp, sin and cos: these digests
+    were made on an AMD EPYC (AVX2) and must come out the same on every machine and compiler
+    (tests/c/test_mask.cpp pins the same designs from C)."""
+    digests = {
+        (16, 1, 1): "0b87eb935f66b187",
+        (16, 4, 1): "e0408d63e9bcc57b",
+        (16, 1, 2): "b11da04b49d789c5",
+    }
+    for (n, t, c), digest in digests.items():
+        ranks, _ = _core.mask_design(n, t, c, 600, 7)
+        assert hashlib.sha256(ranks.astype("<u4").tobytes()).hexdigest()[:16] == digest, (n, t, c)
 
 
 def test_annealer_rejects_bad_input():
-    terms = MD.energy_terms(8, 1)
-    bad = np.zeros((1, 8, 8), np.int32)  # not a permutation
-    with pytest.raises(ValueError, match="permutation"):
-        _mask_anneal.anneal(bad, **terms, steps=1, reach=1, rank_reach=1, t_start=0, t_end=0, seed=0)
     with pytest.raises(InvalidArgumentError):
         MD.anneal_mask(4)
     with pytest.raises(InvalidArgumentError):
         MD.anneal_mask(16, frames=0)
     with pytest.raises(InvalidArgumentError):
         MD.anneal_mask(16, seed=-1)
+    with pytest.raises(InvalidArgumentError, match="8 .. 1024"):
+        MD.anneal_mask(2048)
+    with pytest.raises(InvalidArgumentError, match="not both"):
+        _core.mask_design(16, 4, 2, 600, 0)
     with pytest.raises(InvalidArgumentError, match="GiB"):
         MD.anneal_mask(512, frames=64)  # refused before anything is allocated
 
@@ -178,3 +190,34 @@ def test_mask_sources_serve_annealed_masks(tmp_path, capsys):
     assert main(["mask", "-o", str(out)]) == 0  # annealed is the default
     assert np.array_equal(np.load(out), m)
     assert "from annealed" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("frames, channels", [(1, 1), (3, 1), (1, 2)])
+def test_c_example_designs_the_masks_python_serves(tmp_path, frames, channels):
+    """docs/examples/design_mask.c, compiled against libdpc, prints the ranks dpc.mask_design gives."""
+    import shutil
+    import subprocess
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    libs = [
+        p
+        for p in sorted(root.glob("build/py-*/libdpc/libdpc.so")) + sorted(root.glob("build/**/libdpc/libdpc.so"))
+        if "san" not in str(p.relative_to(root))
+    ]
+    cc = shutil.which("cc")
+    if not libs or cc is None:
+        pytest.skip("needs a C compiler and a built libdpc (build/py-*/libdpc/libdpc.so)")
+    lib, exe = libs[0].parent, tmp_path / "design_mask"
+    src = root / "docs/examples/design_mask.c"
+    cmd = [cc, "-std=c11", "-O2", "-Wall", "-Werror", str(src), f"-I{root / 'libdpc/include'}", f"-L{lib}", "-ldpc"]
+    subprocess.run([*cmd, f"-Wl,-rpath,{lib}", "-o", str(exe)], check=True)
+    args = [str(exe), "16", "9", str(frames), str(channels)]
+    out = subprocess.run(args, check=True, capture_output=True, text=True).stdout
+    blocks = [b for b in out.split("# frame ") if b]
+    ranks = np.array([[int(v) for line in b.splitlines()[1:] for v in line.split()] for b in blocks])
+    want = MD.anneal_mask(16, frames if frames > 1 else None, 9, channels=channels if channels > 1 else None)
+    want = np.rint(want * 256 - 0.5).astype(int)
+    if channels == 2:
+        want = np.moveaxis(want, -1, 0)
+    assert np.array_equal(ranks.reshape(want.shape), want)
