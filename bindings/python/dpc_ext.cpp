@@ -483,17 +483,36 @@ template <class Step> py::array_t<float> changed_copy(const points_in &points, S
 
 // ---- threshold masks (dpc_mask_design) ----------------------------------------------------------
 
-// Polled by libdpc every 65,536 proposals: a pending Ctrl-C stops the design (the call then
-// raises KeyboardInterrupt instead of CancelledError).
-int mask_progress(void *user, uint64_t, uint64_t) {
+// Polled by libdpc every 65,536 proposals: reports to the caller's progress(done, total), if any,
+// and stops the design on a pending Ctrl-C or an exception from progress (the call then raises
+// that instead of CancelledError).
+struct MaskCall {
+    py::object progress;
+    bool stopped = false;
+};
+
+int mask_progress(void *user, uint64_t done, uint64_t total) {
+    MaskCall *c = static_cast<MaskCall *>(user);
     py::gil_scoped_acquire gil;
-    if (PyErr_CheckSignals() == 0) return 0;
-    *static_cast<bool *>(user) = true;
-    return 1;
+    if (PyErr_CheckSignals() != 0) {
+        c->stopped = true;
+        return 1;
+    }
+    if (!c->progress.is_none()) {
+        PyObject *r =
+            PyObject_CallFunction(c->progress.ptr(), "KK", (unsigned long long)done, (unsigned long long)total);
+        if (!r) {
+            c->stopped = true;
+            return 1;
+        }
+        Py_DECREF(r);
+    }
+    return 0;
 }
 
 // (ranks (frames, size, size, channels) uint32, {energy_start, energy_end, accepted}).
-py::tuple mask_design(uint32_t size, uint32_t frames, uint32_t channels, uint32_t steps_per_pixel, py::handle seed) {
+py::tuple mask_design(uint32_t size, uint32_t frames, uint32_t channels, uint32_t steps_per_pixel, py::handle seed,
+                      py::object progress) {
     dpc_mask_options o;
     dpc_mask_options_init(&o);
     o.size = size, o.frames = frames, o.channels = channels, o.steps_per_pixel = steps_per_pixel;
@@ -502,9 +521,9 @@ py::tuple mask_design(uint32_t size, uint32_t frames, uint32_t channels, uint32_
     const dpc_status checked = dpc_mask_count(&o, &count); // every option error, before allocating
     if (checked != DPC_OK) raise_status(checked, dpc_last_error());
     py::array_t<uint32_t> out({size_t(frames), size_t(size), size_t(size), size_t(channels)});
-    bool interrupted = false;
+    MaskCall call{std::move(progress)};
     o.progress = mask_progress;
-    o.user = &interrupted;
+    o.user = &call;
     dpc_mask_stats stats{};
     uint32_t *dst = out.mutable_data();
     dpc_status st;
@@ -514,7 +533,7 @@ py::tuple mask_design(uint32_t size, uint32_t frames, uint32_t channels, uint32_
         st = dpc_mask_design(&o, s, dst, &stats);
         if (st != DPC_OK) message = dpc_last_error();
     }
-    if (interrupted) throw py::error_already_set();
+    if (call.stopped) throw py::error_already_set(); // the pending KeyboardInterrupt or exception
     if (st != DPC_OK) raise_status(st, message);
     py::dict d;
     d["energy_start"] = stats.energy_start;
@@ -559,7 +578,7 @@ PYBIND11_MODULE(_core, mod) {
         .def("table", &Sampler::table, py::arg("t"));
     mod.def("sampler_mask", &sampler_mask);
     mod.def("mask_design", &mask_design, py::arg("size"), py::arg("frames"), py::arg("channels"),
-            py::arg("steps_per_pixel"), py::arg("seed"));
+            py::arg("steps_per_pixel"), py::arg("seed"), py::arg("progress") = py::none());
     mod.attr("MASK_MAX_SIZE") = DPC_MASK_MAX_SIZE;
     mod.attr("MASK_MAX_FRAMES") = DPC_MASK_MAX_FRAMES;
     mod.attr("MASK_MAX_STATE") = DPC_MASK_MAX_STATE;

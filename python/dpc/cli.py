@@ -890,7 +890,15 @@ def mask_cmd(name, size, frames, channels, seed, output, bits, list_):
         raise click.UsageError("give -o/--output (.npy, .png or .exr)")
     if Path(output).suffix.lower() not in M.MASK_EXTENSIONS:
         raise click.UsageError("-o/--output must end in .npy, .png or .exr")
-    arr = M.mask(name, size=size, seed=seed, frames=frames, channels=channels)
+    from tqdm import tqdm
+
+    with tqdm(desc=f"designing {name}", delay=1.0, leave=False, dynamic_ncols=True, file=sys.stderr) as bar:
+
+        def progress(done, total):  # annealed designs made on the spot take seconds to minutes
+            bar.total = total
+            bar.update(done - bar.n)
+
+        arr = M.mask(name, size=size, seed=seed, frames=frames, channels=channels, progress=progress)
     st = arr.ndim == 3 and (frames is not None or name == "stbn" or M.kind_of(arr) == "spatiotemporal")
     kind = M.kind_of(arr, st)
     paths = M.write_mask(output, arr, bits=int(bits), spatiotemporal=st)

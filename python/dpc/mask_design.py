@@ -71,10 +71,13 @@ def anneal_mask(
     seed: int = 0,
     steps_per_pixel: int = STEPS_PER_PIXEL,
     channels: int | None = None,
+    progress=None,
 ) -> np.ndarray:
     """A rank-normalised (size, size) mask; (frames, size, size) when ``frames`` is given;
     (size, size, 2) for ``channels=2`` (blue per channel and in the joint box patterns).
-    Designed by libdpc as the module doc says: the same values for a seed on every machine."""
+    Designed by libdpc as the module doc says: the same values for a seed on every machine.
+    ``progress(done, total)`` is called on this thread every 65,536 swap proposals; an exception
+    it raises (or Ctrl-C) stops the design and propagates."""
     from . import _core
 
     n = _bl._check_mask_size(size, "size", 8)
@@ -86,18 +89,20 @@ def anneal_mask(
     if c == 2 and frames is not None:
         raise InvalidArgumentError("give channels or frames, not both")
     steps = _bl._check_mask_size(steps_per_pixel, "steps_per_pixel", 0) if steps_per_pixel else 0
-    ranks, _stats = _core.mask_design(n, t, c, steps, s)  # (frames, n, n, channels) uint32
+    ranks, _stats = _core.mask_design(n, t, c, steps, s, progress)  # (frames, n, n, channels) uint32
     values = (ranks.astype(np.float64) + 0.5) / (n * n)
     if c == 2:
         return values[0]
     return values[0, ..., 0] if frames is None else values[..., 0]
 
 
-def mask(size: int = 64, frames: int | None = None, seed: int = 0, channels: int | None = None) -> np.ndarray:
+def mask(
+    size: int = 64, frames: int | None = None, seed: int = 0, channels: int | None = None, progress=None
+) -> np.ndarray:
     """The bundled design for (size, frames, seed, channels) when there is one, else
-    :func:`anneal_mask`."""
+    :func:`anneal_mask` (``progress`` as there)."""
     channels = None if channels == 1 else channels
     if seed in BUNDLED.get((size, frames, channels), ()):
         ranks = np.load(bundled_path(size, frames, seed, channels))
         return (ranks.astype(np.float64) + 0.5) / (size * size)
-    return anneal_mask(size, frames, seed, channels=channels)
+    return anneal_mask(size, frames, seed, channels=channels, progress=progress)

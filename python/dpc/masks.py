@@ -185,14 +185,14 @@ def _baseline_mask(name: str, size, frames, channels, seed: int) -> np.ndarray:
     raise InvalidArgumentError(f"unknown mask {name!r}")
 
 
-def _annealed_mask(size, frames, channels, seed: int) -> np.ndarray:
+def _annealed_mask(size, frames, channels, seed: int, progress=None) -> np.ndarray:
     from . import mask_design
 
     # frames and channels are checked by mask_design (a combination it has no bundle for
     # reaches anneal_mask, which refuses it)
     n = 64 if size is None else _bl._check_mask_size(size, "size", 8)
     t = None if frames is None else _bl._check_mask_size(frames, "frames", 1)
-    return mask_design.mask(n, t, seed, channels)
+    return mask_design.mask(n, t, seed, channels, progress=progress)
 
 
 def available() -> dict[str, str]:
@@ -214,11 +214,18 @@ def available() -> dict[str, str]:
 
 
 def mask(
-    name: str, size: int | None = None, seed: int = 0, frames: int | None = None, channels: int | None = None
+    name: str,
+    size: int | None = None,
+    seed: int = 0,
+    frames: int | None = None,
+    channels: int | None = None,
+    progress=None,
 ) -> np.ndarray:
     """A rank-normalised mask from a gridded model (bundled name or .onnx path) or a baseline
     (see the module doc). ``size`` (pixels per side) defaults to the model's grid; ``frames``:
-    spatiotemporal masks; ``channels``: baselines only (a vector model has its own)."""
+    spatiotemporal masks; ``channels``: baselines and ``annealed`` only (a vector model has its
+    own). ``progress(done, total)``: reports an ``annealed`` design made on the spot
+    (:func:`dpc.mask_design.anneal_mask`)."""
     s = int(seed)
     if s != seed or s < 0:
         raise InvalidArgumentError(f"seed must be an integer >= 0, got {seed!r}")
@@ -227,7 +234,7 @@ def mask(
     if str(name) in BASELINE_MASKS:
         return _baseline_mask(str(name), size, frames, channels, s)
     if str(name) in DESIGNED_MASKS:
-        return _annealed_mask(size, frames, channels, s)
+        return _annealed_mask(size, frames, channels, s, progress)
     import dpc
 
     try:

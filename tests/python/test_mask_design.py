@@ -108,6 +108,23 @@ def test_annealer_rejects_bad_input():
         MD.anneal_mask(512, frames=64)  # refused before anything is allocated
 
 
+def test_progress_reports_and_an_exception_stops_the_design():
+    calls = []
+    m = MD.anneal_mask(16, seed=1, progress=lambda done, total: calls.append((done, total)))
+    assert np.array_equal(m, MD.anneal_mask(16, seed=1))
+    assert calls[0] == (0, 600 * 256) and calls[-1] == (600 * 256, 600 * 256) and len(calls) >= 3
+
+    class Stop(Exception):
+        pass
+
+    def stop(done, total):
+        if done > 0:
+            raise Stop
+
+    with pytest.raises(Stop):
+        MD.anneal_mask(16, frames=4, seed=1, progress=stop)
+
+
 def test_annealed_mask_at_least_as_good_as_void_and_cluster_at_48():
     """Designed on the spot (about 3 s each): mask and thresholded-pattern energies at or below
     void-and-cluster's at the same size and seeds (measured, 4 masks, docs/masks.md)."""
