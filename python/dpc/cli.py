@@ -892,7 +892,8 @@ def mask_cmd(name, size, frames, channels, seed, output, bits, list_):
         raise click.UsageError("-o/--output must end in .npy, .png or .exr")
     from tqdm import tqdm
 
-    with tqdm(desc=f"designing {name}", delay=1.0, leave=False, dynamic_ncols=True, file=sys.stderr) as bar:
+    bar_args = {"delay": 1.0, "leave": False, "dynamic_ncols": True, "file": sys.stderr, "unit": " swaps tried"}
+    with tqdm(desc=f"designing {name}", **bar_args) as bar:
 
         def progress(done, total):  # annealed designs made on the spot take seconds to minutes
             bar.total = total
