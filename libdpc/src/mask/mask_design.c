@@ -479,11 +479,14 @@ static double delta(annealer *a, int f, int pa, int pb) {
     const double dv = (double)(rb - ra);
     const double *mr = a->Mr + (size_t)f * Q, *mi = a->Mi + (size_t)f * Q;
     double e = 0;
+    const int n = a->n, xa = pa % n, ya = pa / n, xb = pb % n, yb = pb / n;
+    const int pow2 = (n & (n - 1)) == 0; /* phases by a mask instead of a division */
     for (int i = 0; i < Q; i++) {
-        const int ka = phase(a, i, pa), kb = phase(a, i, pb);
+        const int ua = a->qx[i] * xa + a->qy[i] * ya, ub = a->qx[i] * xb + a->qy[i] * yb;
+        const int ka = pow2 ? ua & (n - 1) : ua % n, kb = pow2 ? ub & (n - 1) : ub % n;
         const double xr = a->cosv[kb] - a->cosv[ka], xi = a->sinv[kb] - a->sinv[ka];
         a->dr[i] = xr, a->di[i] = xi;
-        a->ear[i] = a->cosv[ka], a->eai[i] = a->sinv[ka], a->ebr[i] = a->cosv[kb], a->ebi[i] = a->sinv[kb];
+        if (J > 0) a->ear[i] = a->cosv[ka], a->eai[i] = a->sinv[ka], a->ebr[i] = a->cosv[kb], a->ebi[i] = a->sinv[kb];
         /* the mask's DFT changes by (rb - ra)(e_a - e_b) = -dv (e_b - e_a) */
         e += a->wm[i] * (dv * dv * (xr * xr + xi * xi) - 2 * dv * (mr[i] * xr + mi[i] * xi));
     }
