@@ -1,7 +1,7 @@
 /* Design dpc's annealed blue-noise threshold mask in C (docs/masks.md, "Annealed masks"), e.g.
  * once at load time or in an asset build, and keep it.
  *   cc docs/examples/design_mask.c -Ilibdpc/include -Lbuild/libdpc -ldpc -o design_mask
- *   ./design_mask 64 0 > mask.txt          # 64 x 64, seed 0: the bundled design, about 14 s
+ *   ./design_mask 64 0 > mask.txt          # 64 x 64, seed 0: the bundled design, about 11 s
  *   ./design_mask 64 0 16 > st.txt         # 64 x 64 x 16 spatiotemporal (frames 16)
  *   ./design_mask 64 0 1 2 > rg.txt        # 64 x 64 with 2 values per pixel (channels 2)
  *

@@ -1,7 +1,7 @@
 """Threshold masks designed by simulated annealing of their spectra (docs/masks.md, "Annealed masks").
 
     >>> from dpc import mask_design
-    >>> m = mask_design.anneal_mask(64, seed=0)               # (64, 64), about 14 s on one core
+    >>> m = mask_design.anneal_mask(64, seed=0)               # (64, 64), about 11 s on one core
     >>> st = mask_design.anneal_mask(32, frames=16, seed=0)   # (16, 32, 32), blue in space and time
     >>> v = mask_design.anneal_mask(64, seed=0, channels=2)   # (64, 64, 2), blue per channel and jointly
 
@@ -31,8 +31,8 @@ because pattern spectra are kept as prefix sums over levels. Everything is plain
 arithmetic in a fixed order with libdpc's own exp, sin and cos, so a design is the same bits on
 every machine.
 
-Cost: O(N⁴) (N² pixels × 600 proposals × O(N²) frequencies): about 14 s for 64 × 64 on one core,
-4 minutes at 128 × 128 (`python models/mask_report.py cost` prints the times). The bundled masks
+Cost: O(N⁴) (N² pixels × 600 proposals × O(N²) frequencies): about 11 s for 64 × 64 on one core,
+3 minutes at 128 × 128 (`python models/mask_report.py cost` prints the times). The bundled masks
 (``dpc.masks.mask("annealed", ...)`` at the sizes and seeds in :data:`BUNDLED`) are this
 function's output, so they load instantly.
 """

@@ -23,7 +23,7 @@ Sources (:func:`available`):
 * ``annealed``: masks designed by dpc's spectral annealing (:mod:`dpc.mask_design`), scalar or
   spatiotemporal (``frames``) or vector (``channels=2``, blue per channel and jointly). Sizes and seeds
   in :data:`dpc.mask_design.BUNDLED` load from the package; others are designed on the spot
-  (about 14 s for 64 × 64, 4 minutes at 128 × 128).
+  (about 11 s for 64 × 64, 3 minutes at 128 × 128).
 * baselines from :mod:`dpc.baselines`: ``void-and-cluster`` (Ulichney 1993; with ``channels=2``
   two independent masks, with ``frames=T`` T independent masks), ``stbn`` (scalar spatiotemporal
   blue noise after Wolfe et al. 2022; needs ``frames``), ``white``, ``bayer``.

@@ -491,8 +491,8 @@ DPC_API const float *dpc_sampler_mask(void);
  * - out_ranks[((f * N + y) * N + x) * C + c]: frame f, pixel (x, y), channel c (C = channels).
  * - Deterministic: the same ranks for the same options and seed on every machine and compiler
  *   (plain double operations in a fixed order; no libm call).
- * - Cost: O(N^4) time, one thread: 64 x 64 about 14 s, 128 x 128 about 4 minutes, 32 x 32 x 16
- *   about 17 s (`python models/mask_report.py cost`); steps_per_pixel = 0 gives the
+ * - Cost: O(N^4) time, one thread: 64 x 64 about 11 s, 128 x 128 about 3 minutes, 32 x 32 x 16
+ *   about 14 s (`python models/mask_report.py cost`); steps_per_pixel = 0 gives the
  *   void-and-cluster start alone (under a second at 64 x 64). Memory: the spectra the annealer
  *   keeps, at most DPC_MASK_MAX_STATE bytes (else DPC_ERROR_LIMIT before any allocation):
  *   16 * 64 * (T * C * F + N * N * (T / 2 + 1 if T > 1)) bytes, F about 0.22 N^2 frequencies:
