@@ -124,7 +124,12 @@ TEST(MaskDesign, TheSameBitsOnEveryMachine) {
 
 TEST(MaskDesign, StepsZeroIsTheVoidAndClusterStart) {
     dpc_mask_stats start{}, full{};
-    const std::vector<uint32_t> a = design(options(16, 1, 1, 0), 2, &start);
+    dpc_mask_options zero = options(16, 1, 1, 0);
+    zero.progress = [](void *, uint64_t, uint64_t) -> int {
+        ADD_FAILURE() << "no progress to report without proposals";
+        return 0;
+    };
+    const std::vector<uint32_t> a = design(zero, 2, &start);
     design(options(16), 2, &full);
     EXPECT_EQ(start.accepted, 0u);
     EXPECT_EQ(start.energy_start, start.energy_end);

@@ -512,7 +512,8 @@ typedef struct dpc_mask_options {
     uint32_t channels;        /* 1 (default), or 2 for a vector mask, blue per channel and jointly (frames 1) */
     uint32_t steps_per_pixel; /* annealing proposals per pixel and frame or channel (default 600) */
     /* NULL (default): none. Called with done / total = proposals made / steps_per_pixel * N*N * T*C,
-     * every 65,536 proposals and at the end; nonzero stops with DPC_ERROR_CANCELLED. */
+     * every 65,536 proposals and at the end (never when steps_per_pixel is 0); nonzero stops with
+     * DPC_ERROR_CANCELLED. */
     dpc_progress_fn progress;
     void *user; /* passed to progress */
 } dpc_mask_options;

@@ -613,7 +613,7 @@ static dpc_status anneal(annealer *a, uint64_t steps, uint64_t seed, const dpc_m
         }
         if (take) apply(a, f, pa, pb), stats->accepted++;
     }
-    if (o->progress && o->progress(o->user, steps, steps))
+    if (o->progress && steps > 0 && o->progress(o->user, steps, steps))
         return dpc_fail(DPC_ERROR_CANCELLED, "the progress callback cancelled the mask design");
     stats->energy_end = energy(a);
     return DPC_OK;
