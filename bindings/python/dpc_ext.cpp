@@ -579,9 +579,11 @@ PYBIND11_MODULE(_core, mod) {
     mod.def("sampler_mask", &sampler_mask);
     mod.def("mask_design", &mask_design, py::arg("size"), py::arg("frames"), py::arg("channels"),
             py::arg("steps_per_pixel"), py::arg("seed"), py::arg("progress") = py::none());
-    mod.attr("MASK_MAX_SIZE") = DPC_MASK_MAX_SIZE;
-    mod.attr("MASK_MAX_FRAMES") = DPC_MASK_MAX_FRAMES;
-    mod.attr("MASK_MAX_STATE") = DPC_MASK_MAX_STATE;
+    {
+        dpc_mask_options o; // dpc.mask_design's default, read from libdpc
+        dpc_mask_options_init(&o);
+        mod.attr("MASK_STEPS_PER_PIXEL") = o.steps_per_pixel;
+    }
     mod.def(
         "isa_supported", [](dpc_isa isa) { return dpc_isa_supported(isa) != 0; }, py::arg("isa"));
     mod.def(

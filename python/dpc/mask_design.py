@@ -43,10 +43,11 @@ from pathlib import Path
 
 import numpy as np
 
+from . import _core
 from . import baselines as _bl
 from .errors import InvalidArgumentError
 
-STEPS_PER_PIXEL = 600  # libdpc's default (dpc_mask_options_init)
+STEPS_PER_PIXEL = _core.MASK_STEPS_PER_PIXEL  # libdpc's default (dpc_mask_options_init): 600
 # Bundled designs: (size, frames or None, channels or None) -> seeds, stored as uint16 ranks in
 # dpc/data/masks (made by `python models/make_annealed_masks.py`).
 BUNDLED = {
@@ -78,8 +79,6 @@ def anneal_mask(
     Designed by libdpc as the module doc says: the same values for a seed on every machine.
     ``progress(done, total)`` is called on this thread every 65,536 swap proposals; an exception
     it raises (or Ctrl-C) stops the design and propagates."""
-    from . import _core
-
     n = _bl._check_mask_size(size, "size", 8)
     t = 1 if frames is None else _bl._check_mask_size(frames, "frames", 1)
     s = _bl._check_seed(seed)

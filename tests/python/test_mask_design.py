@@ -212,23 +212,11 @@ def test_mask_sources_serve_annealed_masks(tmp_path, capsys):
 @pytest.mark.parametrize("frames, channels", [(1, 1), (3, 1), (1, 2)])
 def test_c_example_designs_the_masks_python_serves(tmp_path, frames, channels):
     """docs/examples/design_mask.c, compiled against libdpc, prints the ranks dpc.mask_design gives."""
-    import shutil
     import subprocess
-    from pathlib import Path
 
-    root = Path(__file__).resolve().parents[2]
-    libs = [
-        p
-        for p in sorted(root.glob("build/py-*/libdpc/libdpc.so")) + sorted(root.glob("build/**/libdpc/libdpc.so"))
-        if "san" not in str(p.relative_to(root))
-    ]
-    cc = shutil.which("cc")
-    if not libs or cc is None:
-        pytest.skip("needs a C compiler and a built libdpc (build/py-*/libdpc/libdpc.so)")
-    lib, exe = libs[0].parent, tmp_path / "design_mask"
-    src = root / "docs/examples/design_mask.c"
-    cmd = [cc, "-std=c11", "-O2", "-Wall", "-Werror", str(src), f"-I{root / 'libdpc/include'}", f"-L{lib}", "-ldpc"]
-    subprocess.run([*cmd, f"-Wl,-rpath,{lib}", "-o", str(exe)], check=True)
+    import c_example
+
+    exe = c_example.build("design_mask", tmp_path, flags=("-Wall", "-Werror"))
     args = [str(exe), "16", "9", str(frames), str(channels)]
     out = subprocess.run(args, check=True, capture_output=True, text=True).stdout
     blocks = [b for b in out.split("# frame ") if b]

@@ -276,38 +276,12 @@ def test_dither_command_is_atomic(tmp_path, monkeypatch, capsys, mask_ext):
 
 # ---------------------------------------------------------------- C: baking a mask at load time
 def test_c_example_bakes_the_same_ranks_as_dpc_mask(tmp_path):
-    import shutil
     import subprocess
-    from pathlib import Path
 
-    root = Path(__file__).resolve().parents[2]
-    # a plain (not sanitizer-instrumented) build: the Python package's, else any other
-    libs = [
-        p
-        for p in sorted(root.glob("build/py-*/libdpc/libdpc.so")) + sorted(root.glob("build/**/libdpc/libdpc.so"))
-        if "san" not in str(p.relative_to(root))
-    ]
-    cc = shutil.which("cc")
-    if not libs or cc is None:
-        pytest.skip("needs a C compiler and a built libdpc (build/py-*/libdpc/libdpc.so)")
-    lib = libs[0].parent
-    exe = tmp_path / "bake_mask"
-    subprocess.run(
-        [
-            cc,
-            "-std=c11",
-            "-O2",
-            str(root / "docs/examples/bake_mask.c"),
-            f"-I{root / 'libdpc/include'}",
-            f"-L{lib}",
-            "-ldpc",
-            f"-Wl,-rpath,{lib}",
-            "-o",
-            str(exe),
-        ],
-        check=True,
-    )
-    grid = root / "tests" / "data" / "model_grid_3to1.onnx"
+    import c_example
+
+    exe = c_example.build("bake_mask", tmp_path)
+    grid = c_example.ROOT / "tests" / "data" / "model_grid_3to1.onnx"
     out = subprocess.run([str(exe), str(grid), "5"], check=True, capture_output=True, text=True).stdout
     ranks = np.array([int(v) for line in out.splitlines() if not line.startswith("#") for v in line.split()])
     a = M.mask(str(grid), seed=5)

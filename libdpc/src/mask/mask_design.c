@@ -150,6 +150,7 @@ dpc_status dpc_void_and_cluster_ranks(uint32_t size, uint64_t seed, int32_t *ran
 
 typedef struct annealer {
     int T, n, S, Q, K, Kt, J, rank_reach;
+    int pow2;                                /* n is a power of two: phases by a mask, not a division */
     int *rank, *pixel_of_rank;               /* T * S */
     int *qx, *qy;                            /* Q, reduced mod n */
     double *wm, *wl, *wj;                    /* mask, level and joint weights per frequency */
@@ -175,7 +176,19 @@ static size_t dpidx(const annealer *a, int o, int i, int j) { return (((size_t)o
 static double joint_kappa(const annealer *a, int o, int i, int j) {
     return o == 0 ? a->jkap[i * a->J + j] : a->jkap[j * a->J + i];
 }
-static int phase(const annealer *a, int i, int p) { return (a->qx[i] * (p % a->n) + a->qy[i] * (p / a->n)) % a->n; }
+/* The phase index (q . (x, y)) mod n of frequency i at pixel (x, y). */
+static int phase(const annealer *a, int i, int x, int y) {
+    const int v = a->qx[i] * x + a->qy[i] * y;
+    return a->pow2 ? v & (a->n - 1) : v % a->n;
+}
+
+/* For each rank r, the first level whose threshold is above it: the levels from there on hold r. */
+static void first_level_above(const int *thr, int levels, int S, int *out) {
+    for (int r = 0, l = 0; r < S; r++) {
+        while (l < levels && thr[l] <= r) l++;
+        out[r] = l;
+    }
+}
 
 static void annealer_free(annealer *a) {
     void *blocks[] = {a->rank,
@@ -246,6 +259,7 @@ static dpc_status annealer_init(annealer *a, int n, int frames, int joint) {
     const int S = n * n, T = joint ? 2 : frames;
     const double sigma = SIGMA_Q_AT_64 * n / 64.0;
     a->T = T, a->n = n, a->S = S, a->K = LEVELS - 1, a->rank_reach = S / 64 > 1 ? S / 64 : 1;
+    a->pow2 = (n & (n - 1)) == 0;
     a->Q = count_frequencies(n, sigma, NULL, NULL, NULL);
     a->Kt = (!joint && frames > 1) ? frames / 2 + 1 : 0;
     a->J = joint ? JOINT_LEVELS - 1 : 0;
@@ -313,10 +327,7 @@ static dpc_status annealer_init(annealer *a, int n, int frames, int joint) {
         const double kt = Kt ? TIME_WEIGHT / (wt_sum * S * frames * level * (1 - level) * K) : 0.0;
         a->kpt[l + 1] = a->kpt[l] + kt;
     }
-    for (int r = 0, l = 0; r < S; r++) {
-        while (l < K && a->thr[l] <= r) l++;
-        a->level_of_rank[r] = l; /* levels l ... K - 1 have threshold > r: the pixel is on there */
-    }
+    first_level_above(a->thr, K, S, a->level_of_rank);
     for (int k = 0; k < n; k++) {
         const dpc_cplx e = dpc_turn((double)k / n);
         a->cosv[k] = e.re, a->sinv[k] = -e.im;
@@ -333,10 +344,7 @@ static dpc_status annealer_init(annealer *a, int n, int frames, int joint) {
             /* white noise: E|D(q)|^2 = S ab (1 - ab) */
             a->jkap[i * J + j] = JOINT_WEIGHT / (wsum * S * share * (1 - share) * J * J);
         }
-    for (int r = 0, l = 0; r < S; r++) {
-        while (l < J && a->jthr[l] <= r) l++;
-        a->joint_level_of_rank[r] = l;
-    }
+    first_level_above(a->jthr, J, S, a->joint_level_of_rank);
     return DPC_OK;
 oom:
     annealer_free(a);
@@ -370,7 +378,7 @@ static dpc_status rebuild(annealer *a) {
         for (int p = 0; p < S; p++) {
             const int r = a->rank[(size_t)f * S + p], l0 = a->level_of_rank[r];
             for (int i = 0; i < Q; i++) {
-                const int k = phase(a, i, p);
+                const int k = phase(a, i, p % a->n, p / a->n);
                 mr[i] += r * a->cosv[k], mi[i] += r * a->sinv[k];
                 for (int l = l0; l < K; l++) br[(size_t)l * Q + i] += a->cosv[k], bi[(size_t)l * Q + i] += a->sinv[k];
             }
@@ -400,7 +408,7 @@ static dpc_status rebuild(annealer *a) {
     for (int p = 0; p < S && J > 0; p++) {
         const int l0 = a->joint_level_of_rank[a->rank[p]], l1 = a->joint_level_of_rank[a->rank[(size_t)S + p]];
         for (int q = 0; q < Q; q++) {
-            const int k = phase(a, q, p);
+            const int k = phase(a, q, p % a->n, p / a->n);
             for (int i = l0; i < J; i++)
                 for (int j = l1; j < J; j++) {
                     a->Dr[didx(a, 0, i, j) + q] += a->cosv[k], a->Di[didx(a, 0, i, j) + q] += a->sinv[k];
@@ -480,10 +488,8 @@ static double delta(annealer *a, int f, int pa, int pb) {
     const double *mr = a->Mr + (size_t)f * Q, *mi = a->Mi + (size_t)f * Q;
     double e = 0;
     const int n = a->n, xa = pa % n, ya = pa / n, xb = pb % n, yb = pb / n;
-    const int pow2 = (n & (n - 1)) == 0; /* phases by a mask instead of a division */
     for (int i = 0; i < Q; i++) {
-        const int ua = a->qx[i] * xa + a->qy[i] * ya, ub = a->qx[i] * xb + a->qy[i] * yb;
-        const int ka = pow2 ? ua & (n - 1) : ua % n, kb = pow2 ? ub & (n - 1) : ub % n;
+        const int ka = phase(a, i, xa, ya), kb = phase(a, i, xb, yb);
         const double xr = a->cosv[kb] - a->cosv[ka], xi = a->sinv[kb] - a->sinv[ka];
         a->dr[i] = xr, a->di[i] = xi;
         if (J > 0) a->ear[i] = a->cosv[ka], a->eai[i] = a->sinv[ka], a->ebr[i] = a->cosv[kb], a->ebi[i] = a->sinv[kb];
