@@ -23,6 +23,8 @@ from __future__ import annotations
 
 import functools
 import math
+import numbers
+import os
 import re
 import warnings
 from dataclasses import dataclass
@@ -31,7 +33,7 @@ from typing import Callable
 
 import numpy as np
 
-from .errors import InvalidArgumentError
+from .errors import InvalidArgumentError, LimitError
 
 
 def _rng(seed: int) -> np.random.Generator:
@@ -39,10 +41,7 @@ def _rng(seed: int) -> np.random.Generator:
 
 
 def _check_seed(seed) -> int:
-    s = int(seed)
-    if s < 0:
-        raise InvalidArgumentError(f"seed must be >= 0, got {seed}")
-    return s
+    return _check_mask_size(seed, "seed", 0)
 
 
 def _qmc_engine(name: str, dims: int, rng: np.random.Generator, **kw):
@@ -503,13 +502,55 @@ def generate(name: str, n_points: int | None, dims: int | None = 2, count: int =
 
 
 def _check_mask_size(n, what: str = "size", minimum: int = 2) -> int:
+    if isinstance(n, (bool, np.bool_)) or not isinstance(n, (numbers.Integral, numbers.Real)):
+        raise InvalidArgumentError(f"{what} must be an integer >= {minimum}, got {n!r}")
     try:
         v = int(n)
-    except (TypeError, ValueError):
-        raise InvalidArgumentError(f"{what} must be an integer, got {n!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise InvalidArgumentError(f"{what} must be an integer >= {minimum}, got {n!r}") from None
     if v != n or v < minimum:
         raise InvalidArgumentError(f"{what} must be an integer >= {minimum}, got {n!r}")
     return v
+
+
+# Limits checked before any work (LimitError names the limit and how to raise it). Every mask
+# or image function takes ``max_pixels=``: None means the environment variable, else the default.
+#: Largest mask or image, in pixels (frames x size^2 x channels): 8192 x 8192, 512 MiB as
+#: float64; DPC_MAX_PIXELS raises it.
+DEFAULT_MAX_PIXELS = 1 << 26
+#: Largest mask made by a design whose time grows with the square of its pixels
+#: (void-and-cluster, stbn, annealed): 256 x 256 (void-and-cluster: about a minute);
+#: DPC_MAX_DESIGN_PIXELS raises it.
+DEFAULT_MAX_DESIGN_PIXELS = 1 << 16
+
+
+def pixel_limit(max_pixels=None, design: bool = False) -> int:
+    """The pixel limit of one call: ``max_pixels`` (``math.inf``: none), else
+    $DPC_MAX_DESIGN_PIXELS (``design``) or $DPC_MAX_PIXELS, else the default above."""
+    env = "DPC_MAX_DESIGN_PIXELS" if design else "DPC_MAX_PIXELS"
+    if max_pixels is None:
+        text = os.environ.get(env, "").strip()
+        if not text:
+            return DEFAULT_MAX_DESIGN_PIXELS if design else DEFAULT_MAX_PIXELS
+        try:
+            return _check_mask_size(float(text), env, 1)
+        except ValueError:
+            raise InvalidArgumentError(f"{env} must be a pixel count >= 1, got {text!r}") from None
+    if max_pixels == math.inf:
+        return max_pixels  # no limit
+    return _check_mask_size(max_pixels, "max_pixels", 1)
+
+
+def check_pixels(pixels: int, what: str, max_pixels=None, design: bool = False) -> None:
+    """LimitError when ``what`` (``pixels`` pixels) is over the pixel limit (see pixel_limit)."""
+    limit = pixel_limit(max_pixels, design)
+    if pixels > limit:
+        env = "DPC_MAX_DESIGN_PIXELS" if design else "DPC_MAX_PIXELS"
+        why = " for a design whose time grows with the square of its pixels" if design else ""
+        raise LimitError(
+            f"{what} has {pixels:,} pixels, over the limit of {limit:,}{why}; raise it with "
+            f"max_pixels= (dpc mask, dpc dither: --max-pixels) or the environment variable {env}"
+        )
 
 
 def _ranks_to_mask(ranks: np.ndarray) -> np.ndarray:
@@ -557,7 +598,9 @@ class _ToroidalEnergy:
         return int(np.argmin(np.where(self.b, np.inf, self.e)))
 
 
-def void_and_cluster(size: int, seed: int = 0, sigma: float = 1.5, density: float = 0.1) -> np.ndarray:
+def void_and_cluster(
+    size: int, seed: int = 0, sigma: float = 1.5, density: float = 0.1, max_pixels: int | None = None
+) -> np.ndarray:
     """A size × size blue-noise threshold mask by Ulichney's void-and-cluster method
     (R. Ulichney, "The void-and-cluster method for dither array generation", SPIE 1913, 1993),
     on the torus, so the mask tiles.
@@ -575,9 +618,12 @@ def void_and_cluster(size: int, seed: int = 0, sigma: float = 1.5, density: floa
     Returns float64 (size, size) with values (rank + ½)/size². The filter is the Gaussian
     exp(−r²/2σ²) (σ = 1.5 pixels, as in the paper), evaluated in full on the torus: each step
     costs O(size²), the whole mask O(size⁴) (measured in docs/masks.md: 64 × 64 about 0.4 s,
-    128 × 128 a few seconds, 256 × 256 about a minute on one core)."""
+    128 × 128 a few seconds, 256 × 256 about a minute on one core). ``max_pixels``: the
+    largest size² allowed (default DEFAULT_MAX_DESIGN_PIXELS or $DPC_MAX_DESIGN_PIXELS); a larger
+    mask raises LimitError before any work."""
     n = _check_mask_size(size)
     s = _check_seed(seed)
+    check_pixels(n * n, f"void-and-cluster {n} x {n}", max_pixels, design=True)
     if not (np.isfinite(sigma) and sigma > 0):
         raise InvalidArgumentError(f"sigma must be positive, got {sigma}")
     if not 0.0 < density < 0.5:
@@ -612,12 +658,17 @@ def void_and_cluster(size: int, seed: int = 0, sigma: float = 1.5, density: floa
     return _ranks_to_mask(ranks.reshape(n, n))
 
 
-def white_mask(shape, seed: int = 0) -> np.ndarray:
+def white_mask(shape, seed: int = 0, max_pixels: int | None = None) -> np.ndarray:
     """A white-noise mask: uniform random values, rank-normalised. ``shape`` (N, N) is a scalar
-    mask; (N, N, C) a vector mask, each of its C channels ranked on its own."""
-    shp = tuple(_check_mask_size(k, "shape entry", 1) for k in np.atleast_1d(shape))
+    mask; (N, N, C) a vector mask, each of its C channels ranked on its own. ``max_pixels``:
+    the largest N²·C allowed (default DEFAULT_MAX_PIXELS or $DPC_MAX_PIXELS; LimitError
+    before allocating)."""
+    if isinstance(shape, (str, bytes)) or not np.iterable(shape):
+        raise InvalidArgumentError(f"white_mask shape must be (N, N) or (N, N, C), got {shape!r}")
+    shp = tuple(_check_mask_size(k, "shape entry", 1) for k in shape)
     if len(shp) not in (2, 3):
         raise InvalidArgumentError(f"white_mask shape must be (N, N) or (N, N, C), got {shape}")
+    check_pixels(math.prod(shp), f"white mask {' x '.join(map(str, shp))}", max_pixels)
     rng = _rng(_check_seed(seed))
     return _rank_per_channel(rng.random(shp), vector=len(shp) == 3)
 
@@ -630,20 +681,28 @@ def _rank_per_channel(a: np.ndarray, vector: bool) -> np.ndarray:
     return _ranks_to_mask(r.reshape(a.shape))
 
 
-def bayer_mask(size: int) -> np.ndarray:
-    """The size × size Bayer (ordered-dither) matrix, size a power of two, as (rank + ½)/size²."""
+def bayer_mask(size: int, max_pixels: int | None = None) -> np.ndarray:
+    """The size × size Bayer (ordered-dither) matrix, size a power of two, as (rank + ½)/size².
+    ``max_pixels``: as for :func:`white_mask`."""
     from .analysis.dither import bayer
 
-    return bayer(_check_mask_size(size, minimum=1))
+    n = _check_mask_size(size, minimum=1)
+    check_pixels(n * n, f"Bayer mask {n} x {n}", max_pixels)
+    return bayer(n)
 
 
-def vector_void_and_cluster(size: int, seed: int = 0, sigma: float = 1.5) -> np.ndarray:
+def vector_void_and_cluster(size: int, seed: int = 0, sigma: float = 1.5, max_pixels: int | None = None) -> np.ndarray:
     """A 2-value (size, size, 2) mask from two independent void-and-cluster masks (seeds
     ``seed`` and ``seed + 1_000_003``): blue in each value, but not jointly — the pixels whose
     value pair falls in a box of the unit square need not form a blue-noise pattern."""
     n = _check_mask_size(size)
     s = _check_seed(seed)
-    return np.stack([void_and_cluster(n, s, sigma), void_and_cluster(n, s + 1_000_003, sigma)], axis=-1)
+    check_pixels(2 * n * n, f"vector void-and-cluster {n} x {n} x 2", max_pixels, design=True)
+    big = math.inf  # checked above for both masks
+    return np.stack(
+        [void_and_cluster(n, s, sigma, max_pixels=big), void_and_cluster(n, s + 1_000_003, sigma, max_pixels=big)],
+        axis=-1,
+    )
 
 
 def _normalised_gaussian_1d(n: int, sigma: float) -> np.ndarray:
@@ -657,7 +716,13 @@ def _normalised_gaussian_1d(n: int, sigma: float) -> np.ndarray:
 
 
 def stbn_scalar(
-    size: int, frames: int, seed: int = 0, sigma_space: float = 1.9, sigma_time: float = 1.9, density: float = 0.1
+    size: int,
+    frames: int,
+    seed: int = 0,
+    sigma_space: float = 1.9,
+    sigma_time: float = 1.9,
+    density: float = 0.1,
+    max_pixels: int | None = None,
 ) -> np.ndarray:
     """A (frames, size, size) scalar spatiotemporal blue-noise mask after Wolfe et al.,
     "Spatiotemporal Blue Noise Masks" (EGSR 2022): void-and-cluster over the whole volume with
@@ -667,10 +732,12 @@ def stbn_scalar(
     blue noise too. σ = 1.9 in space and time; each 1-D Gaussian has weight 1 at offset 0 and the
     other offsets summing to 1 (as in NVIDIA's reference code; the paper does not fix this).
     Cost: O(frames · size²) per step, O((frames · size²)²) in all (64 × 64 × 16: about a
-    minute on one core)."""
+    minute on one core). ``max_pixels``: the largest frames·size² allowed (as for
+    :func:`void_and_cluster`; LimitError before any work)."""
     n = _check_mask_size(size)
     t = _check_mask_size(frames, "frames", 1)
     s = _check_seed(seed)
+    check_pixels(t * n * n, f"stbn {n} x {n} x {t} frames", max_pixels, design=True)
     for name, v in (("sigma_space", sigma_space), ("sigma_time", sigma_time)):
         if not (np.isfinite(v) and v > 0):
             raise InvalidArgumentError(f"{name} must be positive, got {v}")

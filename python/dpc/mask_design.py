@@ -39,15 +39,19 @@ function's output, so they load instantly.
 
 from __future__ import annotations
 
+import queue
+import threading
 from pathlib import Path
 
 import numpy as np
 
 from . import _core
 from . import baselines as _bl
-from .errors import InvalidArgumentError
+from .errors import InvalidArgumentError, LimitError
 
 STEPS_PER_PIXEL = _core.MASK_STEPS_PER_PIXEL  # libdpc's default (dpc_mask_options_init): 600
+#: Largest steps_per_pixel anneal_mask takes (100 times the default: hours at 64 x 64).
+MAX_STEPS_PER_PIXEL = 100 * STEPS_PER_PIXEL
 # Bundled designs: (size, frames or None, channels or None) -> seeds, stored as uint16 ranks in
 # dpc/data/masks (made by `python models/make_annealed_masks.py`).
 BUNDLED = {
@@ -73,35 +77,98 @@ def anneal_mask(
     steps_per_pixel: int = STEPS_PER_PIXEL,
     channels: int | None = None,
     progress=None,
+    max_pixels: int | None = None,
 ) -> np.ndarray:
     """A rank-normalised (size, size) mask; (frames, size, size) when ``frames`` is given;
     (size, size, 2) for ``channels=2`` (blue per channel and in the joint box patterns).
     Designed by libdpc as the module doc says: the same values for a seed on every machine.
-    ``progress(done, total)`` is called on this thread every 65,536 swap proposals; an exception
-    it raises (or Ctrl-C) stops the design and propagates."""
+    ``progress(done, total)`` is called on this thread about every 65,536 swap proposals; an
+    exception it raises stops the design and propagates. The design runs on a worker thread
+    while this one waits, so Ctrl-C raises KeyboardInterrupt at once (the worker stops at its
+    next progress poll). ``max_pixels``: the largest frames × size² × channels (default 65,536
+    or $DPC_MAX_DESIGN_PIXELS, see :func:`dpc.masks.mask`), and ``steps_per_pixel`` at most
+    :data:`MAX_STEPS_PER_PIXEL`; both checked before any work (LimitError)."""
     n = _bl._check_mask_size(size, "size", 8)
     t = 1 if frames is None else _bl._check_mask_size(frames, "frames", 1)
     s = _bl._check_seed(seed)
+    if s >= 1 << 64:
+        raise InvalidArgumentError(f"seed must be an integer in 0 .. 2^64-1, got {seed!r}")
     if channels not in (None, 1, 2):
         raise InvalidArgumentError(f"channels must be 1 or 2, got {channels!r}")
     c = 2 if channels == 2 else 1
     if c == 2 and frames is not None:
         raise InvalidArgumentError("give channels or frames, not both")
     steps = _bl._check_mask_size(steps_per_pixel, "steps_per_pixel", 0) if steps_per_pixel else 0
-    ranks, _stats = _core.mask_design(n, t, c, steps, s, progress)  # (frames, n, n, channels) uint32
-    values = (ranks.astype(np.float64) + 0.5) / (n * n)
+    if steps > MAX_STEPS_PER_PIXEL:
+        raise LimitError(f"steps_per_pixel must be at most {MAX_STEPS_PER_PIXEL:,}, got {steps:,}")
+    shape = (n, n) + ((t,) if frames is not None else ()) + ((c,) if c > 1 else ())
+    _bl.check_pixels(t * n * n * c, f"annealed {' x '.join(map(str, shape))}", max_pixels, design=True)
+    ranks, _stats = _run_cancellable(lambda poll: _core.mask_design(n, t, c, steps, s, poll), progress)
+    values = (ranks.astype(np.float64) + 0.5) / (n * n)  # ranks: (frames, n, n, channels) uint32
     if c == 2:
         return values[0]
     return values[0, ..., 0] if frames is None else values[..., 0]
 
 
+class _Stop(Exception):
+    """Raised inside libdpc's progress poll to stop the design (never leaves this module)."""
+
+
+def _run_cancellable(call, progress=None):
+    """``call(poll)`` on a worker thread, ``poll(done, total)`` being libdpc's progress callback;
+    this thread waits in short sleeps, so Python handles Ctrl-C (only the main thread sees
+    signals) and ``progress`` runs here. On KeyboardInterrupt, or an exception from
+    ``progress``, the poll stops libdpc at its next call and the exception propagates at once."""
+    reports: queue.SimpleQueue = queue.SimpleQueue()
+    state = {"result": None, "error": None}
+    stop = threading.Event()
+
+    def poll(done, total):
+        if stop.is_set():
+            raise _Stop
+        reports.put((done, total))
+
+    def work():
+        try:
+            state["result"] = call(poll)
+        except BaseException as e:  # noqa: BLE001 - handed to the waiting thread
+            state["error"] = e
+
+    def forward():
+        while progress is not None and not reports.empty():
+            progress(*reports.get())
+
+    worker = threading.Thread(target=work, name="dpc-mask-design", daemon=True)
+    worker.start()
+    try:
+        while worker.is_alive():
+            worker.join(0.05)
+            forward()
+        forward()
+    except BaseException:
+        stop.set()  # the worker stops at libdpc's next poll; nobody waits for it
+        raise
+    if state["error"] is not None:
+        raise state["error"]
+    return state["result"]
+
+
 def mask(
-    size: int = 64, frames: int | None = None, seed: int = 0, channels: int | None = None, progress=None
+    size: int = 64,
+    frames: int | None = None,
+    seed: int = 0,
+    channels: int | None = None,
+    progress=None,
+    max_pixels: int | None = None,
 ) -> np.ndarray:
     """The bundled design for (size, frames, seed, channels) when there is one, else
-    :func:`anneal_mask` (``progress`` as there)."""
+    :func:`anneal_mask` (``progress``, ``max_pixels`` as there)."""
     channels = None if channels == 1 else channels
-    if seed in BUNDLED.get((size, frames, channels), ()):
+    try:
+        bundled = seed in BUNDLED.get((size, frames, channels), ())
+    except TypeError:  # an unhashable argument: anneal_mask says what is wrong with it
+        bundled = False
+    if bundled:
         ranks = np.load(bundled_path(size, frames, seed, channels))
         return (ranks.astype(np.float64) + 0.5) / (size * size)
-    return anneal_mask(size, frames, seed, channels=channels, progress=progress)
+    return anneal_mask(size, frames, seed, channels=channels, progress=progress, max_pixels=max_pixels)

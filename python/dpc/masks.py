@@ -5,7 +5,7 @@
     >>> v = dpc.mask("mask-vector-64")                     # (64, 64, 2): per-pixel 2-D offsets
     >>> st = dpc.mask("mask-st-32x16")                     # (16, 32, 32): frame t = st[t]
     >>> vc = dpc.mask("void-and-cluster", size=128, seed=1)
-    >>> dpc.masks.write_mask("mask.png", m, bits=16)       # also .exr (float32) and .npy
+    >>> dpc.masks.write_mask("mask.png", m, bits=16)       # also .npy, and .exr (the masks extra)
 
 A mask is a float64 array of rank-normalised values: every value (k + ½)/S, k = 0 … S − 1, taken
 by exactly one pixel (S = the pixels of one threshold map). Shapes: scalar (N, N); vector
@@ -32,11 +32,13 @@ Sources (:func:`available`):
 from __future__ import annotations
 
 import math
+import struct
+import zlib
 from pathlib import Path
 
 import numpy as np
 
-from . import _atomic
+from . import _atomic, pointio
 from . import baselines as _bl
 from .errors import DpcError, InvalidArgumentError, ModelNotFoundError
 
@@ -88,7 +90,7 @@ def mask_kind(model) -> str:
     )
 
 
-def _model_mask(model, size: int | None, frames: int | None, seed: int) -> np.ndarray:
+def _model_mask(model, size: int | None, frames: int | None, seed: int, max_pixels=None) -> np.ndarray:
     kind = mask_kind(model)
     axes = tuple(model.grid_axes)
     shape = tuple(model.grid_shape)
@@ -102,6 +104,7 @@ def _model_mask(model, size: int | None, frames: int | None, seed: int) -> np.nd
         if frames is not None:
             raise InvalidArgumentError(f"frames applies to spatiotemporal masks; this is a {kind} mask")
         want = (n, n)
+    _bl.check_pixels(math.prod(want), f"a mask {' x '.join(map(str, want))} from {model.name}", max_pixels)
     if want == shape:
         pts = model.generate(seed=seed)
     else:
@@ -152,47 +155,50 @@ def _filter_at_any_size(model, pts: np.ndarray) -> np.ndarray:
     return x
 
 
-def _baseline_mask(name: str, size, frames, channels, seed: int) -> np.ndarray:
+def _baseline_mask(name: str, size, frames, channels, seed: int, max_pixels=None) -> np.ndarray:
     if size is None:
         raise InvalidArgumentError(f"mask {name!r} needs a size")
     n = _bl._check_mask_size(size, "size", 2)
     c = 1 if channels is None else _bl._check_mask_size(channels, "channels", 1)
     t = None if frames is None else _bl._check_mask_size(frames, "frames", 1)
+    shape = (n, n) + ((t,) if t is not None else ()) + ((c,) if c > 1 else ())
+    design = name in ("void-and-cluster", "stbn")
+    _bl.check_pixels(math.prod(shape), f"{name} {' x '.join(map(str, shape))}", max_pixels, design)
+    free = math.inf  # checked above for the whole mask
     if name == "white":
         if c > 1 and t is not None:
             raise InvalidArgumentError("white: give channels or frames, not both")
         if t is not None:
-            return np.stack([_bl.white_mask((n, n), seed + k) for k in range(t)])
-        return _bl.white_mask((n, n), seed) if c == 1 else _bl.white_mask((n, n, c), seed)
+            return np.stack([_bl.white_mask((n, n), seed + k, free) for k in range(t)])
+        return _bl.white_mask((n, n), seed, free) if c == 1 else _bl.white_mask((n, n, c), seed, free)
     if name == "bayer":
         if c != 1 or t is not None:
             raise InvalidArgumentError("bayer is a scalar mask (no channels, no frames)")
-        return _bl.bayer_mask(n)
+        return _bl.bayer_mask(n, free)
     if name == "void-and-cluster":
         if c > 1 and t is not None:
             raise InvalidArgumentError("void-and-cluster: give channels or frames, not both")
+        vac = [_bl.void_and_cluster(n, seed + 1_000_003 * k, max_pixels=free) for k in range(t or c)]
         if t is not None:
-            return np.stack([_bl.void_and_cluster(n, seed + 1_000_003 * k) for k in range(t)])
-        if c == 1:
-            return _bl.void_and_cluster(n, seed)
-        return np.stack([_bl.void_and_cluster(n, seed + 1_000_003 * k) for k in range(c)], axis=-1)
+            return np.stack(vac)
+        return vac[0] if c == 1 else np.stack(vac, axis=-1)
     if name == "stbn":
         if t is None:
             raise InvalidArgumentError("stbn needs frames (e.g. frames=16)")
         if c != 1:
             raise InvalidArgumentError("stbn here is the scalar construction (channels = 1)")
-        return _bl.stbn_scalar(n, t, seed)
+        return _bl.stbn_scalar(n, t, seed, max_pixels=free)
     raise InvalidArgumentError(f"unknown mask {name!r}")
 
 
-def _annealed_mask(size, frames, channels, seed: int, progress=None) -> np.ndarray:
+def _annealed_mask(size, frames, channels, seed: int, progress=None, max_pixels=None) -> np.ndarray:
     from . import mask_design
 
     # frames and channels are checked by mask_design (a combination it has no bundle for
     # reaches anneal_mask, which refuses it)
     n = 64 if size is None else _bl._check_mask_size(size, "size", 8)
     t = None if frames is None else _bl._check_mask_size(frames, "frames", 1)
-    return mask_design.mask(n, t, seed, channels, progress=progress)
+    return mask_design.mask(n, t, seed, channels, progress=progress, max_pixels=max_pixels)
 
 
 def available() -> dict[str, str]:
@@ -220,21 +226,27 @@ def mask(
     frames: int | None = None,
     channels: int | None = None,
     progress=None,
+    max_pixels: int | None = None,
 ) -> np.ndarray:
     """A rank-normalised mask from a gridded model (bundled name or .onnx path) or a baseline
     (see the module doc). ``size`` (pixels per side) defaults to the model's grid; ``frames``:
     spatiotemporal masks; ``channels``: baselines and ``annealed`` only (a vector model has its
     own). ``progress(done, total)``: reports an ``annealed`` design made on the spot
-    (:func:`dpc.mask_design.anneal_mask`)."""
-    s = int(seed)
-    if s != seed or s < 0:
-        raise InvalidArgumentError(f"seed must be an integer >= 0, got {seed!r}")
+    (:func:`dpc.mask_design.anneal_mask`).
+
+    Limits, checked before any work (:class:`dpc.errors.LimitError` beyond them): the mask's
+    pixels (frames × size² × channels) at most ``max_pixels``. Its default is 65,536 (256 × 256,
+    ``dpc.baselines.DEFAULT_MAX_DESIGN_PIXELS``, or $DPC_MAX_DESIGN_PIXELS) for the designs whose
+    time grows with the square of the pixels (void-and-cluster, stbn, annealed made on the
+    spot), else 2^26 (8192 × 8192, ``DEFAULT_MAX_PIXELS``, or $DPC_MAX_PIXELS); ``math.inf``
+    lifts it. Ctrl-C stops every source promptly (KeyboardInterrupt)."""
+    s = _bl._check_seed(seed)
     if not isinstance(name, (str, Path)):
         raise InvalidArgumentError(f"mask name must be a string, got {type(name).__name__}")
     if str(name) in BASELINE_MASKS:
-        return _baseline_mask(str(name), size, frames, channels, s)
+        return _baseline_mask(str(name), size, frames, channels, s, max_pixels)
     if str(name) in DESIGNED_MASKS:
-        return _annealed_mask(size, frames, channels, s, progress)
+        return _annealed_mask(size, frames, channels, s, progress, max_pixels)
     import dpc
 
     try:
@@ -248,7 +260,7 @@ def mask(
         raise InvalidArgumentError(f"model {name} is not gridded: it has no pixel grid")
     if channels is not None:
         raise InvalidArgumentError("channels applies to baselines; a model has its own")
-    return _model_mask(model, size, frames, s)
+    return _model_mask(model, size, frames, s, max_pixels)
 
 
 def kind_of(mask_array: np.ndarray, spatiotemporal: bool = False) -> str:
@@ -285,34 +297,114 @@ def frame_paths(path, frames: int) -> list[Path]:
     return [p.with_name(f"{p.stem}_{k:0{width}d}{p.suffix}") for k in range(frames)]
 
 
-def _write_png(path: Path, img: np.ndarray, bits: int) -> None:
-    import png  # pypng
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+_PNG_PLANES = {0: 1, 2: 3, 4: 2, 6: 4}  # colour type -> samples per pixel (grey, RGB, grey + alpha, RGBA)
 
+
+def _png_chunk(kind: bytes, data: bytes) -> bytes:
+    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+
+def _write_png(path: Path, img: np.ndarray, bits: int) -> None:
+    """A PNG of the codes floor(v · 2^bits): grey for a scalar mask, RGB (B = 0) for 2 or 3
+    values. Encoded with the standard library (zlib): no imaging package is needed, and 16-bit
+    colour, which Pillow cannot write, is exact too."""
     codes = quantise(img, bits)
-    if codes.ndim == 2:
-        rows, grey, planes = codes, True, 1
-    else:
+    if codes.ndim == 3:
         c = codes.shape[2]
         if c > 3:
             raise InvalidArgumentError("PNG output holds at most 3 channels")
         rgb = np.zeros(codes.shape[:2] + (3,), dtype=codes.dtype)
         rgb[..., :c] = codes  # 2 values: R, G (B = 0)
-        rows, grey, planes = rgb.reshape(codes.shape[0], -1), False, 3
-    writer = png.Writer(width=codes.shape[1], height=codes.shape[0], greyscale=grey, bitdepth=bits)
-    with _atomic.atomic_file(path, "wb") as f:
-        writer.write(f, rows.tolist())
-    del planes
+        codes = rgb
+    h, w = codes.shape[:2]
+    rows = codes.astype(">u2" if bits == 16 else np.uint8).reshape(h, -1).view(np.uint8)
+    raw = np.concatenate([np.zeros((h, 1), np.uint8), rows], axis=1)  # filter type 0 on every row
+    header = struct.pack(">IIBBBBB", w, h, bits, 0 if codes.ndim == 2 else 2, 0, 0, 0)
+    data = (
+        _PNG_SIGNATURE
+        + _png_chunk(b"IHDR", header)
+        + _png_chunk(b"IDAT", zlib.compress(raw.tobytes(), 6))
+        + _png_chunk(b"IEND", b"")
+    )
+    _atomic.write_bytes(path, data)
 
 
-def _read_png(path: Path, channels: int | None) -> np.ndarray:
-    import png
+def _png_unfilter(data: bytes, h: int, stride: int, bpp: int) -> np.ndarray:
+    """Undo PNG's per-row filters (types 0-4): (h, stride) bytes."""
+    if len(data) != h * (stride + 1):
+        raise ValueError(f"{len(data)} bytes of image data, expected {h * (stride + 1)}")
+    out = np.zeros((h + 1, stride), np.uint8)  # row 0: the zero row before the first
+    for y in range(h):
+        pos = y * (stride + 1)
+        kind = data[pos]
+        line = np.frombuffer(data, np.uint8, stride, pos + 1).copy()
+        prior = out[y]
+        if kind == 1:  # Sub: running sums, modulo 256, per byte of a pixel
+            line = np.cumsum(line.reshape(-1, bpp), axis=0, dtype=np.uint8).ravel()
+        elif kind == 2:  # Up
+            line += prior
+        elif kind in (3, 4):  # Average, Paeth: each byte depends on the one before
+            r, up = line.tolist(), prior.tolist()
+            for i in range(stride):
+                a = r[i - bpp] if i >= bpp else 0
+                b = up[i]
+                if kind == 3:
+                    r[i] = (r[i] + (a + b) // 2) & 0xFF
+                else:
+                    c = up[i - bpp] if i >= bpp else 0
+                    p = a + b - c
+                    pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                    r[i] = (r[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 0xFF
+            line = np.array(r, np.uint8)
+        elif kind != 0:
+            raise ValueError(f"unknown PNG filter type {kind}")
+        out[y + 1] = line
+    return out[1:]
 
-    with open(path, "rb") as fh:  # pypng reads rows lazily: all of them before the file closes
-        w, h, rows, info = png.Reader(file=fh).read()
-        bits, planes = info["bitdepth"], info["planes"]
-        if bits not in (8, 16):
-            raise InvalidArgumentError(f"{path}: {bits}-bit PNG; masks are 8 or 16 bits")
-        a = np.array([np.asarray(r, dtype=np.float64) for r in rows]).reshape(h, w, planes)
+
+def png_header(path) -> tuple[int, int, int, int, int]:
+    """(width, height, bit depth, colour type, interlace) from a PNG's IHDR, without decoding."""
+    with open_regular(path) as fh:
+        head = fh.read(33)
+    if len(head) < 33 or head[:8] != _PNG_SIGNATURE or head[12:16] != b"IHDR":
+        raise InvalidArgumentError(f"{path}: not a PNG file")
+    w, h, bits, colour, _compression, _filter, interlace = struct.unpack(">IIBBBBB", head[16:29])
+    return w, h, bits, colour, interlace
+
+
+def _read_png(path: Path, channels: int | None, max_pixels=None) -> np.ndarray:
+    w, h, bits, colour, interlace = png_header(path)
+    if bits not in (8, 16) or colour not in _PNG_PLANES:
+        raise InvalidArgumentError(
+            f"{path}: {bits}-bit PNG of colour type {colour}; masks are 8 or 16 bits, grey or RGB(A)"
+        )
+    if interlace:
+        raise InvalidArgumentError(f"{path}: an interlaced PNG; save the mask without interlacing")
+    _bl.check_pixels(w * h, f"{path}", max_pixels)
+    planes = _PNG_PLANES[colour]
+    stride = w * planes * bits // 8
+    chunks = []
+    with open_regular(path) as fh:
+        fh.seek(8)
+        try:
+            while True:
+                length, kind = struct.unpack(">I4s", fh.read(8))
+                body = fh.read(length)
+                fh.read(4)  # CRC
+                if len(body) != length:
+                    raise ValueError("truncated")
+                if kind == b"IDAT":
+                    chunks.append(body)
+                elif kind == b"IEND":
+                    break
+            inflater = zlib.decompressobj()
+            # never inflate beyond the image's size (a small file can claim gigabytes)
+            data = inflater.decompress(b"".join(chunks), h * (stride + 1) + 1)
+            rows = _png_unfilter(data, h, stride, planes * bits // 8)
+        except (struct.error, zlib.error, ValueError) as e:
+            raise InvalidArgumentError(f"{path}: a damaged PNG ({e})") from None
+    a = rows.view(">u2" if bits == 16 else np.uint8).reshape(h, w, planes).astype(np.float64)
     v = (a + 0.5) / (1 << bits)
     if planes == 1:
         return v[:, :, 0]
@@ -320,11 +412,42 @@ def _read_png(path: Path, channels: int | None) -> np.ndarray:
     return v[:, :, :c]
 
 
+def open_regular(path):
+    """``open(path, "rb")`` for a regular file only: a FIFO, a device or a folder is refused at
+    once (InvalidArgumentError) instead of blocking or failing later."""
+    return pointio.open_regular(path, "rb")
+
+
 _EXR_CHANNELS = ("R", "G", "B", "A")
 
 
+EXR_EXTRA = 'pip install "deep-point-correlation[masks]" (from a checkout: pip install ".[masks]")'
+
+
+def _openexr():
+    """The OpenEXR module, or InvalidArgumentError naming the extra that brings it."""
+    try:
+        import OpenEXR
+    except ImportError:
+        raise InvalidArgumentError(f"EXR files need the OpenEXR package: {EXR_EXTRA}; or write .png or .npy") from None
+    return OpenEXR
+
+
+def check_mask_path(path) -> Path:
+    """Everything about an output path that can fail, checked before a mask is made: the
+    extension, the package an EXR needs, and the output folder (it must exist)."""
+    p = Path(path)
+    ext = p.suffix.lower()
+    if ext not in MASK_EXTENSIONS:
+        raise InvalidArgumentError(f"mask file must end in {', '.join(MASK_EXTENSIONS)}; got {p.name!r}")
+    if ext == ".exr":
+        _openexr()
+    _atomic.check_output(p)
+    return p
+
+
 def _write_exr(path: Path, img: np.ndarray) -> None:
-    import OpenEXR
+    OpenEXR = _openexr()
 
     a = np.asarray(img, dtype=np.float32)
     if a.ndim == 2:
@@ -339,7 +462,8 @@ def _write_exr(path: Path, img: np.ndarray) -> None:
 
 
 def _read_exr(path: Path) -> np.ndarray:
-    import OpenEXR
+    OpenEXR = _openexr()
+    open_regular(path).close()  # a FIFO or folder: refused before OpenEXR opens it
 
     with OpenEXR.File(str(path)) as f:
         ch = f.channels()
@@ -360,10 +484,8 @@ def write_mask(path, mask_array: np.ndarray, bits: int = 16, spatiotemporal: boo
     Written atomically (``dpc._atomic``): each file goes to a temporary file beside it and is
     renamed into place when complete, and the frames of a spatiotemporal mask appear together;
     on any failure no new file is left and existing files are unchanged."""
-    p = Path(path)
+    p = check_mask_path(path)
     ext = p.suffix.lower()
-    if ext not in MASK_EXTENSIONS:
-        raise InvalidArgumentError(f"mask file must end in {', '.join(MASK_EXTENSIONS)}; got {p.name!r}")
     a = np.asarray(mask_array, dtype=np.float64)
     kind = kind_of(a, bool(spatiotemporal))
     if not np.all(np.isfinite(a)) or a.min() < 0 or a.max() >= 1:
@@ -384,21 +506,26 @@ def write_mask(path, mask_array: np.ndarray, bits: int = 16, spatiotemporal: boo
     return paths
 
 
-def read_mask(path) -> np.ndarray:
+def read_mask(path, max_pixels=None) -> np.ndarray:
     """Read a mask file written by :func:`write_mask` (or a list of frame files, stacked into
-    (T, N, N)). PNG codes come back as (code + ½)/2^bits; EXR and .npy exactly as written."""
+    (T, N, N)). PNG codes come back as (code + ½)/2^bits; EXR and .npy exactly as written.
+    Only regular files are read (a FIFO or folder is refused at once); a PNG's header is
+    checked against ``max_pixels`` (as in :func:`mask`) before it is decoded. PNG needs no
+    extra package; EXR needs OpenEXR (the ``masks`` extra)."""
     if isinstance(path, (list, tuple)):
         if not path:
             raise InvalidArgumentError("no mask files given")
-        return np.stack([read_mask(q) for q in path])
+        return np.stack([read_mask(q, max_pixels) for q in path])
     p = Path(path)
     ext = p.suffix.lower()
-    if not p.is_file():
-        raise InvalidArgumentError(f"no such mask file: {p}")
     if ext == ".npy":
-        return np.load(p)
+        with open_regular(p) as fh:
+            try:
+                return np.load(fh, allow_pickle=False)
+            except (ValueError, EOFError) as e:
+                raise InvalidArgumentError(f"{p}: not a readable .npy file ({e})") from None
     if ext == ".png":
-        return _read_png(p, None)
+        return _read_png(p, None, max_pixels)
     if ext == ".exr":
         return _read_exr(p)
     raise InvalidArgumentError(f"mask file must end in {', '.join(MASK_EXTENSIONS)}; got {p.name!r}")

@@ -128,7 +128,11 @@ def read_model(path) -> ModelSpec:
     import onnx
     from onnx import numpy_helper
 
-    model = onnx.load(str(path))
+    from .errors import ModelIOError
+    from .pointio import open_regular
+
+    with open_regular(path, "rb", ModelIOError) as fh:  # a FIFO or folder: refused, never read
+        model = onnx.load_model_from_string(fh.read())
     meta = {p.key: p.value for p in model.metadata_props}
     inits = {t.name: numpy_helper.to_array(t) for t in model.graph.initializer}
     layers = []

@@ -27,6 +27,7 @@ from __future__ import annotations
 import io
 import os
 import re
+import stat
 from pathlib import Path
 
 import numpy as np
@@ -55,6 +56,32 @@ _SEPARATOR = re.compile(r"^[ \t]*#[^\n]*(?:\n|$)", re.MULTILINE)
 
 class PointFileError(InvalidArgumentError):
     """A point-set file that cannot be read or written as asked (format, shape, values)."""
+
+
+_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO"), (stat.S_ISCHR, "a device"), (stat.S_ISBLK, "a device"))
+
+
+def open_regular(path, mode: str = "rb", error=InvalidArgumentError):
+    """``open(path, mode)`` ("rb" or "r") for a regular file only. A folder, FIFO, socket or
+    device is refused at once with ``error`` (a FIFO with no writer would block a plain open or
+    read forever); so is a missing or unreadable file, naming it."""
+    p = Path(path)
+    try:  # O_NONBLOCK: opening a FIFO returns at once, so it can be refused below
+        fd = os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
+    except FileNotFoundError:
+        raise error(f"{p}: no such file") from None
+    except OSError as e:
+        raise error(f"{p}: cannot open ({e.strerror or e})") from None
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            kind = next((k for test, k in _KINDS if test(st.st_mode)), "not a regular file")
+            raise error(f"{p}: is {kind}, not a regular file; give a file")
+        os.set_blocking(fd, True)
+        return os.fdopen(fd, mode, **({"encoding": "utf-8"} if "b" not in mode else {}))
+    except BaseException:
+        os.close(fd)
+        raise
 
 
 def resolve_format(path, fmt: str | None = None) -> str:
@@ -164,8 +191,11 @@ def _stack(sets: list[np.ndarray], where: str) -> np.ndarray:
 
 def _read_npy(p: Path) -> np.ndarray:
     try:
-        a = np.load(p, allow_pickle=False)
+        with open_regular(p, "rb", PointFileError) as fh:
+            a = np.load(fh, allow_pickle=False)
     except (ValueError, EOFError, OSError) as e:
+        if isinstance(e, PointFileError):
+            raise
         raise PointFileError(f"{p}: not a readable .npy file ({e})") from None
     if isinstance(a, np.lib.npyio.NpzFile):
         raise PointFileError(f"{p}: is an .npz archive, expected one .npy array")
@@ -184,7 +214,8 @@ def _read_npy(p: Path) -> np.ndarray:
 
 def _read_text(p: Path, progress_bar: bool) -> np.ndarray:
     try:
-        text = p.read_text(encoding="utf-8")
+        with open_regular(p, "r", PointFileError) as fh:
+            text = fh.read()
     except UnicodeDecodeError:
         raise PointFileError(f"{p}: not a text file") from None
     sets = []
@@ -218,7 +249,8 @@ def _parse_bin(data: bytes, n: int, dtype: np.dtype) -> list[np.ndarray] | None:
 
 
 def _read_bin(p: Path, dims: int | None, bin_dtype: str | None) -> np.ndarray:
-    data = p.read_bytes()
+    with open_regular(p, "rb", PointFileError) as fh:
+        data = fh.read()
     if bin_dtype is not None and bin_dtype not in _BIN_DTYPES:
         raise PointFileError(f"bin_dtype must be float64 or float32, got {bin_dtype!r}")
     if dims is not None and not 1 <= int(dims) <= 1 << 16:
@@ -260,8 +292,6 @@ def read_points(
     reading ``.bin`` files (see the module notes); for other formats ``dims`` is checked."""
     p = Path(path)
     kind = resolve_format(p, fmt)
-    if not p.is_file():
-        raise PointFileError(f"{p}: no such file")
     if kind == "npy":
         out = _read_npy(p)
     elif kind in ("dat", "csv"):

@@ -5,6 +5,7 @@ files, and the mask sources that serve them."""
 from __future__ import annotations
 
 import hashlib
+import math
 
 import numpy as np
 import pytest
@@ -16,7 +17,7 @@ from dpc import masks as M
 from dpc.analysis import masks as AM
 from dpc.analysis.dither import mask_quality
 from dpc.cli import main
-from dpc.errors import InvalidArgumentError
+from dpc.errors import InvalidArgumentError, LimitError
 
 
 def _exact_levels(a: np.ndarray) -> bool:
@@ -100,12 +101,21 @@ def test_annealer_rejects_bad_input():
         MD.anneal_mask(16, frames=0)
     with pytest.raises(InvalidArgumentError):
         MD.anneal_mask(16, seed=-1)
+    with pytest.raises(LimitError, match="DPC_MAX_DESIGN_PIXELS"):
+        MD.anneal_mask(2048)  # Python's limit on the work, before libdpc's
     with pytest.raises(InvalidArgumentError, match="8 .. 1024"):
-        MD.anneal_mask(2048)
+        MD.anneal_mask(2048, max_pixels=math.inf)
     with pytest.raises(InvalidArgumentError, match="not both"):
         _core.mask_design(16, 4, 2, 600, 0)
     with pytest.raises(InvalidArgumentError, match="GiB"):
-        MD.anneal_mask(512, frames=64)  # refused before anything is allocated
+        MD.anneal_mask(512, frames=64, max_pixels=math.inf)  # refused before anything is allocated
+    with pytest.raises(LimitError, match="steps_per_pixel"):
+        MD.anneal_mask(16, steps_per_pixel=2**40)
+    for bad in ("16", 16.5, None, True):
+        with pytest.raises(InvalidArgumentError):
+            MD.anneal_mask(bad)
+    with pytest.raises(InvalidArgumentError, match="seed"):
+        MD.anneal_mask(16, seed=2**64)
 
 
 def test_progress_reports_and_an_exception_stops_the_design():
