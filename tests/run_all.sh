@@ -10,7 +10,8 @@
 # the reader fuzzer (libFuzzer), libdpc as another project's dependency (tests/downstream/run.sh:
 # install, find_package, pkg-config, add_subdirectory), the wheel in a clean virtual environment
 # (with the train extra: dpc-train and dpc-export), and pytest against the pip-installed package
-# (built with the Vulkan backend; it also runs the README's and docs' marked command blocks). Any
+# (built with the Vulkan backend; all but the tests marked slow; it also runs the README's and the
+# docs' code blocks: shell, Python, and C compiled by gcc and clang). Any
 # failure, or a suite that runs no test, fails the script.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -37,8 +38,21 @@ if [ -n "$missing" ]; then
 fi
 
 step "python packages"
-# torch first and pinned: the CPU build of 2.13.0 is on this image's disk; anything else pulls CUDA.
-python3 -m pip install -q --disable-pip-version-check torch==2.13.0
+# torch first and pinned to the version the tests ran with, the CPU build where it can be had:
+# from PyTorch's CPU index when that is reachable, else from pip's configured indexes (PyPI's
+# Linux wheel is the CUDA build: several GB, and it runs the tests on the CPU just the same).
+# An installed torch==2.13.0 (this image's CPU build) is kept without asking any index.
+TORCH=torch==2.13.0
+install_torch() { # python
+  if "$1" -c "import urllib.request as u; u.urlopen('https://download.pytorch.org/whl/cpu/', timeout=10)" 2>/dev/null; then
+    "$1" -m pip install -q --disable-pip-version-check "$TORCH" --index-url https://download.pytorch.org/whl/cpu
+  else
+    echo "PyTorch's CPU index is not reachable: $TORCH from pip's indexes"
+    "$1" -m pip install -q --disable-pip-version-check "$TORCH"
+  fi
+  "$1" -c "import torch; print('torch', torch.__version__, 'CUDA build' if torch.version.cuda else 'CPU build')"
+}
+install_torch python3
 python3 -m pip install -q --disable-pip-version-check scikit-build-core pybind11 ninja cmake
 # ruff pinned: another version may format differently (the format check below).
 python3 -m pip install -q --disable-pip-version-check ruff==0.17.6
@@ -56,8 +70,8 @@ python3 -m ruff check --no-cache "${PY_FILES[@]}"
 python3 -m ruff format --check --no-cache "${PY_FILES[@]}"
 echo "${#C_FILES[@]} C/C++ files and ${#PY_FILES[@]} Python files are formatted"
 
-step "the dpc package (with the Vulkan backend; extras test, train, mitsuba)"
-python3 -m pip install -q --disable-pip-version-check --no-build-isolation -C cmake.define.DPC_VULKAN=ON "$ROOT[test,train,mitsuba]"
+step "the dpc package (with the Vulkan backend; every extra: all)"
+python3 -m pip install -q --disable-pip-version-check --no-build-isolation -C cmake.define.DPC_VULKAN=ON "$ROOT[all]"
 # lavapipe is installed above: the Vulkan tests must find a device, not skip.
 export DPC_TEST_REQUIRE_VULKAN=1
 
@@ -132,10 +146,10 @@ a = numpy.load(sys.argv[1])
 assert a.shape == (512, 2) and a.dtype == numpy.float32, (a.shape, a.dtype)
 assert 'bnot-2d' in dpc.available_models() and dpc.__file__.startswith(sys.prefix), dpc.__file__
 print('clean venv:', dpc.__version__, len(dpc.available_models()), 'models,', a.shape, a.dtype)" "$ROOT/build/wheel-points.npy")
-# the train extra, with torch pinned to the CPU build first (README, docs/training.md)
-build/wheel-venv/bin/python -m pip install -q --disable-pip-version-check torch==2.13.0
+# the train extra, torch first as above (README, docs/training.md)
+install_torch build/wheel-venv/bin/python
 build/wheel-venv/bin/python -m pip install -q --disable-pip-version-check "$WHEEL[train]"
-build/wheel-venv/bin/python -c "import torch, onnx; assert torch.version.cuda is None, torch.version.cuda; print('train extra: torch', torch.__version__, 'onnx', onnx.__version__)"
+build/wheel-venv/bin/python -c "import torch, onnx; print('train extra: torch', torch.__version__, 'onnx', onnx.__version__)"
 # the training commands of the train extra, from the wheel: a short run and its export
 (cd /tmp && "$ROOT/build/wheel-venv/bin/dpc-train" --config "$ROOT/training/configs/tiny-test.toml" --steps 2 \
    --run-dir "$ROOT/build/wheel-train" --force --no-progress >/dev/null \

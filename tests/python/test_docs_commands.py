@@ -1,29 +1,154 @@
-"""Runs every command block of README.md and docs/*.md marked with a line `<!-- doc-test -->`
-right before its fence, on the installed package, in a fresh copy of the repository's tracked
-files (so relative paths such as models/bnot-2d.onnx resolve as they do for a reader):
-```bash blocks with bash -euo pipefail, ```python blocks with this interpreter. A block that
-fails fails the test with its output. The marked blocks are the ones a reader runs as written;
-the rest show output, placeholders or long runs."""
+"""Runs the code blocks of README.md and docs/*.md that a reader copies, on the installed package,
+in a fresh copy of the repository's tracked files (so relative paths such as
+models/bnot-2d.onnx resolve as they do for a reader).
 
+Every fenced block needs a language (```text for output, pseudo-code and diagrams). A block in a
+language a reader runs (bash, sh, python, c, cpp) needs one of these lines right before its fence:
+
+    <!-- doc-test -->               run as written: bash with -euo pipefail, python with this
+                                    interpreter; C/C++: a whole program, compiled and run
+    <!-- doc-test: fragment -->     C/C++: the statements of a main function; compiled and run
+                                    as `FRAGMENT_HEAD` + block + `return 0; }` (stdio.h,
+                                    stdlib.h, stdint.h, string.h and dpc/dpc.h included)
+    <!-- doc-test: loss MODEL -->   python: a [loss] source of the loss language (docs/training.md
+                                    §3): compiled for MODEL's point count and dimensions and
+                                    evaluated on a set MODEL generates
+    <!-- doc-skip: REASON -->       not run; REASON says why (an install, a run of many minutes)
+
+C is compiled with -std=c11, C++ with -std=c++17, both with -Wall -Wextra -Werror by gcc/g++ and
+by clang/clang++, against the header and the library inside the installed dpc package
+(dpc/include/dpc/dpc.h, dpc/lib/libdpc.so.N), and run in the checkout with DPC_MODEL_PATH set to
+the package's models (dpc/models). A block that fails fails the test with its output.
+"""
+
+from __future__ import annotations
+
+import os
 import re
 import shutil
 import subprocess
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
 
 REPO = Path(__file__).resolve().parents[2]
-MARK = re.compile(r"^<!-- doc-test -->\n```(bash|python)\n(.*?)^```$", re.MULTILINE | re.DOTALL)
+FENCE = re.compile(r"^[ \t]*(```+)[ \t]*([^`\s]*)[^\n]*$")
+MARK = re.compile(r"^[ \t]*<!-- doc-(test|skip)(?::[ \t]*(.*?))?[ \t]*-->[ \t]*$")
+RUN_LANGS = {"bash": "bash", "sh": "bash", "shell": "bash", "python": "python", "py": "python"}
+RUN_LANGS |= {"c": "c", "cpp": "cpp", "c++": "cpp", "cxx": "cpp"}
+COMPILERS = {"c": (("gcc", "clang"), "-std=c11"), "cpp": (("g++", "clang++"), "-std=c++17")}
+FRAGMENT_HEAD = (
+    "#include <stdint.h>\n#include <stdio.h>\n#include <stdlib.h>\n#include <string.h>\n\n"
+    '#include "dpc/dpc.h"\n\nint main(void) {\n'
+)
 
 
-def blocks():
-    out = []
-    for doc in [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]:
-        for mt in MARK.finditer(doc.read_text(encoding="utf-8")):
-            line = doc.read_text(encoding="utf-8")[: mt.start()].count("\n") + 1
-            out.append(pytest.param(mt.group(1), mt.group(2), id=f"{doc.name}:{line}"))
+@dataclass
+class Block:
+    doc: str
+    line: int  # the fence's line, 1-based
+    lang: str  # the fence's language, as written
+    kind: str  # "bash", "python", "c", "cpp" or "" (not a language a reader runs)
+    mark: str  # "test", "skip" or "" (no mark)
+    arg: str  # the mark's argument: "fragment", "loss MODEL", a skip's reason
+    code: str
+
+
+def parse(doc: Path) -> list[Block]:
+    lines = doc.read_text(encoding="utf-8").split("\n")
+    out, i = [], 0
+    while i < len(lines):
+        m = FENCE.match(lines[i])
+        if not m:
+            i += 1
+            continue
+        ticks, lang = m.group(1), m.group(2).lower()
+        end = next((j for j in range(i + 1, len(lines)) if lines[j].strip() == ticks), None)
+        assert end is not None, f"{doc.name}:{i + 1}: a fence that is never closed"
+        indent = len(lines[i]) - len(lines[i].lstrip())
+        code = "\n".join(ln[indent:] if ln[:indent].isspace() else ln for ln in lines[i + 1 : end]) + "\n"
+        mk = MARK.match(lines[i - 1]) if i else None
+        mark, arg = (mk.group(1), (mk.group(2) or "").strip()) if mk else ("", "")
+        out.append(Block(doc.name, i + 1, lang, RUN_LANGS.get(lang, ""), mark, arg, code))
+        i = end + 1
     return out
+
+
+def docs() -> list[Path]:
+    return [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]
+
+
+def all_blocks() -> list[Block]:
+    return [b for d in docs() for b in parse(d)]
+
+
+def run_params():
+    return [pytest.param(b, id=f"{b.doc}:{b.line}") for b in all_blocks() if b.mark == "test"]
+
+
+def problems(blocks: list[Block]) -> list[str]:
+    """What breaks the rule of this file's docstring, one line per block."""
+    bad = []
+    for b in blocks:
+        where = f"{b.doc}:{b.line}"
+        if not b.lang:
+            bad.append(f"{where}: a fence without a language (```text for output or pseudo-code)")
+        elif b.kind and not b.mark:
+            bad.append(f"{where}: ```{b.lang} is neither <!-- doc-test --> nor <!-- doc-skip: REASON -->")
+        elif b.mark and not b.kind:
+            bad.append(f"{where}: a doc-{b.mark} mark on ```{b.lang}, which is not run")
+        elif b.mark == "skip" and len(b.arg) < 10:
+            bad.append(f"{where}: doc-skip needs a reason")
+        elif b.mark == "test" and b.arg:
+            if b.arg == "fragment" and b.kind not in ("c", "cpp"):
+                bad.append(f"{where}: 'fragment' is for C and C++ blocks")
+            elif b.arg.startswith("loss ") and b.kind != "python":
+                bad.append(f"{where}: 'loss MODEL' is for python blocks")
+            elif b.arg != "fragment" and not re.fullmatch(r"loss [\w.-]+", b.arg):
+                bad.append(f"{where}: unknown doc-test argument {b.arg!r}")
+    return bad
+
+
+def test_every_copyable_block_is_run_or_marked():
+    """A block a reader copies is either run below or says why not; output and pseudo-code are
+    ```text (or another non-code language), so nothing is unchecked by accident."""
+    bad = problems(all_blocks())
+    assert not bad, "\n".join(bad)
+
+
+def test_the_checker_sees_unmarked_blocks(tmp_path):
+    """The rule on a page with one block of each case: only the unmarked, unlabelled and
+    wrongly marked ones are reported."""
+    page = tmp_path / "page.md"
+    page.write_text(
+        "```bash\nls\n```\n<!-- doc-test -->\n```c\nint main(void) { return 0; }\n```\n"
+        "<!-- doc-skip: a long run of many minutes -->\n```python\npass\n```\n```\nout\n```\n"
+        "```text\nout\n```\n<!-- doc-test: fragment -->\n```python\npass\n```\n"
+        "<!-- doc-skip: x -->\n  ```sh\n  ls\n  ```\n<!-- doc-test: loss bnot-2d -->\n```python\npass\n```\n",
+        encoding="utf-8",
+    )
+    blocks = parse(page)
+    assert [(b.line, b.kind, b.mark) for b in blocks] == [
+        (1, "bash", ""),
+        (5, "c", "test"),
+        (9, "python", "skip"),
+        (12, "", ""),
+        (15, "", ""),
+        (19, "python", "test"),
+        (23, "bash", "skip"),
+        (27, "python", "test"),
+    ]
+    assert blocks[6].code == "ls\n"
+    assert [p.split(":")[1] for p in problems(blocks)] == ["1", "12", "19", "23"]
+
+
+def test_the_docs_run_blocks_of_every_language():
+    found = {(b.doc, b.kind) for b in all_blocks() if b.mark == "test"}
+    for want in [("README.md", "bash"), ("README.md", "python"), ("README.md", "c"), ("training.md", "bash")]:
+        assert want in found, want
+    assert ("rendering.md", "python") in found and ("models.md", "python") in found
 
 
 @pytest.fixture(scope="module")
@@ -56,13 +181,61 @@ def checkout(tmp_path_factory):
     return dst
 
 
-def test_the_docs_mark_blocks():
-    found = {p.id.split(":")[0] for p in blocks()}
-    assert {"README.md", "training.md"} <= found, found
+def installed_c_library() -> tuple[Path, Path, Path]:
+    """(include folder, libdpc.so.N, models folder) inside the installed dpc package."""
+    import dpc._core
+
+    pkg = Path(dpc._core.__file__).parent
+    libs = sorted((pkg / "lib").glob("libdpc.so.*"))
+    assert (pkg / "include" / "dpc" / "dpc.h").is_file() and libs, f"no dpc/include, dpc/lib in {pkg}"
+    return pkg / "include", libs[0], pkg / "models"
 
 
-@pytest.mark.parametrize("lang, code", blocks())
-def test_doc_block_runs(checkout, lang, code):
-    cmd = ["bash", "-euo", "pipefail", "-c", code] if lang == "bash" else [sys.executable, "-c", code]
-    r = subprocess.run(cmd, cwd=checkout, capture_output=True, text=True, timeout=1200)
-    assert r.returncode == 0, f"exit {r.returncode}\n--- stdout\n{r.stdout[-4000:]}\n--- stderr\n{r.stderr[-4000:]}"
+def check(r: subprocess.CompletedProcess, what: str):
+    out = f"--- stdout\n{r.stdout[-4000:]}\n--- stderr\n{r.stderr[-4000:]}"
+    assert r.returncode == 0, f"{what}: exit {r.returncode}\n{out}"
+
+
+def run_compiled(b: Block, checkout: Path, tmp_path: Path):
+    compilers, std = COMPILERS[b.kind]
+    include, lib, models = installed_c_library()
+    src = tmp_path / ("block.c" if b.kind == "c" else "block.cpp")
+    src.write_text(FRAGMENT_HEAD + b.code + "return 0;\n}\n" if b.arg == "fragment" else b.code, encoding="utf-8")
+    for cc in compilers:
+        if shutil.which(cc) is None:
+            pytest.fail(f"{cc} is not installed: the doc blocks are compiled by gcc and clang")
+        exe = tmp_path / f"block-{cc}"
+        flags = [std, "-Wall", "-Wextra", "-Werror", "-O1", f"-I{include}"]
+        cmd = [cc, *flags, str(src), str(lib), f"-Wl,-rpath,{lib.parent}", "-lm", "-o", str(exe)]
+        check(subprocess.run(cmd, capture_output=True, text=True, timeout=300), " ".join(cmd))
+        # the package's libdpc installs no model folder of its own: named models come from there
+        env = {**os.environ, "DPC_MODEL_PATH": str(models)}
+        r = subprocess.run([str(exe)], cwd=checkout, env=env, capture_output=True, text=True, timeout=600)
+        check(r, exe.name)
+
+
+LOSS_CHECK = """
+import sys, math, torch, dpc
+from dpc_train.lossprog import compile_source
+model = dpc.load(sys.argv[1])
+loss = compile_source(sys.stdin.read(), model.n_points, model.dims)
+x = torch.from_numpy(model.generate_batch(2, seed=0)).to(torch.float64)
+v = float(loss(x))
+assert math.isfinite(v), v
+print(sys.argv[1], "loss", v)
+"""
+
+
+@pytest.mark.parametrize("b", run_params())
+def test_doc_block_runs(checkout, tmp_path, b: Block):
+    if b.kind in COMPILERS:
+        run_compiled(b, checkout, tmp_path)
+        return
+    if b.arg.startswith("loss "):
+        cmd, stdin = [sys.executable, "-c", LOSS_CHECK, b.arg.split()[1]], b.code
+    elif b.kind == "bash":
+        cmd, stdin = ["bash", "-euo", "pipefail", "-c", b.code], None
+    else:
+        cmd, stdin = [sys.executable, "-c", b.code], None
+    r = subprocess.run(cmd, cwd=checkout, input=stdin, capture_output=True, text=True, timeout=1200)
+    check(r, b.kind)

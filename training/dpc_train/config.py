@@ -75,7 +75,8 @@ class TrainConfig:
     # torch's intra-op threads and the C op's threads; dpc's one default (dpc.DEFAULT_THREADS, 1),
     # 0: torch's default (one per core)
     threads: int = DEFAULT_THREADS
-    impl: str = "torch"
+    # "auto": libdpc's C kernels on the CPU (about 4x faster than torch on bnot-2d), torch on CUDA
+    impl: str = "auto"
     checkpoint_every: int = 50
     log_every: int = 1
     eval_sets: int = 16  # sets used for the measured quality at the end / on export

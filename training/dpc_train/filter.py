@@ -416,7 +416,24 @@ class _FilterC(torch.autograd.Function):
 # Public entry point
 # ----------------------------------------------------------------------------------------
 
-IMPLS = ("torch", "analytic", "c")
+IMPLS = ("auto", "torch", "analytic", "c")
+# libdpc's layer descriptor holds at most this many dimensions (DPC_MAX_DIMS in dpc.h)
+_C_MAX_DIMS = 64
+
+
+def resolve_impl(impl: str, points: torch.Tensor) -> str:
+    """The implementation "auto" stands for: libdpc's C kernels (the fastest on the CPU, same
+    results as torch to float64 rounding) where they can serve, i.e. CPU tensors of at most
+    _C_MAX_DIMS dimensions with the dpc package importable; pure torch otherwise (CUDA)."""
+    if impl != "auto":
+        return impl
+    if points.device.type != "cpu" or points.shape[-1] > _C_MAX_DIMS:
+        return "torch"
+    try:
+        import dpc.training  # noqa: F401
+    except ImportError:
+        return "torch"
+    return "c"
 
 
 def filter_layer(
@@ -433,7 +450,8 @@ def filter_layer(
 
     points: [m, n] or [batch, m, n] in [0, 1); kernels: [s, b] (kernel values in units of the
     subspace's mean spacing); subspaces: s bitmasks; radius: s values ρ_t (in spacings);
-    eps: cutoff in spacings; fixed: bitmask of dims that never move. cache: optional
+    eps: cutoff in spacings; fixed: bitmask of dims that never move. impl: one of IMPLS ("auto":
+    "c" on the CPU, else "torch"; resolve_impl). cache: optional
     NeighbourCache shared by the layers of a cascade (same subspaces and radii) to reuse the
     neighbour search; the result is the same pair set either way.
     """
@@ -443,6 +461,7 @@ def filter_layer(
         raise FilterConfigError(f"kernels dtype {kernels.dtype} != points dtype {x.dtype}")
     subspaces = tuple(int(s) for s in subspaces)
     radius = tuple(float(r) for r in radius)
+    impl = resolve_impl(impl, x)
     cands = None
     if cache is not None and impl in ("torch", "analytic"):
         if cache.subspaces != subspaces or cache.radius != radius:
