@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <string>
 #include <thread>
@@ -125,8 +126,9 @@ TEST(MaskDesign, TheSameBitsOnEveryMachine) {
 TEST(MaskDesign, StepsZeroIsTheVoidAndClusterStart) {
     dpc_mask_stats start{}, full{};
     dpc_mask_options zero = options(16, 1, 1, 0);
-    zero.progress = [](void *, uint64_t, uint64_t) -> int {
-        ADD_FAILURE() << "no progress to report without proposals";
+    zero.progress = [](void *, uint64_t done, uint64_t total) -> int {
+        EXPECT_EQ(done, 0u); // polls of the start only: no proposals to report
+        EXPECT_EQ(total, 1u);
         return 0;
     };
     const std::vector<uint32_t> a = design(zero, 2, &start);
@@ -177,4 +179,31 @@ TEST(MaskThreads, ConcurrentDesignsMatchSerialOnes) {
     t1.join(), t2.join();
     EXPECT_EQ(ta, a);
     EXPECT_EQ(tb, b);
+}
+
+// The void-and-cluster start (O(N^4), minutes at 512 x 512) polls the callback too: a cancel is
+// seen within milliseconds, before any proposal.
+TEST(MaskDesign, CancelDuringTheVoidAndClusterStartIsPrompt) {
+    struct Stop {
+        std::chrono::steady_clock::time_point start, stopped;
+        bool stop = false, proposals = false;
+    } st;
+    dpc_mask_options o = options(256, 1, 1, 0);
+    o.user = &st;
+    o.progress = [](void *user, uint64_t done, uint64_t total) -> int {
+        Stop *s = static_cast<Stop *>(user);
+        s->proposals |= done != 0 || total != 1;
+        if (!s->stop && std::chrono::steady_clock::now() - s->start > std::chrono::milliseconds(200)) {
+            s->stop = true;
+            s->stopped = std::chrono::steady_clock::now();
+        }
+        return s->stop ? 1 : 0;
+    };
+    std::vector<uint32_t> out(256 * 256);
+    st.start = std::chrono::steady_clock::now();
+    EXPECT_EQ(dpc_mask_design(&o, 3, out.data(), nullptr), DPC_ERROR_CANCELLED);
+    ASSERT_TRUE(st.stop);
+    EXPECT_FALSE(st.proposals);
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - st.stopped).count(), 0.5);
+    EXPECT_NE(std::string(dpc_last_error()).find("cancel"), std::string::npos) << dpc_last_error();
 }

@@ -1,4 +1,4 @@
-// Robustness of the loading and generation API (issue 16): only regular files are opened (a
+// Robustness of the loading and generation API: only regular files are opened (a
 // FIFO, a directory or a device gives a status, never a hang), dpc_model_load_named, the work
 // bound max_neighbours, dpc_generate_size (counts checked before a host allocates), and
 // dpc_generate_ex (progress and cancellation, the same bits as dpc_generate_batch).
@@ -104,6 +104,61 @@ TEST(LoadNamed, SearchesDpcModelPathThenTheInstalledFolder) {
     if (old) setenv("DPC_MODEL_PATH", saved.c_str(), 1);
     else unsetenv("DPC_MODEL_PATH");
     EXPECT_NE(dpc_model_dir(), nullptr);
+}
+
+// The one model search (dpc_model_find; dpc.load and the Mitsuba plugin use it): regular files
+// only, so a FIFO, a folder or a dangling name on DPC_MODEL_PATH is skipped, never opened.
+TEST(ModelFind, SkipsEverythingButRegularFilesWithoutOpeningThem) {
+    const char *old = std::getenv("DPC_MODEL_PATH");
+    const std::string saved = old ? old : "";
+    const std::string dir = temp_dir(), data = data_path("");
+    const std::string fifo = dir + "/model_2d.onnx", folder = dir + "/model_3d_proj.onnx";
+    ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+    ASSERT_EQ(mkdir(folder.c_str(), 0700), 0);
+    ASSERT_EQ(symlink((dir + "/nowhere.onnx").c_str(), (dir + "/model_10d.onnx").c_str()), 0);
+    setenv("DPC_MODEL_PATH", (dir + ":" + data).c_str(), 1);
+    char path[DPC_PATH_MAX];
+    const auto start = std::chrono::steady_clock::now();
+    for (const char *name : {"model_2d", "model_3d_proj", "model_10d"}) {
+        ASSERT_EQ(dpc_model_find(name, path, sizeof path), DPC_OK) << name << ": " << dpc_last_error();
+        EXPECT_EQ(std::string(path), data + "/" + name + ".onnx");
+    }
+    dpc_model *m = nullptr;
+    ASSERT_EQ(dpc_model_load_named("model_2d", nullptr, &m), DPC_OK) << dpc_last_error(); // past the FIFO
+    dpc_model_free(m);
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
+
+    setenv("DPC_MODEL_PATH", dir.c_str(), 1); // the FIFO alone: not found, and no hang
+    std::string msg;
+    EXPECT_EQ(load_within(fifo, 2.0, &msg), DPC_ERROR_IO);
+    EXPECT_EQ(dpc_model_find("model_2d", path, sizeof path), DPC_ERROR_IO); // no bundled model has that name
+    EXPECT_STREQ(path, "");
+    EXPECT_NE(std::string(dpc_last_error()).find("no regular file model_2d.onnx"), std::string::npos)
+        << dpc_last_error();
+    EXPECT_EQ(dpc_model_find("no-such-model", path, sizeof path), DPC_ERROR_IO);
+    EXPECT_STREQ(path, "");
+
+    setenv("DPC_MODEL_PATH", data.c_str(), 1);
+    char small[8] = "x";
+    EXPECT_EQ(dpc_model_find("model_2d", small, sizeof small), DPC_ERROR_LIMIT);
+    EXPECT_STREQ(small, "");
+    EXPECT_NE(std::string(dpc_last_error()).find("DPC_PATH_MAX"), std::string::npos) << dpc_last_error();
+    const size_t need = data.size() + std::strlen("/model_2d.onnx") + 1;
+    std::vector<char> exact(need);
+    EXPECT_EQ(dpc_model_find("model_2d", exact.data(), need), DPC_OK) << dpc_last_error();
+    EXPECT_EQ(dpc_model_find("model_2d", exact.data(), need - 1), DPC_ERROR_LIMIT);
+    for (const char *bad : {"", "../model_2d", "a/b", ".hidden", "model 2d", "model_2d.onnx/x"})
+        EXPECT_EQ(dpc_model_find(bad, path, sizeof path), DPC_ERROR_INVALID_ARGUMENT) << bad;
+    EXPECT_EQ(dpc_model_find(nullptr, path, sizeof path), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(dpc_model_find("model_2d", nullptr, 10), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(dpc_model_find("model_2d", path, 0), DPC_ERROR_INVALID_ARGUMENT);
+
+    if (old) setenv("DPC_MODEL_PATH", saved.c_str(), 1);
+    else unsetenv("DPC_MODEL_PATH");
+    unlink(fifo.c_str());
+    unlink((dir + "/model_10d.onnx").c_str());
+    rmdir(folder.c_str());
+    rmdir(dir.c_str());
 }
 
 TEST(WorkBound, MaxNeighboursIsCheckedAtEveryRequestedCount) {

@@ -6,7 +6,10 @@
 #include "test_util.h"
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <functional>
 #include <thread>
@@ -415,4 +418,97 @@ TEST(SamplerThreads, ConcurrentCreationFromOneModel) {
         });
     for (std::thread &th : threads) th.join();
     for (int t = 1; t < 6; t++) EXPECT_EQ(tables[t], tables[0]);
+}
+
+namespace {
+struct Creation {
+    std::atomic<uint64_t> calls{0}, last_done{0}, total{0};
+    std::atomic<bool> backwards{false};
+    std::chrono::steady_clock::time_point start, stopped;
+    double stop_after_s = -1; // < 0: never stop
+    std::atomic<bool> stop{false};
+};
+
+int on_creation(void *user, uint64_t done, uint64_t total) {
+    Creation *c = static_cast<Creation *>(user);
+    if (done < c->last_done) c->backwards = true;
+    c->calls++, c->last_done = done, c->total = total;
+    if (c->stop_after_s >= 0 && !c->stop &&
+        std::chrono::steady_clock::now() - c->start > std::chrono::duration<double>(c->stop_after_s)) {
+        c->stopped = std::chrono::steady_clock::now();
+        c->stop = true;
+    }
+    return c->stop ? 1 : 0;
+}
+} // namespace
+
+TEST(SamplerProgress, ReportsEverySetAndChangesNoBit) {
+    ModelPtr m = load(model_path("model_2d"), DPC_ISA_AUTO, 4);
+    const dpc_model *h = m.get();
+    dpc_sampler_options o;
+    dpc_sampler_options_init(&o);
+    EXPECT_EQ(o.progress, nullptr);
+    EXPECT_EQ(o.user, nullptr);
+    o.models = &h;
+    o.n_models = 1;
+    o.samples_per_pixel = 64;
+    o.dimensions = 8;
+    o.net_dims = 1; // slot 0 a net: 7 sets to make
+    Creation c;
+    o.progress = on_creation;
+    o.user = &c;
+    dpc_sampler *s = nullptr;
+    ASSERT_EQ(dpc_sampler_create(&o, &s), DPC_OK) << dpc_last_error();
+    SamplerPtr with(s);
+    EXPECT_EQ(c.total.load(), 7u);
+    EXPECT_EQ(c.last_done.load(), 7u);
+    EXPECT_FALSE(c.backwards.load());
+    EXPECT_GT(c.calls.load(), 7u); // polls inside the sets too
+    SamplerPtr plain = make({h}, 64, 8, 0, 1, 1);
+    for (uint32_t t = 0; t < 8; t++) EXPECT_EQ(table_of(with.get(), t, 64), table_of(plain.get(), t, 64)) << t;
+}
+
+TEST(SamplerProgress, OptionsWithoutTheCallbackFieldsStillWork) {
+    ModelPtr m = load(model_path("model_2d"));
+    const dpc_model *h = m.get();
+    dpc_sampler_options o;
+    dpc_sampler_options_init(&o);
+    o.models = &h;
+    o.n_models = 1;
+    o.progress = [](void *, uint64_t, uint64_t) -> int { return 1; }; // beyond the old struct: ignored
+    o.struct_size = (uint32_t)offsetof(dpc_sampler_options, progress);
+    dpc_sampler *s = nullptr;
+    ASSERT_EQ(dpc_sampler_create(&o, &s), DPC_OK) << dpc_last_error();
+    SamplerPtr old(s);
+    SamplerPtr now = make({h}, 16, 16, 0, 1, DPC_SAMPLER_NET_DIMS_AUTO);
+    EXPECT_EQ(table_of(old.get(), 3, 16), table_of(now.get(), 3, 16));
+    o.struct_size = (uint32_t)sizeof o - 4;
+    EXPECT_EQ(dpc_sampler_create(&o, &s), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(s, nullptr);
+}
+
+// A progressive model with the prefix relaxation (seconds per large table): a cancel is seen
+// within a relaxation step, not after the set or the sampler.
+TEST(SamplerProgress, CancelStopsAProgressiveRelaxationPromptly) {
+    ModelPtr m = load(model_path("model_2d_progressive_relaxed"), DPC_ISA_AUTO, 2);
+    const dpc_model *h = m.get();
+    dpc_sampler_options o;
+    dpc_sampler_options_init(&o);
+    o.models = &h;
+    o.n_models = 1;
+    o.samples_per_pixel = 16384;
+    o.dimensions = 4;
+    Creation c;
+    c.stop_after_s = 0.3;
+    o.progress = on_creation;
+    o.user = &c;
+    dpc_sampler *s = reinterpret_cast<dpc_sampler *>(1);
+    c.start = std::chrono::steady_clock::now();
+    EXPECT_EQ(dpc_sampler_create(&o, &s), DPC_ERROR_CANCELLED);
+    const double late = std::chrono::duration<double>(std::chrono::steady_clock::now() - c.stopped).count();
+    EXPECT_EQ(s, nullptr);
+    EXPECT_TRUE(c.stop.load());
+    EXPECT_LT(late, 0.5) << "creation went on for " << late << " s after the callback asked to stop";
+    EXPECT_NE(std::string(dpc_last_error()).find("cancelled"), std::string::npos) << dpc_last_error();
+    EXPECT_EQ(c.last_done.load(), 0u); // no set finished in 0.3 s
 }

@@ -23,7 +23,7 @@ using namespace dpct;
 
 namespace {
 
-constexpr double kParityTol = 1e-4; // issue 6: Vulkan vs CPU, float32 on both sides
+constexpr double kParityTol = 1e-4; // Vulkan vs CPU, float32 on both sides
 
 dpc_status load_with(const std::string &path, dpc_backend backend, dpc_model **out,
                      dpc_input input = DPC_INPUT_UNIFORM) {

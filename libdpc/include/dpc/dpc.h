@@ -74,7 +74,7 @@ typedef enum dpc_status {
     DPC_ERROR_OUT_OF_MEMORY = 5,    /* an allocation failed */
     DPC_ERROR_LIMIT = 6,            /* request exceeds a documented limit (e.g. point count) */
     DPC_ERROR_INTERNAL = 7,         /* a bug in libdpc: please report it */
-    DPC_ERROR_CANCELLED = 8         /* a progress callback asked to stop (dpc_generate_ex) */
+    DPC_ERROR_CANCELLED = 8         /* a progress callback asked to stop (dpc_generate_ex, sampler, mask) */
 } dpc_status;
 
 /* Detail of the most recent failure on the calling thread. Every fallible call clears it when it
@@ -184,16 +184,26 @@ DPC_API dpc_status dpc_model_load_memory(const void *data, size_t size, const dp
 /* Release a model. NULL is a no-op. No call may use the model during or after this one. */
 DPC_API void dpc_model_free(dpc_model *model);
 
-/* Load a model by name, e.g. "bnot-2d": the first regular file NAME.onnx in the folders of the
- * environment variable DPC_MODEL_PATH (separated by ':'), then in dpc_model_dir(). A name is
- * 1 .. 255 characters of [A-Za-z0-9._-], not starting with '.' (so it never names a path).
- * DPC_ERROR_IO with the folders searched when no file is found. */
+/* Load a model by name, e.g. "bnot-2d": the file dpc_model_find names, then as
+ * dpc_model_load_file. */
 DPC_API dpc_status dpc_model_load_named(const char *name, const dpc_load_options *options, dpc_model **out_model);
+/* The model search, without loading: the first regular file NAME.onnx in the folders of the
+ * environment variable DPC_MODEL_PATH (separated by ':'), then in dpc_model_dir(); anything
+ * else of that name (a FIFO, a folder, a device) is skipped, never opened. A name is 1 .. 255
+ * characters of [A-Za-z0-9._-], not starting with '.' (so it never names a path), else
+ * DPC_ERROR_INVALID_ARGUMENT. On success out_path holds the file's path (capacity bytes, the
+ * terminating NUL included: DPC_PATH_MAX always suffices; less than the path needs gives
+ * DPC_ERROR_LIMIT); DPC_ERROR_IO
+ * with the folders searched when there is no such file. out_path is "" on failure. The
+ * Python package (dpc.load) and its Mitsuba plugin use this search. */
+DPC_API dpc_status dpc_model_find(const char *name, char *out_path, size_t capacity);
+#define DPC_PATH_MAX 4096
 /* The folder `cmake --install` put the bundled models in: <prefix>/share/dpc/models found
  * beside the shared library (so a prefix given at install time, or a moved install, still
  * works), else the folder configured at build time (CMAKE_INSTALL_PREFIX: all a static libdpc
- * knows); "" for a build that installs none (the Python package's copy: dpc.load finds its
- * own). Canonical path; static string. DPC_MODEL_PATH serves any other place. */
+ * knows); in the Python package, its own models folder (dpc/models, beside the extension and
+ * dpc/lib); "" for a build that installs none. Canonical path; static string. DPC_MODEL_PATH
+ * serves any other place. */
 DPC_API const char *dpc_model_dir(void);
 
 /* ---------------------------------------------------------------------------------------------
@@ -445,6 +455,15 @@ typedef struct dpc_sampler_options {
      * progressive samplers keep 1: more were not measured in a renderer), else 1; 0 for none. */
     uint32_t net_dims;
     uint64_t seed; /* default 0 */
+    /* NULL (default): none. Called with done / total = sets made / sets to make (the tables'
+     * point sets), after each batch of sets and with the same `done` inside each set's work (a
+     * poll: between the cascade's chunks and layers, before every step of a progressive model's
+     * relaxation), so a nonzero return stops creation promptly with DPC_ERROR_CANCELLED. Calls
+     * never overlap but may come from libdpc's worker threads (see dpc_progress_fn). Added after
+     * `seed`: a struct_size of offsetof(dpc_sampler_options, progress) is still accepted, as
+     * none. */
+    dpc_progress_fn progress;
+    void *user; /* passed to progress */
 } dpc_sampler_options;
 
 #define DPC_SAMPLER_NO_FOLD 0xFFFFFFFFu
@@ -456,8 +475,8 @@ typedef struct dpc_sampler_options {
 /* Fill *options with the defaults (no models: set models and n_models). */
 DPC_API void dpc_sampler_options_init(dpc_sampler_options *options);
 
-/* Build a sampler: D sets of spp points through the models' cascades (64 spp, 16 dimensions:
- * milliseconds; bench/bench_sampler.c). On failure *out_sampler is NULL. */
+/* Build a sampler: D sets of spp points through the models' cascades (bench/bench_sampler.c
+ * measures it). On failure *out_sampler is NULL. */
 DPC_API dpc_status dpc_sampler_create(const dpc_sampler_options *options, dpc_sampler **out_sampler);
 /* Release a sampler. NULL is a no-op. */
 DPC_API void dpc_sampler_free(dpc_sampler *sampler);
@@ -512,8 +531,9 @@ typedef struct dpc_mask_options {
     uint32_t channels;        /* 1 (default), or 2 for a vector mask, blue per channel and jointly (frames 1) */
     uint32_t steps_per_pixel; /* annealing proposals per pixel and frame or channel (default 600) */
     /* NULL (default): none. Called with done / total = proposals made / steps_per_pixel * N*N * T*C,
-     * every 65,536 proposals and at the end (never when steps_per_pixel is 0); nonzero stops with
-     * DPC_ERROR_CANCELLED. */
+     * every 65,536 proposals and at the end; before the first proposal (the void-and-cluster
+     * start, the first spectra) with done = 0 every few million inner steps, as a poll (total
+     * then at least 1, also when steps_per_pixel is 0). Nonzero stops with DPC_ERROR_CANCELLED. */
     dpc_progress_fn progress;
     void *user; /* passed to progress */
 } dpc_mask_options;

@@ -250,17 +250,23 @@ static int is_dir(const char *path) {
     return stat(path, &info) == 0 && S_ISDIR(info.st_mode);
 }
 
-/* The models beside this library (<libdir>/../share/dpc/models: an install moved, or made with
- * `cmake --install --prefix`), else the configured folder; canonical (realpath). */
+/* The models beside this library: the first folder of DPC_MODEL_DIR_FROM_LIB (':'-separated,
+ * relative to the folder of the binary this code is in: <libdir>/../share/dpc/models for an
+ * install moved or made with `cmake --install --prefix`; in the Python package dpc/models, seen
+ * from the extension in dpc/ and from dpc/lib/libdpc.so) that exists, else the configured
+ * folder; canonical (realpath). */
 static void find_model_dir(void) {
     char buf[4096] = "";
     Dl_info info;
     if (DPC_MODEL_DIR_FROM_LIB[0] && dladdr((void *)&find_model_dir, &info) && info.dli_fname) {
         const char *slash = strrchr(info.dli_fname, '/');
-        if (slash) {
-            const int n = snprintf(buf, sizeof buf, "%.*s/%s", (int)(slash - info.dli_fname), info.dli_fname,
-                                   DPC_MODEL_DIR_FROM_LIB);
+        for (const char *rel = DPC_MODEL_DIR_FROM_LIB; slash && rel && !buf[0];) {
+            const char *end = strchr(rel, ':');
+            const int len = (int)(end ? (size_t)(end - rel) : strlen(rel));
+            const int n =
+                snprintf(buf, sizeof buf, "%.*s/%.*s", (int)(slash - info.dli_fname), info.dli_fname, len, rel);
             if (n < 0 || (size_t)n >= sizeof buf || !is_dir(buf)) buf[0] = '\0';
+            rel = end ? end + 1 : NULL;
         }
     }
     if (!buf[0] && DPC_MODEL_DIR[0] && strlen(DPC_MODEL_DIR) < sizeof buf)
@@ -284,11 +290,8 @@ static int named_file(const char *dir, size_t dir_len, const char *name, char *b
     return stat(buf, &info) == 0 && S_ISREG(info.st_mode);
 }
 
-dpc_status dpc_model_load_named(const char *name, const dpc_load_options *options, dpc_model **out_model) {
-    dpc_clear_error();
-    if (!out_model) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "out_model is NULL");
-    *out_model = NULL;
-    if (!name) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "name is NULL");
+/* A model name: 1 .. 255 characters of [A-Za-z0-9._-], not starting with '.'. */
+static dpc_status check_name(const char *name) {
     const size_t len = strlen(name);
     if (len == 0 || len > 255 || name[0] == '.')
         return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
@@ -302,21 +305,49 @@ dpc_status dpc_model_load_named(const char *name, const dpc_load_options *option
                             "dpc_model_load_file instead)",
                             name, i);
     }
-    char path[4096];
+    return DPC_OK;
+}
+
+dpc_status dpc_model_find(const char *name, char *out_path, size_t capacity) {
+    dpc_clear_error();
+    if (!name || !out_path || capacity == 0)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "name or out_path is NULL, or capacity is 0");
+    out_path[0] = '\0';
+    dpc_status st = check_name(name);
+    if (st != DPC_OK) return st;
+    char path[DPC_PATH_MAX];
+    int found = 0;
     const char *env = getenv("DPC_MODEL_PATH");
-    if (env) {
-        for (const char *p = env;;) {
-            const char *end = strchr(p, ':');
-            const size_t n = end ? (size_t)(end - p) : strlen(p);
-            if (named_file(p, n, name, path, sizeof path)) return dpc_model_load_file(path, options, out_model);
-            if (!end) break;
-            p = end + 1;
-        }
+    for (const char *p = env; p && !found;) {
+        const char *end = strchr(p, ':');
+        const size_t n = end ? (size_t)(end - p) : strlen(p);
+        found = named_file(p, n, name, path, sizeof path);
+        p = end ? end + 1 : NULL;
     }
     const char *dir = dpc_model_dir();
-    if (named_file(dir, strlen(dir), name, path, sizeof path)) return dpc_model_load_file(path, options, out_model);
-    return dpc_fail(DPC_ERROR_IO, "no model named '%s': no file %s.onnx in DPC_MODEL_PATH (%.1000s) or in %s", name,
-                    name, env ? env : "unset", dir[0] ? dir : "(this build installs no models)");
+    if (!found) found = named_file(dir, strlen(dir), name, path, sizeof path);
+    if (!found)
+        return dpc_fail(DPC_ERROR_IO,
+                        "no model named '%s': no regular file %s.onnx in DPC_MODEL_PATH (%.1000s) or in %s", name, name,
+                        env ? env : "unset", dir[0] ? dir : "(this build installs no models)");
+    const size_t len = strlen(path);
+    if (len >= capacity)
+        return dpc_fail(DPC_ERROR_LIMIT,
+                        "the path of model '%s' is %zu bytes, more than out_path's capacity %zu: "
+                        "give DPC_PATH_MAX bytes",
+                        name, len + 1, capacity);
+    memcpy(out_path, path, len + 1);
+    return DPC_OK;
+}
+
+dpc_status dpc_model_load_named(const char *name, const dpc_load_options *options, dpc_model **out_model) {
+    dpc_clear_error();
+    if (!out_model) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "out_model is NULL");
+    *out_model = NULL;
+    if (!name) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "name is NULL");
+    char path[DPC_PATH_MAX];
+    const dpc_status st = dpc_model_find(name, path, sizeof path);
+    return st == DPC_OK ? dpc_model_load_file(path, options, out_model) : st;
 }
 
 void dpc_model_free(dpc_model *model) {
@@ -547,12 +578,13 @@ static dpc_status progress_add(progress *p, uint64_t units) {
  * of progress). */
 static dpc_status engine_hook(void *ctx, int layer_done) { return progress_add((progress *)ctx, layer_done ? 1u : 0u); }
 
-dpc_status dpc_model_generate_cpu(const dpc_model *model, uint64_t seed, size_t m, float *out) {
+dpc_status dpc_model_generate_cpu(const dpc_model *model, uint64_t seed, size_t m, float *out, dpc_cpu_hook hook,
+                                  void *ctx) {
     dpc_cpu_engine one;
     dpc_status st = dpc_cpu_engine_init(&one, model->engine.isa, 1); /* every ISA: the same bits */
     if (st != DPC_OK) return st;
     if ((st = check_count(model, &m)) != DPC_OK) return st;
-    return dpc_cpu_generate(&model->cascade, model->input, &one, seed, 1, m, out, NULL, NULL);
+    return dpc_cpu_generate(&model->cascade, model->input, &one, seed, 1, m, out, hook, ctx);
 }
 
 #if defined(DPC_HAVE_VULKAN)

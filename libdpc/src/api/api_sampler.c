@@ -1,4 +1,5 @@
 /* The sampler's ABI boundary: checks every argument, builds the tables (docs/rendering.md). */
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -18,11 +19,25 @@ void dpc_sampler_options_init(dpc_sampler_options *options) {
     options->net_dims = DPC_SAMPLER_NET_DIMS_AUTO;
 }
 
-static dpc_status check_options(const dpc_sampler_options *o) {
-    if (o->struct_size != sizeof *o)
+/* The caller's options in the current layout: older callers pass the struct without `progress`
+ * and `user` (struct_size = their offset), which default to none. */
+static dpc_status read_options(const dpc_sampler_options *options, dpc_sampler_options *o) {
+    dpc_sampler_options_init(o);
+    const size_t before_progress = offsetof(dpc_sampler_options, progress);
+    if (options->struct_size == sizeof *o) {
+        *o = *options;
+    } else if (options->struct_size == before_progress) {
+        memcpy(o, options, before_progress);
+        o->struct_size = (uint32_t)sizeof *o;
+    } else {
         return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
                         "options.struct_size is %u, expected %u: initialise with dpc_sampler_options_init",
-                        o->struct_size, (unsigned)sizeof *o);
+                        options->struct_size, (unsigned)sizeof *o);
+    }
+    return DPC_OK;
+}
+
+static dpc_status check_options(const dpc_sampler_options *o) {
     if (!o->models || o->n_models == 0)
         return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "options.models is NULL or n_models is 0: give at least one model");
     for (uint32_t j = 0; j < o->n_models; j++) {
@@ -60,11 +75,12 @@ dpc_status dpc_sampler_create(const dpc_sampler_options *options, dpc_sampler **
     if (!out_sampler) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "out_sampler is NULL");
     *out_sampler = NULL;
     if (!options) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "options is NULL");
-    dpc_status st = check_options(options);
-    if (st != DPC_OK) return st;
+    dpc_sampler_options o;
+    dpc_status st = read_options(options, &o);
+    if (st != DPC_OK || (st = check_options(&o)) != DPC_OK) return st;
     dpc_sampler *s = (dpc_sampler *)calloc(1, sizeof *s);
     if (!s) return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory");
-    if ((st = dpc_sampler_build(s, options)) != DPC_OK) {
+    if ((st = dpc_sampler_build(s, &o)) != DPC_OK) {
         dpc_sampler_free(s);
         return st;
     }

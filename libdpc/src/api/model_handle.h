@@ -22,7 +22,9 @@ struct dpc_model {
 
 /* dpc_generate_n of the model's cascade and input kind on the CPU backend with one thread,
  * whatever the handle's threads and backend: the points every machine gives (every CPU ISA path
- * gives the same bits; the Vulkan backend does not). */
-dpc_status dpc_model_generate_cpu(const dpc_model *model, uint64_t seed, size_t m, float *out);
+ * gives the same bits; the Vulkan backend does not). hook (or NULL) is polled as in dpc_cpu_generate:
+ * a status other than DPC_OK stops it with DPC_ERROR_CANCELLED. */
+dpc_status dpc_model_generate_cpu(const dpc_model *model, uint64_t seed, size_t m, float *out, dpc_cpu_hook hook,
+                                  void *ctx);
 
 #endif

@@ -57,6 +57,24 @@ static uint64_t next_u64(splitmix *r) {
 static double next_uniform(splitmix *r) { return (double)(next_u64(r) >> 11) * 0x1.0p-53; }
 static int next_below(splitmix *r, int n) { return (int)(((next_u64(r) >> 32) * (uint64_t)n) >> 32); }
 
+/* Polls of the progress callback during the start (void-and-cluster, the first spectra), which
+ * makes no proposals: done = 0, total = the proposals to come (at least 1), after about
+ * POLL_WORK inner-loop steps (milliseconds). */
+#define POLL_WORK (1ull << 22)
+typedef struct poller {
+    const dpc_mask_options *o;
+    uint64_t total, work;
+} poller;
+
+/* Count `work` more steps; whether the callback asked to stop. */
+static int poll_stop(poller *p, uint64_t work) {
+    if (!p || !p->o->progress) return 0;
+    p->work += work;
+    if (p->work < POLL_WORK) return 0;
+    p->work = 0;
+    return p->o->progress(p->o->user, 0, p->total) != 0;
+}
+
 /* ---- void-and-cluster ----------------------------------------------------------------------- */
 
 typedef struct vac_field {
@@ -89,7 +107,7 @@ static int vac_extreme(const vac_field *v, int want) {
     return best;
 }
 
-dpc_status dpc_void_and_cluster_ranks(uint32_t size, uint64_t seed, int32_t *ranks) {
+static dpc_status void_and_cluster(uint32_t size, uint64_t seed, int32_t *ranks, poller *poll) {
     const int n = (int)size, s = n * n;
     int radius = (int)(6.0 * VAC_SIGMA); /* exp(-r^2 / 2 sigma^2) below 1e-7 beyond */
     if (radius > (n - 1) / 2) radius = (n - 1) / 2;
@@ -118,8 +136,9 @@ dpc_status dpc_void_and_cluster_ranks(uint32_t size, uint64_t seed, int32_t *ran
         order[i] = order[j], order[j] = t;
         vac_toggle(&v, order[i], 1);
     }
+    int stopped = 0;
     /* relax: tightest cluster -> largest void until the pixel removed is the one refilled */
-    for (long long it = 0; it < 50LL * s; it++) {
+    for (long long it = 0; it < 50LL * s && !(stopped = poll_stop(poll, 2 * (uint64_t)s)); it++) {
         const int c = vac_extreme(&v, 1);
         vac_toggle(&v, c, 0);
         const int z = vac_extreme(&v, 0);
@@ -130,20 +149,26 @@ dpc_status dpc_void_and_cluster_ranks(uint32_t size, uint64_t seed, int32_t *ran
     uint8_t *proto_on = v.on + s;
     memcpy(proto_e, v.e, sizeof(double) * (size_t)s);
     memcpy(proto_on, v.on, (size_t)s);
-    for (int rank = ones - 1; rank >= 0; rank--) { /* phase 1: remove tightest clusters */
+    for (int rank = ones - 1; rank >= 0 && !(stopped |= poll_stop(poll, s));
+         rank--) { /* phase 1: remove tightest clusters */
         const int c = vac_extreme(&v, 1);
         vac_toggle(&v, c, 0);
         ranks[c] = rank;
     }
     memcpy(v.e, proto_e, sizeof(double) * (size_t)s);
     memcpy(v.on, proto_on, (size_t)s);
-    for (int rank = ones; rank < s; rank++) { /* phases 2 and 3: fill the largest voids */
+    for (int rank = ones; rank < s && !(stopped |= poll_stop(poll, s));
+         rank++) { /* phases 2, 3: fill the largest voids */
         const int z = vac_extreme(&v, 0);
         vac_toggle(&v, z, 1);
         ranks[z] = rank;
     }
     free(v.kernel), free(v.e), free(v.on), free(order);
-    return DPC_OK;
+    return stopped ? dpc_fail(DPC_ERROR_CANCELLED, "the progress callback cancelled the mask design") : DPC_OK;
+}
+
+dpc_status dpc_void_and_cluster_ranks(uint32_t size, uint64_t seed, int32_t *ranks) {
+    return void_and_cluster(size, seed, ranks, NULL);
 }
 
 /* ---- the annealer ---------------------------------------------------------------------------- */
@@ -364,7 +389,7 @@ static void joint_prefix_row(annealer *a, int o, int i) {
 }
 
 /* All spectra from the ranks (the start of a run). */
-static dpc_status rebuild(annealer *a) {
+static dpc_status rebuild(annealer *a, poller *poll) {
     const int T = a->T, S = a->S, Q = a->Q, K = a->K, Kt = a->Kt, J = a->J;
     double *br = (double *)malloc(sizeof(double) * (size_t)K * Q),
            *bi = (double *)malloc(sizeof(double) * (size_t)K * Q);
@@ -376,6 +401,10 @@ static dpc_status rebuild(annealer *a) {
         memset(br, 0, sizeof(double) * (size_t)K * Q), memset(bi, 0, sizeof(double) * (size_t)K * Q);
         double *mr = a->Mr + (size_t)f * Q, *mi = a->Mi + (size_t)f * Q;
         for (int p = 0; p < S; p++) {
+            if (poll_stop(poll, (uint64_t)Q * K)) {
+                free(br), free(bi);
+                return dpc_fail(DPC_ERROR_CANCELLED, "the progress callback cancelled the mask design");
+            }
             const int r = a->rank[(size_t)f * S + p], l0 = a->level_of_rank[r];
             for (int i = 0; i < Q; i++) {
                 const int k = phase(a, i, p % a->n, p / a->n);
@@ -392,7 +421,9 @@ static dpc_status rebuild(annealer *a) {
         }
     }
     free(br), free(bi);
-    for (int p = 0; p < S && Kt > 0; p++)
+    for (int p = 0; p < S && Kt > 0; p++) {
+        if (poll_stop(poll, (uint64_t)K * Kt * T))
+            return dpc_fail(DPC_ERROR_CANCELLED, "the progress callback cancelled the mask design");
         for (int l = 1; l <= K; l++) { /* C_pl(k) = sum_f ([rank_f < thr] - thr / S) e_f(k) */
             const double share = (double)a->thr[l - 1] / S, c = a->kpt[l] - a->kpt[l - 1];
             for (int k = 0; k < Kt; k++) {
@@ -405,7 +436,10 @@ static dpc_status rebuild(annealer *a) {
                 a->Vi[tidx(a, p, l) + k] = a->Vi[tidx(a, p, l - 1) + k] + c * si;
             }
         }
+    }
     for (int p = 0; p < S && J > 0; p++) {
+        if (poll_stop(poll, (uint64_t)Q * J * J))
+            return dpc_fail(DPC_ERROR_CANCELLED, "the progress callback cancelled the mask design");
         const int l0 = a->joint_level_of_rank[a->rank[p]], l1 = a->joint_level_of_rank[a->rank[(size_t)S + p]];
         for (int q = 0; q < Q; q++) {
             const int k = phase(a, q, p % a->n, p / a->n);
@@ -586,11 +620,12 @@ static void apply(annealer *a, int f, int pa, int pb) {
     a->pixel_of_rank[(size_t)f * S + *ra] = pa, a->pixel_of_rank[(size_t)f * S + *rb] = pb;
 }
 
-static dpc_status anneal(annealer *a, uint64_t steps, uint64_t seed, const dpc_mask_options *o, dpc_mask_stats *stats) {
+static dpc_status anneal(annealer *a, uint64_t steps, uint64_t seed, const dpc_mask_options *o, poller *poll,
+                         dpc_mask_stats *stats) {
     const int T = a->T, S = a->S;
     for (int f = 0; f < T; f++)
         for (int p = 0; p < S; p++) a->pixel_of_rank[(size_t)f * S + a->rank[(size_t)f * S + p]] = p;
-    dpc_status st = rebuild(a);
+    dpc_status st = rebuild(a, poll);
     if (st != DPC_OK) return st;
     splitmix rng = {seed * 0x2545F4914F6CDD1Dull + 0x1234567ull};
     stats->energy_start = energy(a);
@@ -631,10 +666,12 @@ dpc_status dpc_mask_design_run(const dpc_mask_options *o, uint64_t seed, uint32_
     annealer a;
     dpc_status st = annealer_init(&a, n, (int)o->frames, joint);
     if (st != DPC_OK) return st;
+    const uint64_t steps = (uint64_t)o->steps_per_pixel * (uint64_t)S * (uint64_t)T;
+    poller poll = {o, steps ? steps : 1, 0};
     for (int f = 0; f < T && st == DPC_OK; f++) /* one void-and-cluster start per frame or channel */
-        st = dpc_void_and_cluster_ranks(o->size, seed + 1000003ull * (uint64_t)f, a.rank + (size_t)f * S);
+        st = void_and_cluster(o->size, seed + 1000003ull * (uint64_t)f, a.rank + (size_t)f * S, &poll);
     dpc_mask_stats local = {0, 0, 0};
-    if (st == DPC_OK) st = anneal(&a, (uint64_t)o->steps_per_pixel * (uint64_t)S * (uint64_t)T, seed, o, &local);
+    if (st == DPC_OK) st = anneal(&a, steps, seed, o, &poll, &local);
     if (st == DPC_OK) {
         for (int f = 0; f < T; f++)
             for (int p = 0; p < S; p++) {

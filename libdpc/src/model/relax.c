@@ -371,8 +371,8 @@ dpc_status dpc_relax_points(float *x, size_t m, uint32_t base, uint32_t steps, u
     }
     for (size_t i = 0; i < 2 * m; i++) R.x[i] = (double)x[i];
     for (uint32_t t = 0; t < steps; t++) {
+        if (hook && (st = hook(ctx)) != DPC_OK) goto done; /* every step: a large set's step takes tens of ms */
         if (t % DPC_RELAX_REFRESH == 0) {
-            if (hook && (st = hook(ctx)) != DPC_OK) goto done;
             for (size_t q = 0; q < R.n_prefix; q++)
                 if (!search(&R, &R.p[q])) {
                     st = dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "cannot allocate the relaxation's neighbour pairs");

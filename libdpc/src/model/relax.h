@@ -15,8 +15,8 @@
 #define DPC_RELAX_MAX_STEPS 100000u
 #define DPC_RELAX_REFRESH 10u /* steps between neighbour searches */
 
-/* A hook asked at every neighbour search whether to go on (DPC_OK) or stop (any other status;
- * the points are then partly relaxed). NULL: never stopped. */
+/* A hook asked before every step whether to go on (DPC_OK) or stop (any other status; the points
+ * are then left as they were). NULL: never stopped. */
 typedef dpc_status (*dpc_relax_hook)(void *ctx);
 
 /* Relax m 2-D points (each coordinate in [0, 1)) in place: the prefixes are base * 2^j < m and

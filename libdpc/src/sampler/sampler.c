@@ -1,4 +1,5 @@
 /* Building a sampler's tables (docs/rendering.md, "Definition"). */
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -34,6 +35,35 @@ static void stratify_projections(float *table, uint32_t n, ranked *scratch) {
 
 #define SAMPLER_MAX_WORKERS 16u
 
+/* options.progress: one unit per set made, polled inside each set's generation (between the
+ * cascade's chunks and layers, before every relaxation step); calls serialised, from any worker. */
+typedef struct build_progress {
+    dpc_progress_fn fn;
+    void *user;
+    uint64_t done, total;
+    int cancelled;
+    pthread_mutex_t lock;
+} build_progress;
+
+/* Count `units` more sets as made (0: a poll) and tell the callback; DPC_ERROR_CANCELLED once it
+ * asked to stop. */
+static dpc_status progress_add(build_progress *p, uint64_t units) {
+    if (!p->fn) return DPC_OK;
+    pthread_mutex_lock(&p->lock);
+    if (!p->cancelled) {
+        p->done += units;
+        if (p->fn(p->user, p->done, p->total) != 0) p->cancelled = 1;
+    }
+    const int cancelled = p->cancelled;
+    pthread_mutex_unlock(&p->lock);
+    return cancelled ? DPC_ERROR_CANCELLED : DPC_OK;
+}
+
+static dpc_status set_hook(void *ctx, int layer_done) {
+    (void)layer_done;
+    return progress_add((build_progress *)ctx, 0);
+}
+
 /* Sets made at once for a sampler's tables: set j (the k[j]-th set, seed set_seed(base, k[j]))
  * into sets[j], on worker j. */
 typedef struct set_job {
@@ -43,6 +73,7 @@ typedef struct set_job {
     uint64_t k[SAMPLER_MAX_WORKERS];
     uint32_t first_slot[SAMPLER_MAX_WORKERS];
     float *sets;
+    build_progress *progress; /* NULL: none */
     dpc_status status[SAMPLER_MAX_WORKERS];
 } set_job;
 
@@ -50,10 +81,22 @@ static void make_set(void *ctx, unsigned j) {
     set_job *job = (set_job *)ctx;
     const dpc_model *m = job->o->models[job->k[j] % job->o->n_models];
     job->status[j] =
-        dpc_model_generate_cpu(m, set_seed(job->base, job->k[j]), job->n, job->sets + (size_t)j * job->n * job->widest);
+        dpc_model_generate_cpu(m, set_seed(job->base, job->k[j]), job->n, job->sets + (size_t)j * job->n * job->widest,
+                               job->progress ? set_hook : NULL, job->progress);
 }
 
-dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
+/* Sets dpc_sampler_build makes: one per model turn whose slots are not all nets. */
+static uint64_t sets_to_make(const dpc_sampler_options *o, uint32_t net_slots) {
+    uint64_t sets = 0;
+    for (uint64_t k = 0, t = 0; t < o->dimensions; k++) {
+        const uint32_t dims = o->models[k % o->n_models]->cascade.dims;
+        if (t + dims / 2 > net_slots) sets++;
+        t += dims / 2;
+    }
+    return sets;
+}
+
+static dpc_status build(dpc_sampler *s, const dpc_sampler_options *o, build_progress *progress) {
     const uint32_t n = o->samples_per_pixel, D = o->dimensions;
     uint32_t widest = 0;
     for (uint32_t j = 0; j < o->n_models; j++)
@@ -109,7 +152,9 @@ dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
      * seed either way, so every other slot's table is the same whatever net_dims is. The sets
      * are made `workers` at a time, one per thread (each the same bits on any thread). */
     uint32_t t = 0;
-    set_job job = {.o = o, .base = s->base, .n = n, .widest = widest, .sets = set};
+    set_job job = {.o = o, .base = s->base, .n = n, .widest = widest, .sets = set, .progress = progress};
+    if (progress) progress->total = sets_to_make(o, s->net_slots);
+    if (progress && progress_add(progress, 0) != DPC_OK) goto cancelled;
     for (uint64_t k = 0; t < D || job.count; k++) {
         if (t < D) {
             const uint32_t dims = o->models[k % o->n_models]->cascade.dims;
@@ -123,12 +168,14 @@ dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
             if (t < D && job.count < workers) continue;
         }
         dpc_run_workers(job.count, make_set, &job);
+        for (uint32_t j = 0; j < job.count; j++)
+            if (job.status[j] == DPC_ERROR_CANCELLED) goto cancelled;
         for (uint32_t j = 0; j < job.count; j++) {
             const dpc_model *m = o->models[job.k[j] % o->n_models];
             const uint32_t dims = m->cascade.dims;
             const float *made = set + (size_t)j * n * widest;
             if (job.status[j] != DPC_OK) { /* again on this thread, for its message */
-                st = dpc_model_generate_cpu(m, set_seed(s->base, job.k[j]), n, set);
+                st = dpc_model_generate_cpu(m, set_seed(s->base, job.k[j]), n, set, NULL, NULL);
                 if (st == DPC_OK) st = dpc_fail(job.status[j], "making a sampler table failed");
                 goto done;
             }
@@ -141,12 +188,14 @@ dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
                 stratify_projections(table, n, scratch);
             }
         }
+        if (progress && progress_add(progress, job.count) != DPC_OK) goto cancelled;
         job.count = 0;
     }
     /* Net slots: the net's cells, as cell centres (what dpc_sampler_table shows; the lookups
      * read the cells). */
     for (t = 0; t < s->net_slots; t++) {
         uint32_t *cells = s->nets + (size_t)t * n;
+        if (progress && progress_add(progress, 0) != DPC_OK) goto cancelled;
         const uint64_t net_seed = dpc_mix64(s->base ^ dpc_mix64(t + 0x243F6A8885A308D3ull));
         if ((st = dpc_sampler_make_net(log_n, net_seed, cells)) != DPC_OK) goto done;
         /* Every net after the first in a seeded random order (Fisher-Yates): two nets in Sobol'
@@ -175,6 +224,22 @@ dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
 done:
     free(set);
     free(scratch);
+    return st;
+cancelled:
+    st = dpc_fail(DPC_ERROR_CANCELLED, "sampler creation cancelled by the progress callback (%llu of %llu sets made)",
+                  (unsigned long long)progress->done, (unsigned long long)progress->total);
+    goto done;
+}
+
+dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
+    if (!o->progress) return build(s, o, NULL);
+    build_progress p;
+    memset(&p, 0, sizeof p);
+    p.fn = o->progress;
+    p.user = o->user;
+    if (pthread_mutex_init(&p.lock, NULL) != 0) return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "cannot create a mutex");
+    const dpc_status st = build(s, o, &p);
+    pthread_mutex_destroy(&p.lock);
     return st;
 }
 
