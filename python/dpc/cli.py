@@ -36,6 +36,40 @@ _SEED = click.IntRange(min=0, max=(1 << 64) - 1)
 
 
 # ---------------------------------------------------------------- helpers
+class _Option(click.Option):
+    """An option that also accepts ``old_names`` (earlier spellings, kept so that scripts keep
+    working) without showing them in the help."""
+
+    def __init__(self, *args, old_names=(), **kwargs):
+        super().__init__(*args, **kwargs)
+        self._old_names = set(old_names)
+
+    def get_help_record(self, ctx):
+        shown, self.opts = self.opts, [o for o in self.opts if o not in self._old_names]
+        try:
+            return super().get_help_record(ctx)
+        finally:
+            self.opts = shown
+
+
+def _max_pixels_option(what: str):
+    return click.option(
+        "--max-pixels",
+        type=click.IntRange(min=1),
+        default=None,
+        metavar="N",
+        help=f"Largest {what} in pixels, checked before any work: default 67108864 (8192 x 8192; "
+        "$DPC_MAX_PIXELS), and 65536 (256 x 256; $DPC_MAX_DESIGN_PIXELS) for masks designed on the "
+        "spot (void-and-cluster, stbn, annealed), whose time grows with the square of the pixels.",
+    )
+
+
+def _check_output(path) -> None:
+    """A missing or unwritable output folder, reported before the work (dpc._atomic)."""
+    if path is not None:
+        _atomic.check_output(path)
+
+
 def _progress(iterable, desc: str, total: int | None = None):
     from tqdm import tqdm
 
@@ -171,7 +205,9 @@ def _read_inputs(
     (label, sets, the model or None)."""
     out = []
     for spec in specs:
-        if Path(spec).is_file() and Path(spec).suffix.lower() != ".onnx":
+        p = Path(spec)
+        if p.suffix.lower() != ".onnx" and (p.is_file() or (p.exists() and not p.is_dir())):
+            # a FIFO or device too: read_points refuses it at once, naming it
             out.append(
                 (Path(spec).stem, pointio.read_points(spec, dims=dims, bin_dtype=bin_dtype, progress_bar=True), None)
             )
@@ -494,7 +530,8 @@ def generate_cmd(
     """Generate point sets from a model or a baseline. A model's sets are float32 (kept so in
     .npy and float32 .bin files; text has 17 significant digits)."""
     if output is not None:
-        pointio.resolve_format(output, fmt)  # fail on a bad name before the work
+        pointio.resolve_format(output, fmt)  # fail on a bad name or folder before the work
+        _check_output(output)
     if stratified is not None and model in baselines.BASELINES:
         raise click.UsageError("--stratified/--uniform apply to models, not to baselines")
     sets, name, loaded = _generate(
@@ -837,8 +874,11 @@ def _compare_plots(results, out: Path, nu_max: float, formats=("png",), targets=
 @cli.command("mask")
 @click.option(
     "-m",
+    "--model",
     "--mask",
     "name",
+    cls=_Option,
+    old_names=("--mask",),
     default="annealed",
     show_default=True,
     help="annealed (dpc's designed masks, the best here), a gridded mask model (bundled name or "
@@ -875,8 +915,9 @@ def _compare_plots(results, out: Path, nu_max: float, formats=("png",), targets=
     "(float32). Spatiotemporal masks: one .npy, or stem_000.png ... per frame.",
 )
 @click.option("--bits", type=click.Choice(["8", "16"]), default="16", show_default=True, help="PNG bit depth.")
+@_max_pixels_option("mask (frames x size^2 x channels)")
 @click.option("--list", "list_", is_flag=True, help="List the mask sources and exit.")
-def mask_cmd(name, size, frames, channels, seed, output, bits, list_):
+def mask_cmd(name, size, frames, channels, seed, output, bits, max_pixels, list_):
     """Write a blue-noise threshold mask (scalar, vector or spatiotemporal) and print its
     low-band energies (white noise = 1; docs/masks.md)."""
     from . import masks as M
@@ -890,6 +931,7 @@ def mask_cmd(name, size, frames, channels, seed, output, bits, list_):
         raise click.UsageError("give -o/--output (.npy, .png or .exr)")
     if Path(output).suffix.lower() not in M.MASK_EXTENSIONS:
         raise click.UsageError("-o/--output must end in .npy, .png or .exr")
+    M.check_mask_path(output)  # EXR's package and the output folder, before the work
     from tqdm import tqdm
 
     bar_args = {"delay": 1.0, "leave": False, "dynamic_ncols": True, "file": sys.stderr, "unit": " swaps tried"}
@@ -899,7 +941,9 @@ def mask_cmd(name, size, frames, channels, seed, output, bits, list_):
             bar.total = total
             bar.update(done - bar.n)
 
-        arr = M.mask(name, size=size, seed=seed, frames=frames, channels=channels, progress=progress)
+        arr = M.mask(
+            name, size=size, seed=seed, frames=frames, channels=channels, progress=progress, max_pixels=max_pixels
+        )
     st = arr.ndim == 3 and (frames is not None or name == "stbn" or M.kind_of(arr) == "spatiotemporal")
     kind = M.kind_of(arr, st)
     paths = M.write_mask(output, arr, bits=int(bits), spatiotemporal=st)
@@ -934,6 +978,10 @@ def mask_cmd(name, size, frames, channels, seed, output, bits, list_):
 @click.option(
     "-m",
     "--model",
+    "--mask",
+    "model",
+    cls=_Option,
+    old_names=("--mask",),
     default="annealed",
     show_default=True,
     help="Mask: annealed (dpc's designed masks), a gridded mask model (bundled name or .onnx) or "
@@ -969,7 +1017,8 @@ def mask_cmd(name, size, frames, channels, seed, output, bits, list_):
     help="Also write the mask: .npy (values in (0, 1)) or .png (8-bit grey).",
 )
 @click.option("--white-noise", is_flag=True, help="Use a white-noise mask of the same size instead (for comparison).")
-def dither_cmd(image, model, size, channel, frame, seed, output, mask_output, white_noise):
+@_max_pixels_option("image or mask")
+def dither_cmd(image, model, size, channel, frame, seed, output, mask_output, white_noise, max_pixels):
     """Ordered dithering of IMAGE with a blue-noise mask (tiled): a gridded mask model or a
     baseline mask."""
     import matplotlib
@@ -984,10 +1033,13 @@ def dither_cmd(image, model, size, channel, frame, seed, output, mask_output, wh
         raise click.UsageError("the output image must be a .png file")
     if mask_output is not None and Path(mask_output).suffix.lower() not in (".npy", ".png"):
         raise click.UsageError("--mask-output must end in .npy or .png")
+    _check_output(output)
+    _check_output(mask_output)
+    img = D.read_image(image, max_pixels)  # regular files only; size checked before decoding
     frames = None
     if model == "stbn":
         frames = frame + 1
-    arr = M.mask(model, size=size, seed=seed, frames=frames)
+    arr = M.mask(model, size=size, seed=seed, frames=frames, max_pixels=max_pixels)
     kind = M.kind_of(arr, model == "stbn")
     if kind == "vector":
         if channel >= arr.shape[2]:
@@ -1001,10 +1053,6 @@ def dither_cmd(image, model, size, channel, frame, seed, output, mask_output, wh
         mask = arr
     if white_noise:
         mask = D.rank_normalise(np.random.default_rng(seed).random(mask.shape))
-    try:
-        img = mpimg.imread(image)
-    except (OSError, SyntaxError, ValueError) as e:  # Pillow/libpng failures on bad files
-        raise InvalidArgumentError(f"cannot read image {image}: {e}") from e
     out = D.dither(img, mask)
     with _atomic.transaction():  # the image and the mask, or (on any failure) neither
         with _atomic.atomic_file(output, "wb") as fh:
@@ -1053,6 +1101,15 @@ def main(argv=None) -> int:
         if isinstance(e, OSError) and not isinstance(e, DpcError) and e.strerror:
             msg = e.strerror + (f": {e.filename}" if e.filename else "")  # no "[Errno 28]"
         click.echo(f"dpc: error: {_one_line(msg) or type(e).__name__}", err=True)
+        return 1
+    except Exception as e:  # a bug, not bad input: still one line, and how to see more
+        if debug:
+            raise
+        click.echo(
+            f"dpc: error: internal error ({type(e).__name__}: {_one_line(e)}); rerun with DPC_DEBUG=1 "
+            "for the traceback and please report it",
+            err=True,
+        )
         return 1
     return rv if isinstance(rv, int) else 0
 

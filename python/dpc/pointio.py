@@ -78,7 +78,9 @@ def open_regular(path, mode: str = "rb", error=InvalidArgumentError):
             kind = next((k for test, k in _KINDS if test(st.st_mode)), "not a regular file")
             raise error(f"{p}: is {kind}, not a regular file; give a file")
         os.set_blocking(fd, True)
-        return os.fdopen(fd, mode, **({"encoding": "utf-8"} if "b" not in mode else {}))
+        fh = os.fdopen(fd, mode, **({"encoding": "utf-8"} if "b" not in mode else {}))
+        (fh.raw if "b" in mode else fh.buffer.raw).name = str(p)  # readers that ask for a name get it
+        return fh
     except BaseException:
         os.close(fd)
         raise

@@ -13,6 +13,7 @@ patterns tells periodic masks (Bayer: all power in a few spikes) from blue noise
 
 from __future__ import annotations
 
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -120,6 +121,49 @@ def luminance(image: np.ndarray) -> np.ndarray:
     if not np.all(np.isfinite(a)):
         raise InvalidArgumentError("image has non-finite values")
     return np.clip(a, 0.0, 1.0)
+
+
+_PIL_LOCK = threading.Lock()
+
+
+def read_image(path, max_pixels=None) -> np.ndarray:
+    """An image file as matplotlib's ``imread`` gives it (PNG: float in [0, 1]; other formats
+    Pillow reads: integers), for :func:`dither`. Only a regular file is read (a FIFO or folder is
+    refused at once), and its header's width × height is checked against ``max_pixels`` before
+    anything is decoded (default 2^26 = 8192 × 8192 or $DPC_MAX_PIXELS, ``math.inf``: none;
+    :class:`dpc.errors.LimitError` beyond it). Unreadable files raise InvalidArgumentError."""
+    import warnings
+
+    import matplotlib.image as mpimg
+    from PIL import Image, UnidentifiedImageError
+
+    from ..baselines import check_pixels, pixel_limit
+    from ..pointio import open_regular
+
+    pixel_limit(max_pixels)  # a bad max_pixels or DPC_MAX_PIXELS: said before the file is opened
+    with open_regular(path) as fh, _PIL_LOCK, warnings.catch_warnings():
+        # Pillow's own bound (a process-wide setting) is replaced, while this file is read, by
+        # this call's limit, checked against the header before anything is decoded.
+        saved = Image.MAX_IMAGE_PIXELS
+        Image.MAX_IMAGE_PIXELS = None
+        warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+        try:
+            with Image.open(fh) as im:  # reads the header only
+                w, h = im.size
+            check_pixels(w * h, f"image {path} ({w} x {h})", max_pixels)
+            fh.seek(0)
+            return mpimg.imread(fh)
+        except (OSError, SyntaxError, ValueError) as e:  # Pillow/libpng failures on bad files
+            if isinstance(e, InvalidArgumentError):
+                raise
+            why = "not an image format Pillow reads" if isinstance(e, UnidentifiedImageError) else _one_line(e)
+            raise InvalidArgumentError(f"cannot read image {path}: {why}") from None
+        finally:
+            Image.MAX_IMAGE_PIXELS = saved
+
+
+def _one_line(e) -> str:
+    return " ".join(str(e).split()) or type(e).__name__
 
 
 def dither(image: np.ndarray, mask: np.ndarray) -> np.ndarray:
