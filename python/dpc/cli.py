@@ -36,6 +36,12 @@ _SEED = click.IntRange(min=0, max=(1 << 64) - 1)
 
 
 # ---------------------------------------------------------------- helpers
+def count_of(k: int, noun: str = "set") -> str:
+    """'1 set', '16 sets' (dpc.analysis._common has the same; importing it here would pull in
+    scipy at start-up)."""
+    return f"{k} {noun}" if k == 1 else f"{k} {noun}s"
+
+
 class _Option(click.Option):
     """An option that also accepts ``old_names`` (earlier spellings, kept so that scripts keep
     working) without showing them in the help."""
@@ -443,7 +449,7 @@ def list_cmd():
     for name, b in baselines.BASELINES.items():
         extra = ""
         if isinstance(b, baselines.ReferenceBaseline):
-            extra = "  [" + ", ".join(f"m={m} d={d}: {k} sets" for m, d, k in b.available()) + "]"
+            extra = "  [" + ", ".join(f"m={m} d={d}: {count_of(k)}" for m, d, k in b.available()) + "]"
         click.echo(f"  {name:22s} {b.description}{extra}")
 
 
@@ -557,7 +563,7 @@ def generate_cmd(
         return
     pointio.write_points(output, sets, fmt, bin_dtype=bin_dtype, progress_bar=True)
     click.echo(
-        f"wrote {sets.shape[0]} set(s) of {sets.shape[1]} {sets.shape[2]}-D points "
+        f"wrote {count_of(sets.shape[0])} of {sets.shape[1]} {sets.shape[2]}-D points "
         f"from {name}{f' ({_ran_on(loaded)})' if loaded else ''} to {output}",
         err=True,
     )
@@ -642,7 +648,7 @@ def analyze_cmd(
         if not no_plots:
             written += _analysis_plots(res, sets, out, nu_max, formats, targets)
     s = res.summary()
-    click.echo(f"{name}: {res.n_sets} sets of {res.n_points} {res.dims}-D points")
+    click.echo(f"{name}: {count_of(res.n_sets)} of {res.n_points} {res.dims}-D points")
     for key in ("E_low<0.5", "E_low<0.75", "peak", "peak_nu", "delta_min", *res.discrepancy.keys()):
         if key in s and s[key] is not None:
             click.echo(f"  {key:12s} {_fmt(s[key])}")
@@ -673,7 +679,7 @@ def _refs(targets, dims: int, sub: tuple) -> list:
 def _analysis_plots(res, sets, out: Path, nu_max: float, formats=("png",), targets=()) -> list[str]:
     from .analysis import plots
 
-    title = f"{res.label}: m={res.n_points}, {res.n_sets} sets"
+    title = f"{res.label}: m={res.n_points}, {count_of(res.n_sets)}"
     sub = tuple(res.spectrum.dims) if res.spectrum is not None else (0,)
     names: list[str] = []
 

@@ -164,6 +164,7 @@ def mask(
     """The bundled design for (size, frames, seed, channels) when there is one, else
     :func:`anneal_mask` (``progress``, ``max_pixels`` as there)."""
     channels = None if channels == 1 else channels
+    _bl.pixel_limit(max_pixels, design=True)  # a bad max_pixels is said even for a bundled mask
     try:
         bundled = seed in BUNDLED.get((size, frames, channels), ())
     except TypeError:  # an unhashable argument: anneal_mask says what is wrong with it

@@ -241,6 +241,7 @@ def mask(
     spot), else 2^26 (8192 × 8192, ``DEFAULT_MAX_PIXELS``, or $DPC_MAX_PIXELS); ``math.inf``
     lifts it. Ctrl-C stops every source promptly (KeyboardInterrupt)."""
     s = _bl._check_seed(seed)
+    _bl.pixel_limit(max_pixels)  # a bad max_pixels is said whatever the source
     if not isinstance(name, (str, Path)):
         raise InvalidArgumentError(f"mask name must be a string, got {type(name).__name__}")
     if str(name) in BASELINE_MASKS:
@@ -381,7 +382,7 @@ def _read_png(path: Path, channels: int | None, max_pixels=None) -> np.ndarray:
         )
     if interlace:
         raise InvalidArgumentError(f"{path}: an interlaced PNG; save the mask without interlacing")
-    _bl.check_pixels(w * h, f"{path}", max_pixels)
+    _bl.check_pixels(w * h, f"{path} ({w} x {h})", max_pixels)
     planes = _PNG_PLANES[colour]
     stride = w * planes * bits // 8
     chunks = []

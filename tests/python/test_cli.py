@@ -40,7 +40,7 @@ def test_list_shows_models_and_baselines(capsys):
 def test_generate_baseline_in_every_format(tmp_path, capsys, ext):
     f = tmp_path / f"sobol{ext}"
     rc, _, err = run(capsys, "generate", "-m", "sobol", "-n", 128, "-d", 3, "-s", 4, "-c", 3, "-o", f)
-    assert rc == 0 and "wrote 3 set(s)" in err
+    assert rc == 0 and "wrote 3 sets" in err
     np.testing.assert_array_equal(read_points(f), baselines.generate("sobol", 128, dims=3, count=3, seed=4))
 
 

@@ -30,6 +30,11 @@ _CENTRE_DENSITY = {
 MAX_PACKING_DIMS = max(_CENTRE_DENSITY)
 
 
+def count_of(k: int, noun: str = "set") -> str:
+    """'1 set', '16 sets': a count with its noun, singular or plural."""
+    return f"{k} {noun}" if k == 1 else f"{k} {noun}s"
+
+
 def max_packing_distance(n_points: int, dims: int) -> float:
     """Largest possible minimum distance of ``n_points`` points in the unit torus [0,1)^dims,
     from the densest known sphere packing: m balls of radius d/2 cover the packing density,

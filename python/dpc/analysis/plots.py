@@ -13,6 +13,7 @@ from matplotlib.figure import Figure
 
 from .. import _atomic
 from ..errors import InvalidArgumentError
+from ._common import count_of
 from .integration import IntegrationStudy
 from .pcf import PCF
 from .spectrum import RadialSpectrum, Spectrum1D, Spectrum2D
@@ -88,7 +89,7 @@ def save_spectrum2d(path, spec: Spectrum2D, *, title: str = "", formats: Sequenc
     fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04, label="power P (white noise = 1)")
     ax.set_xlabel(rf"$\nu_{{{spec.dims[0]}}}$")
     ax.set_ylabel(rf"$\nu_{{{spec.dims[1]}}}$")
-    ax.set_title(title or f"power spectrum, m={spec.n_points}, {spec.n_sets} sets", fontsize=10)
+    ax.set_title(title or f"power spectrum, m={spec.n_points}, {count_of(spec.n_sets)}", fontsize=10)
     return _save(fig, path, formats)
 
 
