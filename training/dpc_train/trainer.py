@@ -276,6 +276,13 @@ class Trainer:
             raise TrainingDivergedError(
                 f"the optimiser failed at step {self.step} ({e}); stopping. {self._last_good()}"
             ) from e
+        # Checked here, not by the next forward pass: libdpc's C layer (impl "c", the CPU
+        # default) refuses non-finite kernels with its own error, torch would overflow somewhere.
+        if not torch.isfinite(self.model.theta.detach()).all():
+            raise TrainingDivergedError(
+                f"the optimiser made kernel values non-finite at step {self.step} (loss {val}); "
+                f"stopping. {self._last_good()} Lower [train] lr."
+            )
         self.sched.step()
         return val
 

@@ -68,3 +68,18 @@ def test_bad_layer_is_a_typed_error():
     x, k, subspaces, radius, fixed = make("2d")
     with pytest.raises((FilterConfigError, ValueError)):
         filter_layer(x, k, [0b100], radius, 1e-4, fixed, impl="c")  # names a dimension >= n
+
+
+def test_auto_is_the_c_layer_on_the_cpu_and_torch_elsewhere():
+    from dpc_train.config import TrainConfig
+    from dpc_train.filter import resolve_impl
+
+    assert TrainConfig().impl == "auto", "the trainer's default is the fastest implementation"
+    x, k, subspaces, radius, fixed = make("3d_subspaces")
+    assert resolve_impl("auto", x) == "c"
+    assert resolve_impl("auto", x.to("meta")) == "torch"  # any non-CPU device (CUDA)
+    assert resolve_impl("auto", torch.rand(4, 65, dtype=torch.float64)) == "torch"  # past DPC_MAX_DIMS
+    assert resolve_impl("torch", x) == "torch" and resolve_impl("c", x) == "c"
+    auto = filter_layer(x, k, subspaces, radius, 1e-4, fixed, impl="auto")
+    c = filter_layer(x, k, subspaces, radius, 1e-4, fixed, impl="c")
+    assert torch.equal(auto, c)
