@@ -352,20 +352,40 @@ class Baseline:
         """One set (m, n) from ``seed``."""
         return self.generate_batch(1, n_points, dims, seed)[0]
 
-    def generate_batch(self, count: int, n_points: int | None, dims: int | None = 2, seed: int = 0) -> np.ndarray:
-        """``count`` sets (count, m, n); set c from seed ``seed + c``."""
+    def generate_batch(
+        self, count: int, n_points: int | None, dims: int | None = 2, seed: int = 0, max_bytes: float | None = None
+    ) -> np.ndarray:
+        """``count`` sets (count, m, n); set c from seed ``seed + c``. ``max_bytes``: the
+        largest output (as for dpc models: default 4 GiB or $DPC_MAX_OUTPUT_BYTES); a larger
+        request raises LimitError before anything is allocated."""
         if n_points is None:
             raise InvalidArgumentError(f"{self.name} needs a number of points")
-        m, n, c = int(n_points), int(2 if dims is None else dims), int(count)
+        m = _check_mask_size(n_points, "the number of points", 1)
+        n = _check_mask_size(2 if dims is None else dims, "dims", 1)
+        c = _check_mask_size(count, "count", 1)
         s = _check_seed(seed)
-        if m < 1 or n < 1 or c < 1:
-            raise InvalidArgumentError(f"count, points and dims must be positive, got {count}, {n_points}, {dims}")
+        check_output_size(c, m, n, max_bytes)
         out = np.empty((c, m, n))
         for i in range(c):
             out[i] = self.make(m, n, _rng(s + i))
         # Guard the unit torus: shifted lattices and rounding can land exactly on 1.0.
         out[out >= 1.0] = 0.0
         return out
+
+
+def check_output_size(count: int, n_points: int, dims: int, max_bytes: float | None = None) -> None:
+    """LimitError when ``count`` float64 sets of ``n_points`` ``dims``-D points exceed the byte
+    limit of one call (``max_bytes``, else $DPC_MAX_OUTPUT_BYTES, else 4 GiB, as for models)."""
+    from ._model import _max_bytes
+
+    limit = _max_bytes(max_bytes)
+    size = count * n_points * dims * 8
+    if size > limit:
+        raise LimitError(
+            f"the output would take {count * n_points * dims:,} floats ({size / 2**30:.3g} GiB), more than the "
+            f"limit of {limit / 2**30:.3g} GiB: pass max_bytes (CLI: --max-output, environment: "
+            "DPC_MAX_OUTPUT_BYTES) to raise it"
+        )
 
 
 # ---------------------------------------------------------------- the authors' point sets

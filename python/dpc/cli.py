@@ -143,6 +143,7 @@ def _generate(
             raise click.UsageError(f"baseline {spec} needs -n/--points")
         if isinstance(base, baselines.ReferenceBaseline):
             return base.generate_batch(count, n_points, dims, seed), spec, None
+        baselines.check_output_size(count, n_points, 2 if dims is None else dims, max_bytes)  # before the work
         out = []
         for c in _progress(range(count), f"{spec}"):
             out.append(base.generate_batch(1, n_points, 2 if dims is None else dims, seed + c)[0])
