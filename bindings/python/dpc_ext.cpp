@@ -41,17 +41,14 @@ template <class F> void call(F &&f) {
     if (status != DPC_OK) raise_status(status, message);
 }
 
-// ---- generation off the Python thread: Ctrl-C, progress, no partial output ---------------------
+// ---- long calls off the Python thread: Ctrl-C, progress, no partial output --------------------
 
-// One generate request, run on a worker thread so that the calling thread can notice Ctrl-C
-// (PyErr_CheckSignals) and report progress while libdpc works. The job owns the output buffer
-// and keeps the model alive: if the worker has not stopped shortly after a cancel, it is
-// detached and frees both when libdpc returns, so nothing outlives what it uses.
-struct Job {
-    std::shared_ptr<dpc_model> model;
-    uint64_t seed = 0;
-    size_t count = 0, n_points = 0;
-    float *buf = nullptr; // malloc'd; handed to numpy on success
+// One long libdpc call (a generate request, a sampler's creation), run on a worker thread so
+// that the calling thread can notice Ctrl-C (PyErr_CheckSignals) and report progress while
+// libdpc works. The work owns its output and keeps the models alive: if the worker has not
+// stopped shortly after a cancel, it is detached and frees both when libdpc returns, so nothing
+// outlives what it uses.
+struct Work {
     std::atomic<bool> cancel{false};
     std::atomic<uint64_t> done{0}, total{0};
     std::mutex mu;
@@ -59,46 +56,85 @@ struct Job {
     bool finished = false;
     dpc_status status = DPC_OK;
     std::string message;
-    ~Job() { std::free(buf); }
+    virtual ~Work() = default;
+    virtual dpc_status run() = 0; // on the worker thread; progress through work_progress
 };
 
-int job_progress(void *user, uint64_t done, uint64_t total) {
-    Job *j = static_cast<Job *>(user);
-    j->done.store(done);
-    j->total.store(total);
-    return j->cancel.load() ? 1 : 0;
+int work_progress(void *user, uint64_t done, uint64_t total) {
+    Work *w = static_cast<Work *>(user);
+    w->done.store(done);
+    w->total.store(total);
+    return w->cancel.load() ? 1 : 0;
 }
 
-void job_run(const std::shared_ptr<Job> &j) {
-    dpc_generate_options o;
-    dpc_generate_options_init(&o);
-    o.progress = job_progress;
-    o.user = j.get();
-    const dpc_status st = dpc_generate_ex(j->model.get(), j->seed, j->count, j->n_points, &o, j->buf);
+void work_thread(const std::shared_ptr<Work> &w) {
+    const dpc_status st = w->run();
     std::string msg = st != DPC_OK ? dpc_last_error() : "";
     {
-        std::lock_guard<std::mutex> g(j->mu);
-        j->status = st;
-        j->message = std::move(msg);
-        j->finished = true;
+        std::lock_guard<std::mutex> g(w->mu);
+        w->status = st;
+        w->message = std::move(msg);
+        w->finished = true;
     }
-    j->cv.notify_all();
+    w->cv.notify_all();
 }
 
-// Wait (GIL released) up to `ms` milliseconds for the job; whether it finished.
-bool job_wait(Job &j, int ms) {
+// Wait (GIL released) up to `ms` milliseconds for the work; whether it finished.
+bool work_wait(Work &w, int ms) {
     py::gil_scoped_release release;
-    std::unique_lock<std::mutex> lk(j.mu);
-    return j.cv.wait_for(lk, std::chrono::milliseconds(ms), [&] { return j.finished; });
+    std::unique_lock<std::mutex> lk(w.mu);
+    return w.cv.wait_for(lk, std::chrono::milliseconds(ms), [&] { return w.finished; });
 }
 
-// Stop a job the caller no longer wants: ask libdpc to stop, give it a moment, else let the
-// worker finish on its own (it owns the buffer and the model reference).
-void job_abandon(const std::shared_ptr<Job> &j, std::thread &t) {
-    j->cancel.store(true);
-    if (job_wait(*j, 100)) t.join();
+// Stop work the caller no longer wants: ask libdpc to stop, give it a moment, else let the
+// worker finish on its own (it owns what it uses).
+void work_abandon(const std::shared_ptr<Work> &w, std::thread &t) {
+    w->cancel.store(true);
+    if (work_wait(*w, 100)) t.join();
     else t.detach();
 }
+
+// Run w on a worker thread; every 50 ms check for Ctrl-C (the pending KeyboardInterrupt, or
+// another signal handler's exception, is raised) and call progress(done, total) when it moved.
+void run_off_thread(const std::shared_ptr<Work> &w, const py::object &progress) {
+    std::thread t(work_thread, w);
+    uint64_t shown = UINT64_MAX;
+    while (!work_wait(*w, 50)) {
+        if (PyErr_CheckSignals() != 0) {
+            work_abandon(w, t);
+            throw py::error_already_set();
+        }
+        const uint64_t done = w->done.load();
+        if (!progress.is_none() && done != shown) {
+            shown = done;
+            try {
+                progress(done, w->total.load());
+            } catch (...) {
+                work_abandon(w, t);
+                throw;
+            }
+        }
+    }
+    t.join();
+    if (w->status != DPC_OK) raise_status(w->status, w->message);
+    if (!progress.is_none() && w->done.load() != shown) progress(w->done.load(), w->total.load());
+}
+
+// One generate request; owns the output buffer.
+struct Job final : Work {
+    std::shared_ptr<dpc_model> model;
+    uint64_t seed = 0;
+    size_t count = 0, n_points = 0;
+    float *buf = nullptr; // malloc'd; handed to numpy on success
+    ~Job() override { std::free(buf); }
+    dpc_status run() override {
+        dpc_generate_options o;
+        dpc_generate_options_init(&o);
+        o.progress = work_progress;
+        o.user = this;
+        return dpc_generate_ex(model.get(), seed, count, n_points, &o, buf);
+    }
+};
 
 // Below this many point-layers a request runs on the calling thread (a thread costs more than
 // it takes; it ends within milliseconds anyway).
@@ -190,27 +226,7 @@ class Model {
         if (progress.is_none() && work < INLINE_WORK) {
             call([&] { return dpc_generate_batch(model_.get(), seed, count, n_points, job->buf); });
         } else {
-            std::thread t(job_run, job);
-            uint64_t shown = UINT64_MAX;
-            while (!job_wait(*job, 50)) {
-                if (PyErr_CheckSignals() != 0) { // Ctrl-C (KeyboardInterrupt) or another signal's exception
-                    job_abandon(job, t);
-                    throw py::error_already_set();
-                }
-                const uint64_t done = job->done.load();
-                if (!progress.is_none() && done != shown) {
-                    shown = done;
-                    try {
-                        progress(done, job->total.load());
-                    } catch (...) {
-                        job_abandon(job, t);
-                        throw;
-                    }
-                }
-            }
-            t.join();
-            if (job->status != DPC_OK) raise_status(job->status, job->message);
-            if (!progress.is_none() && job->done.load() != shown) progress(job->done.load(), job->total.load());
+            run_off_thread(job, progress);
         }
         float *data = job->buf;
         job->buf = nullptr;
@@ -232,6 +248,7 @@ class Model {
     }
 
     const dpc_model *handle() const { return model_.get(); }
+    std::shared_ptr<dpc_model> shared() const { return model_; }
 
   private:
     static std::string gib(double bytes) {
@@ -268,22 +285,44 @@ py::array_t<float> input_points(uint64_t seed, size_t m, size_t n, double max_by
 
 using ArrayU32 = py::array_t<uint32_t, py::array::c_style>;
 
+// A sampler's creation (seconds to minutes for large progressive tables); owns the models'
+// references and, until taken, the sampler.
+struct SamplerBuild final : Work {
+    std::vector<std::shared_ptr<dpc_model>> models;
+    std::vector<const dpc_model *> handles;
+    dpc_sampler_options options{};
+    dpc_sampler *sampler = nullptr;
+    ~SamplerBuild() override { dpc_sampler_free(sampler); }
+    dpc_status run() override {
+        options.models = handles.data();
+        options.n_models = static_cast<uint32_t>(handles.size());
+        options.progress = work_progress;
+        options.user = this;
+        return dpc_sampler_create(&options, &sampler);
+    }
+};
+
 class Sampler {
   public:
+    // Created off the calling thread (see run_off_thread): Ctrl-C raises KeyboardInterrupt at
+    // once, progress(done, total) counts the tables' sets.
     Sampler(const std::vector<const Model *> &models, uint32_t spp, uint32_t dims, uint64_t seed, uint32_t fold_from,
-            uint32_t net_dims) {
-        std::vector<const dpc_model *> handles;
-        for (const Model *m : models) handles.push_back(m->handle());
-        dpc_sampler_options o;
+            uint32_t net_dims, py::object progress) {
+        auto build = std::make_shared<SamplerBuild>();
+        for (const Model *m : models) {
+            build->models.push_back(m->shared());
+            build->handles.push_back(m->handle());
+        }
+        dpc_sampler_options &o = build->options;
         dpc_sampler_options_init(&o);
-        o.models = handles.data();
-        o.n_models = static_cast<uint32_t>(handles.size());
         o.samples_per_pixel = spp;
         o.dimensions = dims;
         o.seed = seed;
         o.fold_from = fold_from;
         o.net_dims = net_dims;
-        call([&] { return dpc_sampler_create(&o, &sampler_); });
+        run_off_thread(build, progress);
+        sampler_ = build->sampler;
+        build->sampler = nullptr;
         spp_ = spp;
         dims_ = dims;
     }
@@ -571,12 +610,24 @@ PYBIND11_MODULE(_core, mod) {
     mod.attr("SAMPLER_NET_DIMS_AUTO") = DPC_SAMPLER_NET_DIMS_AUTO;
     mod.attr("SAMPLER_AUTO_NETS_SPP") = DPC_SAMPLER_AUTO_NETS_SPP;
     py::class_<Sampler>(mod, "Sampler")
-        .def(py::init<const std::vector<const Model *> &, uint32_t, uint32_t, uint64_t, uint32_t, uint32_t>(),
+        .def(py::init<const std::vector<const Model *> &, uint32_t, uint32_t, uint64_t, uint32_t, uint32_t,
+                      py::object>(),
              py::arg("models"), py::arg("spp"), py::arg("dims"), py::arg("seed"), py::arg("fold_from"),
-             py::arg("net_dims"))
+             py::arg("net_dims"), py::arg("progress") = py::none())
         .def("get", &Sampler::get, py::arg("x"), py::arg("y"), py::arg("index"), py::arg("dim"), py::arg("width"))
         .def("table", &Sampler::table, py::arg("t"));
     mod.def("sampler_mask", &sampler_mask);
+    mod.def(
+        "find_model",
+        [](const std::string &name) {
+            if (name.find('\0') != std::string::npos)
+                raise_status(DPC_ERROR_INVALID_ARGUMENT, "the model name contains a NUL character");
+            std::vector<char> path(DPC_PATH_MAX);
+            call([&] { return dpc_model_find(name.c_str(), path.data(), path.size()); });
+            return std::string(path.data());
+        },
+        py::arg("name"), "dpc_model_find: the path of the model file named name (DPC_MODEL_PATH, then model_dir())");
+    mod.def("model_dir", [] { return std::string(dpc_model_dir()); });
     mod.def("mask_design", &mask_design, py::arg("size"), py::arg("frames"), py::arg("channels"),
             py::arg("steps_per_pixel"), py::arg("seed"), py::arg("progress") = py::none());
     {

@@ -5,13 +5,14 @@ from __future__ import annotations
 import math
 import numbers
 import os
+import re
 from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
 from . import _core
-from .errors import InvalidArgumentError, LimitError, ModelNotFoundError
+from .errors import InvalidArgumentError, LimitError, ModelIOError, ModelNotFoundError
 
 #: dpc_isa, dpc_backend, dpc_input of dpc.h, as the binding exports them (the Python API names
 #: their members in lower case: "auto", "scalar", "avx2", "avx512"; "auto", "cpu", "vulkan";
@@ -104,20 +105,34 @@ def _seed(seed) -> int:
 
 
 def _check_path(path) -> str:
+    """A model path or name as a str: str, bytes or os.PathLike, without a NUL (which C would
+    silently cut the name at); InvalidArgumentError else."""
+    if not isinstance(path, (str, bytes, os.PathLike)):
+        raise InvalidArgumentError(
+            f"a model is a bundled name (str, see dpc.available_models()) or the path of a .onnx file "
+            f"(str or os.PathLike), got {path!r} ({type(path).__name__})"
+        )
     s = os.fspath(path)
     if isinstance(s, bytes):
         s = os.fsdecode(s)
+    if not isinstance(s, str):
+        raise InvalidArgumentError(f"os.fspath({path!r}) gave {type(s).__name__}, not a str")
     if "\x00" in s:
-        raise InvalidArgumentError(f"path {s!r} contains a NUL character")
+        raise InvalidArgumentError(f"model name or path {s!r} contains a NUL character")
     return s
 
 
-def _bundled_dirs() -> list[Path]:
-    dirs = []
-    env = os.environ.get("DPC_MODEL_PATH")
-    if env:
-        dirs += [Path(p) for p in env.split(os.pathsep) if p]
-    dirs.append(Path(str(resources.files("dpc") / "models")))
+#: A model name as libdpc's search takes it (dpc_model_find): 1 .. 255 characters of
+#: [A-Za-z0-9._-], not starting with '.'.
+_NAME = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9._-]{0,254}")
+
+
+def _search_dirs() -> list[Path]:
+    """The folders libdpc's model search reads, in its order: $DPC_MODEL_PATH's (separated by
+    ':'), then the package's models folder (dpc_model_dir() of the package's libdpc)."""
+    dirs = [Path(p) for p in os.environ.get("DPC_MODEL_PATH", "").split(":") if p]
+    bundled = _core.model_dir()
+    dirs.append(Path(bundled) if bundled else Path(str(resources.files("dpc") / "models")))
     return dirs
 
 
@@ -128,27 +143,46 @@ def isa_supported(isa: str) -> bool:
 
 
 def available_models() -> list[str]:
-    """Names of the bundled models (files ``NAME.onnx`` in the package's models folder and in
-    the folders of ``$DPC_MODEL_PATH``)."""
+    """Names :func:`load` finds: every regular file ``NAME.onnx`` with a valid name in the folders
+    of ``$DPC_MODEL_PATH`` and the package's models folder (libdpc's search, dpc_model_find)."""
     names = set()
-    for d in _bundled_dirs():
-        if d.is_dir():
-            names.update(p.stem for p in d.glob("*.onnx"))
+    for d in _search_dirs():
+        try:
+            entries = list(os.scandir(d))
+        except OSError:
+            continue
+        for e in entries:
+            stem = e.name[: -len(".onnx")]
+            try:
+                regular = e.name.endswith(".onnx") and e.is_file()  # stat only: a FIFO is never opened
+            except OSError:
+                regular = False
+            if regular and _NAME.fullmatch(stem):
+                names.add(stem)
     return sorted(names)
 
 
+def _is_name(s: str) -> bool:
+    return bool(_NAME.fullmatch(s)) and not s.endswith(".onnx")
+
+
 def model_path(name_or_path) -> Path:
-    """Resolve a file path or a bundled model name to a file path."""
-    p = Path(_check_path(name_or_path))
-    if p.suffix == ".onnx" or p.exists():
-        return p
-    for d in _bundled_dirs():
-        cand = d / f"{name_or_path}.onnx"
-        if cand.is_file():
-            return cand
+    """Resolve a model path or name to a file path: a path (ending in ``.onnx``, or naming
+    something that exists and is not a plain model name) is returned as it is; a name
+    (``[A-Za-z0-9._-]``, e.g. ``"bnot-2d"``), unless a regular file of that name is in the working
+    folder, is looked up by libdpc's search (dpc_model_find: the folders of ``$DPC_MODEL_PATH``,
+    then the bundled models; regular files only, never opened while searching).
+    :class:`ModelNotFoundError` (listing the bundled names) when there is no such model."""
+    s = _check_path(name_or_path)
+    if _is_name(s) and not os.path.isfile(s):
+        try:
+            return Path(_core.find_model(s))
+        except ModelIOError:
+            pass  # not found: below, with the bundled names
+    elif _is_name(s) or s.endswith(".onnx") or os.path.lexists(s):
+        return Path(s)  # a path: libdpc's loader reports a missing or non-regular file
     raise ModelNotFoundError(
-        f"no model file or bundled model named {str(name_or_path)!r}; "
-        f"bundled: {', '.join(available_models()) or '(none)'}"
+        f"no model file or bundled model named {s!r}; bundled: {', '.join(available_models()) or '(none)'}"
     )
 
 
@@ -323,9 +357,11 @@ def load(
     ``math.inf``: no bound); a request beyond it raises :class:`LimitError`. For files you do
     not trust. ``model.neighbours`` is the model's own figure.
 
-    Names are looked up in the folders of ``$DPC_MODEL_PATH`` (separated by ``os.pathsep``),
-    then among the bundled models; a path ending in ``.onnx`` or naming a file is loaded as it
-    is."""
+    Names are looked up by libdpc's model search (dpc_model_find, the one the C API and the
+    Mitsuba plugin use): the folders of ``$DPC_MODEL_PATH`` (separated by ``:``), then the
+    bundled models, regular files only; a path ending in ``.onnx`` or naming a file is loaded as
+    it is (see :func:`model_path`). Neither a name nor a path may contain a NUL character, and
+    anything but a str, bytes or os.PathLike raises :class:`InvalidArgumentError`."""
     return Model(
         model_path(path_or_name), isa=isa, threads=threads, backend=backend, input=input, max_neighbours=max_neighbours
     )

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import math
 import numbers
+import os
 
 import numpy as np
 
 from . import _core
-from ._model import Model, load
-from .errors import InvalidArgumentError
+from ._model import Model, _max_bytes, load
+from .errors import InvalidArgumentError, LimitError
 
 DEFAULT_MODEL = "bnot-2d-stratified"
 MAX_SPP = int(_core.SAMPLER_MAX_SPP)  # DPC_SAMPLER_MAX_SPP
@@ -16,6 +18,9 @@ MAX_DIMENSIONS = int(_core.SAMPLER_MAX_DIMENSIONS)  # DPC_SAMPLER_MAX_DIMENSIONS
 NO_FOLD = int(_core.SAMPLER_NO_FOLD)  # DPC_SAMPLER_NO_FOLD
 NET_DIMS_AUTO = int(_core.SAMPLER_NET_DIMS_AUTO)  # DPC_SAMPLER_NET_DIMS_AUTO
 AUTO_NETS_SPP = int(_core.SAMPLER_AUTO_NETS_SPP)  # DPC_SAMPLER_AUTO_NETS_SPP
+#: Lookups are evaluated this many at a time: beyond the output, a lookup holds O(chunk) memory
+#: whatever the broadcast shape of its arguments.
+LOOKUP_CHUNK = 1 << 16
 
 
 def _integer(value, name: str, low: int, high: int) -> int:
@@ -74,10 +79,18 @@ class Sampler:
         seed: int = 0,
         fold_from: int | None = 1,
         net_dims: int | str = "auto",
+        *,
+        progress=None,
     ):
-        if isinstance(models, (str, bytes)) or isinstance(models, Model) or hasattr(models, "__fspath__"):
+        if isinstance(models, (str, bytes, Model, os.PathLike)):
             models = [models]
-        models = list(models)
+        elif isinstance(models, (list, tuple)):
+            models = list(models)
+        else:
+            raise InvalidArgumentError(
+                "models must be a dpc.Model, a model name or .onnx path (str or os.PathLike), or a list "
+                f"or tuple of them, got {models!r} ({type(models).__name__})"
+            )
         if not models:
             raise InvalidArgumentError("models must name at least one model")
         self.models: list[Model] = [m if isinstance(m, Model) else load(m) for m in models]
@@ -98,6 +111,7 @@ class Sampler:
             self.seed,
             NO_FOLD if self.fold_from is None else self.fold_from,
             NET_DIMS_AUTO if self.net_dims == "auto" else self.net_dims,
+            progress,
         )
 
     def __repr__(self) -> str:
@@ -107,25 +121,54 @@ class Sampler:
             f"dimensions={self.dimensions}, seed={self.seed}, fold_from={self.fold_from}, net_dims={self.net_dims!r})"
         )
 
-    def _lookup(self, x, y, index, dimension, width: int) -> np.ndarray:
-        arrays = np.broadcast_arrays(
+    def _lookup(self, x, y, index, dimension, width: int, max_bytes) -> np.ndarray:
+        args = (
             _uint32_array(x, "x", wrap=True),
             _uint32_array(y, "y", wrap=True),
             _uint32_array(index, "index", wrap=False),
             _uint32_array(dimension, "dimension", wrap=False),
         )
-        shape = arrays[0].shape
-        flat = [np.ascontiguousarray(a.ravel()) for a in arrays]
-        out = self._h.get(*flat, width)
-        return out.reshape(shape + ((2,) if width == 2 else ()))
+        try:
+            shape = np.broadcast_shapes(*(a.shape for a in args))
+        except ValueError:
+            raise InvalidArgumentError(
+                f"x, y, index and dimension do not broadcast together: shapes {[a.shape for a in args]}"
+            ) from None
+        limit = _max_bytes(max_bytes)
+        size = math.prod(shape)
+        if size * width * 4 > limit:
+            raise LimitError(
+                f"the lookup's output, {'x'.join(map(str, shape))} x {width} float32, would take "
+                f"{size * width * 4 / 2**30:.3g} GiB, more than the limit of {limit / 2**30:.3g} GiB: pass "
+                "max_bytes= (or set DPC_MAX_OUTPUT_BYTES) to raise it, or look up in parts"
+            )
+        out = np.empty(shape + ((2,) if width == 2 else ()), dtype=np.float32)
+        # the output seen as one element per lookup (a 2-D value as one complex64)
+        target = out.view(np.complex64)[..., 0] if width == 2 else out
+        # LOOKUP_CHUNK lookups at a time: the broadcast arguments are never made full size
+        it = np.nditer(
+            [*args, target],
+            flags=["external_loop", "buffered", "zerosize_ok"],
+            op_flags=[["readonly"]] * 4 + [["writeonly"]],
+            buffersize=LOOKUP_CHUNK,
+            order="C",
+        )
+        with it:
+            for xs, ys, i_s, ds, o in it:
+                values = self._h.get(*(np.ascontiguousarray(a) for a in (xs, ys, i_s, ds)), width)
+                o[...] = values.view(np.complex64)[:, 0] if width == 2 else values
+        return out
 
-    def get_1d(self, x, y, index, dimension) -> np.ndarray:
-        """Values in [0, 1) of the stratified 1-D lattice; arguments broadcast like numpy's."""
-        return self._lookup(x, y, index, dimension, 1)
+    def get_1d(self, x, y, index, dimension, *, max_bytes: float | None = None) -> np.ndarray:
+        """Values in [0, 1) of the stratified 1-D lattice; arguments broadcast like numpy's (the
+        broadcast is evaluated in chunks, never made full size). ``max_bytes``: the largest output
+        allowed (default 4 GiB or $DPC_MAX_OUTPUT_BYTES), else :class:`LimitError` before any work."""
+        return self._lookup(x, y, index, dimension, 1, max_bytes)
 
-    def get_2d(self, x, y, index, dimension) -> np.ndarray:
-        """Points in [0, 1)^2 from the model's set: shape ``broadcast shape + (2,)``."""
-        return self._lookup(x, y, index, dimension, 2)
+    def get_2d(self, x, y, index, dimension, *, max_bytes: float | None = None) -> np.ndarray:
+        """Points in [0, 1)^2 from the model's set: shape ``broadcast shape + (2,)`` (``max_bytes``
+        as in :meth:`get_1d`)."""
+        return self._lookup(x, y, index, dimension, 2, max_bytes)
 
     @property
     def net_slots(self) -> int:

@@ -186,3 +186,51 @@ def test_jit_variants_are_refused_with_the_reason():
             mi.load_dict({"type": "dpc"})
     finally:
         mi.set_variant("scalar_rgb")
+
+
+_LOAD_IN_CHILD = """
+import sys
+import mitsuba as mi
+mi.set_variant("scalar_rgb")
+import dpc.mitsuba
+s = mi.load_dict({"type": "dpc", "model": sys.argv[1], "sample_count": 4})
+print("loaded", s)
+"""
+
+
+def test_a_fifo_named_like_a_model_on_dpc_model_path_is_skipped_not_opened(tmp_path):
+    """The plugin finds names by libdpc's search (regular files only): a FIFO bnot-2d.onnx first
+    on DPC_MODEL_PATH is passed over for the bundled bnot-2d, and a FIFO given as a path is
+    refused at once. A hang fails the test by its timeout."""
+    import os
+    import subprocess
+    import sys
+
+    fifo = tmp_path / "bnot-2d.onnx"
+    os.mkfifo(fifo)
+    env = dict(os.environ, DPC_MODEL_PATH=str(tmp_path))
+    for spec, ok in [("bnot-2d", True), (str(fifo), False)]:
+        r = subprocess.run(
+            [sys.executable, "-c", _LOAD_IN_CHILD, spec], env=env, capture_output=True, text=True, timeout=120
+        )
+        if ok:
+            assert r.returncode == 0 and "loaded DpcSampler[model = bnot-2d" in r.stdout, r.stderr[-2000:]
+        else:
+            assert r.returncode != 0 and "a FIFO" in r.stderr, r.stderr[-2000:]
+
+
+def test_a_nul_in_the_model_property_is_refused():
+    with pytest.raises(Exception, match="NUL"):
+        mi.load_dict({"type": "dpc", "model": "bnot-2d\x00whatever"})
+
+
+def test_an_unknown_model_lists_the_bundled_ones_as_dpc_load_does():
+    with pytest.raises(Exception) as e:
+        mi.load_dict({"type": "dpc", "model": "no-such-model"})
+    message = str(e.value)
+    assert "no-such-model" in message and "bundled: " in message
+    listed = message.split("bundled: ", 1)[1]
+    for name in dpc.available_models():
+        assert name in listed
+    with pytest.raises(dpc.ModelNotFoundError, match="bundled: " + dpc.available_models()[0]):
+        dpc.load("no-such-model")

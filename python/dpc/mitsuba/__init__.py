@@ -34,7 +34,6 @@ import shutil
 import subprocess
 import sys
 import tempfile
-from importlib import resources
 from pathlib import Path
 
 from .._core import __version__ as _dpc_version
@@ -45,7 +44,11 @@ _PLUGIN = "dpc.so"
 
 
 def _package_dir() -> Path:
-    return Path(str(resources.files("dpc")))
+    """The installed package's folder: the one holding the extension, lib/libdpc.so.N, include/
+    and models/ (an editable install keeps the Python files elsewhere)."""
+    from .. import _core  # noqa: PLC0415
+
+    return Path(_core.__file__).parent
 
 
 def cache_root() -> Path:
@@ -109,7 +112,6 @@ def _compile_command(output: Path) -> list[str]:
         f"-I{dr_dir / 'include'}",
         f"-I{nanobind.include_dir()}",
         f"-I{pkg / 'include'}",
-        f'-DDPC_MODELS_DIR="{pkg / "models"}"',
         str(_source()),
         "-o",
         str(output),

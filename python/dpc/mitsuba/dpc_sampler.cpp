@@ -13,19 +13,18 @@
 // and with the 32-pixel mask tile dividing the block size (32 unless the integrator's
 // block_size says otherwise) the mask tiles seamlessly across blocks without knowing where a
 // block lies in the image.
-#include <cstdlib>
+#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
+
+#include <dirent.h>
+#include <sys/stat.h>
 
 #include <mitsuba/core/properties.h>
 #include <mitsuba/render/sampler.h>
 
 #include "dpc/dpc.h"
-
-#ifndef DPC_MODELS_DIR
-#define DPC_MODELS_DIR ""
-#endif
 
 NAMESPACE_BEGIN(mitsuba)
 
@@ -43,21 +42,46 @@ inline std::vector<std::string> split(const std::string &s, char sep) {
     return out;
 }
 
-// A bundled name ("bnot-2d-stratified") or a path: $DPC_MODEL_PATH's folders, then the package's.
-inline std::string resolve(const std::string &name) {
-    if (name.find('/') != std::string::npos || (name.size() > 5 && name.substr(name.size() - 5) == ".onnx"))
-        return name;
-    std::vector<std::string> dirs;
-    if (const char *env = std::getenv("DPC_MODEL_PATH")) dirs = split(env, ':');
-    dirs.push_back(DPC_MODELS_DIR);
-    for (const std::string &d : dirs) {
-        std::string path = d + "/" + name + ".onnx";
-        if (FILE *f = std::fopen(path.c_str(), "rb")) {
-            std::fclose(f);
-            return path;
+// The models a name can find in the package (NAME.onnx regular files in dpc_model_dir()), for
+// the unknown-model message, as dpc.load lists them.
+inline std::string bundled() {
+    std::vector<std::string> names;
+    const std::string dir = dpc_model_dir();
+    if (DIR *d = dir.empty() ? nullptr : opendir(dir.c_str())) {
+        while (const dirent *e = readdir(d)) {
+            const std::string file = e->d_name;
+            struct stat info;
+            if (file.size() > 5 && file[0] != '.' && file.compare(file.size() - 5, 5, ".onnx") == 0 &&
+                stat((dir + "/" + file).c_str(), &info) == 0 && S_ISREG(info.st_mode))
+                names.push_back(file.substr(0, file.size() - 5));
         }
+        closedir(d);
     }
-    return name; // dpc_model_load_file reports it
+    std::sort(names.begin(), names.end());
+    std::string out;
+    for (const std::string &n : names) out += (out.empty() ? "" : ", ") + n;
+    return out.empty() ? "(none)" : out;
+}
+
+// Load one model of the "model" property: a path (with a '/' or ending in ".onnx") as it is, a
+// name through libdpc's model search (dpc_model_find: $DPC_MODEL_PATH's folders, then the
+// package's; regular files only, never opened while searching), the one dpc.load uses. A
+// FIFO or device is refused at once by dpc_model_load_file. nullptr and a message on failure.
+inline dpc_model *load(const std::string &spec, std::string &error) {
+    dpc_model *h = nullptr;
+    const bool path =
+        spec.find('/') != std::string::npos || (spec.size() > 5 && spec.compare(spec.size() - 5, 5, ".onnx") == 0);
+    if (path) {
+        if (dpc_model_load_file(spec.c_str(), nullptr, &h) != DPC_OK) error = dpc_last_error();
+        return h;
+    }
+    std::vector<char> found(DPC_PATH_MAX);
+    if (dpc_model_find(spec.c_str(), found.data(), found.size()) != DPC_OK) {
+        error = std::string(dpc_last_error()) + "; bundled: " + bundled();
+        return nullptr;
+    }
+    if (dpc_model_load_file(found.data(), nullptr, &h) != DPC_OK) error = dpc_last_error();
+    return h;
 }
 
 // One libdpc sampler, shared by a plugin instance and all its forks.
@@ -71,9 +95,10 @@ inline std::shared_ptr<Table> build(const std::vector<std::string> &models, uint
     std::vector<dpc_model *> loaded;
     auto table = std::make_shared<Table>();
     for (const std::string &m : models) {
-        dpc_model *h = nullptr;
-        if (dpc_model_load_file(resolve(m).c_str(), nullptr, &h) != DPC_OK) {
-            error = std::string("model \"") + m + "\": " + dpc_last_error();
+        std::string why;
+        dpc_model *h = load(m, why);
+        if (!h) {
+            error = std::string("model \"") + m + "\": " + why;
             break;
         }
         loaded.push_back(h);
@@ -115,7 +140,10 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
         if constexpr (dr::is_jit_v<Float>)
             Throw("the dpc sampler serves Mitsuba's scalar variants (e.g. scalar_rgb); this is %s",
                   this->variant_name());
-        m_models = dpc_plugin::split(std::string(props.get<std::string_view>("model", "bnot-2d-stratified")), ',');
+        const std::string model(props.get<std::string_view>("model", "bnot-2d-stratified"));
+        if (model.find('\0') != std::string::npos) // C would read only the part before it
+            Throw("property \"model\" contains a NUL character");
+        m_models = dpc_plugin::split(model, ',');
         if (m_models.empty()) Throw("property \"model\" names no model");
         int dims = props.get<int>("dimensions", 16);
         int block = props.get<int>("block_size", 32);
