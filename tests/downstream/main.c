@@ -1,7 +1,8 @@
 /* A downstream C program: finds a bundled model by name (dpc_model_load_named: DPC_MODEL_PATH,
- * then the installed share/dpc/models) and generates one set with it. Built by
- * tests/downstream/run.sh against an installed libdpc, through find_package(dpc), pkg-config
- * and add_subdirectory. */
+ * then the installed share/dpc/models) and generates one set with it; built with
+ * MODEL_FOLDER (e.g. the CMake package's DPC_MODEL_DIR), it loads NAME.onnx from that
+ * folder with dpc_model_load_file instead. Built by tests/downstream/run.sh against an installed
+ * libdpc, through find_package(dpc), pkg-config and add_subdirectory. */
 #define _XOPEN_SOURCE 700 /* realpath */
 #include <stdio.h>
 #include <stdlib.h>
@@ -12,7 +13,13 @@
 int main(int argc, char **argv) {
     const char *name = argc > 1 ? argv[1] : "bnot-2d";
     dpc_model *model = NULL;
+#ifdef MODEL_FOLDER
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s.onnx", MODEL_FOLDER, name);
+    if (dpc_model_load_file(path, NULL, &model) != DPC_OK) {
+#else
     if (dpc_model_load_named(name, NULL, &model) != DPC_OK) {
+#endif
         fprintf(stderr, "downstream: %s\n", dpc_last_error());
         return 1;
     }

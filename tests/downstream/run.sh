@@ -3,8 +3,8 @@
 # fails if anything needs C++), installs it into a fresh prefix, then builds and runs a
 # separate downstream project against it:
 # with find_package(dpc CONFIG) (dpc::dpc and dpc::dpc_static), with pkg-config (shared, and
-# static), again after moving the whole prefix elsewhere, and with add_subdirectory of the
-# checkout; last, the build line written in libdpc/examples/generate.c, exactly as written.
+# static), again after moving the whole prefix elsewhere, a static libdpc installed with
+# --prefix elsewhere than configured, and with add_subdirectory of the checkout; last, the build line written in libdpc/examples/generate.c, exactly as written.
 #   bash tests/downstream/run.sh            # about a minute on 2 cores
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
@@ -69,6 +69,26 @@ cc -std=c11 "$ROOT/tests/downstream/main.c" $(pkg-config --cflags --libs dpc) \
    -Wl,-rpath,"$(pkg-config --variable=libdir dpc)" -o "$WORK/pc_moved"
 check "models in $(cd "$WORK/moved/share/dpc/models" && pwd -P)" "$WORK/pc_moved" bnot-2d
 mv "$WORK/moved" "$WORK/prefix"
+
+step "static libdpc: finds models by name under the prefix it was configured with, not one given to cmake --install"
+# The static programs above were configured with -DCMAKE_INSTALL_PREFIX=the prefix they were
+# installed to (use_static, pc_static: found by name). A second install of the same build with
+# --prefix: its static programs look where the build was configured (dpc.h, dpc_model_dir), so
+# with that folder gone they need DPC_MODEL_PATH, or the model by path from the CMake package's
+# DPC_MODEL_DIR (README, "Linking statically").
+quiet cmake --install "$WORK/build" --prefix "$WORK/other"
+quiet cmake -S "$ROOT/tests/downstream" -B "$WORK/fp-other" "${GEN[@]}" -DDPC_DOWNSTREAM_MODE=find_package \
+      -DCMAKE_PREFIX_PATH="$WORK/other" -DCMAKE_CXX_COMPILER=/nonexistent/c++ -DDPC_DOWNSTREAM_CHECK_MODEL_DIR=OFF
+quiet cmake --build "$WORK/fp-other" --target use_static use_static_model_dir
+mv "$WORK/prefix" "$WORK/moved"
+if out=$("$WORK/fp-other/use_static" bnot-2d 2>&1); then
+  echo "a static libdpc installed with --prefix found models without the configured prefix: $out"; exit 1
+fi
+echo "   by name, configured prefix gone: fails as documented: ${out:0:160}"
+DPC_MODEL_PATH="$WORK/other/share/dpc/models" check "bnot-2d: 1024 points in 2-D" "$WORK/fp-other/use_static" bnot-2d
+check "bnot-2d: 1024 points in 2-D" "$WORK/fp-other/use_static_model_dir" bnot-2d
+mv "$WORK/moved" "$WORK/prefix"
+check "bnot-2d: 1024 points in 2-D" "$WORK/fp-other/use_static" bnot-2d
 
 step "downstream project, add_subdirectory(dpc checkout)"
 quiet cmake -S "$ROOT/tests/downstream" -B "$WORK/sub" "${GEN[@]}" -DDPC_DOWNSTREAM_MODE=add_subdirectory \

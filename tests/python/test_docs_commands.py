@@ -17,8 +17,8 @@ language a reader runs (bash, sh, python, c, cpp) needs one of these lines right
 
 C is compiled with -std=c11, C++ with -std=c++17, both with -Wall -Wextra -Werror by gcc/g++ and
 by clang/clang++, against the header and the library inside the installed dpc package
-(dpc/include/dpc/dpc.h, dpc/lib/libdpc.so.N), and run in the checkout with DPC_MODEL_PATH set to
-the package's models (dpc/models). A block that fails fails the test with its output.
+(dpc/include/dpc/dpc.h, dpc/lib/libdpc.so.N), and run in the checkout without DPC_MODEL_PATH
+(that libdpc finds the package's dpc/models by itself). A block that fails fails the test with its output.
 """
 
 from __future__ import annotations
@@ -182,14 +182,14 @@ def checkout(tmp_path_factory):
     return dst
 
 
-def installed_c_library() -> tuple[Path, Path, Path]:
-    """(include folder, libdpc.so.N, models folder) inside the installed dpc package."""
+def installed_c_library() -> tuple[Path, Path]:
+    """(include folder, libdpc.so.N) inside the installed dpc package."""
     import dpc._core
 
     pkg = Path(dpc._core.__file__).parent
     libs = sorted((pkg / "lib").glob("libdpc.so.*"))
     assert (pkg / "include" / "dpc" / "dpc.h").is_file() and libs, f"no dpc/include, dpc/lib in {pkg}"
-    return pkg / "include", libs[0], pkg / "models"
+    return pkg / "include", libs[0]
 
 
 def check(r: subprocess.CompletedProcess, what: str):
@@ -199,7 +199,7 @@ def check(r: subprocess.CompletedProcess, what: str):
 
 def run_compiled(b: Block, checkout: Path, tmp_path: Path):
     compilers, std = COMPILERS[b.kind]
-    include, lib, models = installed_c_library()
+    include, lib = installed_c_library()
     src = tmp_path / ("block.c" if b.kind == "c" else "block.cpp")
     src.write_text(FRAGMENT_HEAD + b.code + "return 0;\n}\n" if b.arg == "fragment" else b.code, encoding="utf-8")
     for cc in compilers:
@@ -209,8 +209,8 @@ def run_compiled(b: Block, checkout: Path, tmp_path: Path):
         flags = [std, "-Wall", "-Wextra", "-Werror", "-O1", f"-I{include}"]
         cmd = [cc, *flags, str(src), str(lib), f"-Wl,-rpath,{lib.parent}", "-lm", "-o", str(exe)]
         check(subprocess.run(cmd, capture_output=True, text=True, timeout=300), " ".join(cmd))
-        # the package's libdpc installs no model folder of its own: named models come from there
-        env = {**os.environ, "DPC_MODEL_PATH": str(models)}
+        # named models come from the package's dpc/models, which its libdpc finds beside itself
+        env = {k: v for k, v in os.environ.items() if k != "DPC_MODEL_PATH"}
         r = subprocess.run([str(exe)], cwd=checkout, env=env, capture_output=True, text=True, timeout=600)
         check(r, exe.name)
 
