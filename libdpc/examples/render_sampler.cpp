@@ -3,8 +3,9 @@
 // on several threads: a plane lit by a square area light, partly hidden by a disc, each pixel
 // integrating over its footprint and over the light. It prints the error of 16 spp against a
 // 4,096-spp render, for dpc and for independent uniform samples.
-//   c++ -std=c++17 render_sampler.cpp -Ilibdpc/include -Lbuild/libdpc -ldpc -pthread \
-//       -Wl,-rpath,build/libdpc -o render_sampler && ./render_sampler models/bnot-2d-stratified.onnx
+// Build and run (one line):
+//   c++ -std=c++17 render_sampler.cpp -Ilibdpc/include -Lbuild/libdpc -ldpc -pthread
+//   -Wl,-rpath,build/libdpc -o render_sampler && ./render_sampler models/bnot-2d-stratified.onnx
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -97,7 +98,8 @@ double mse(const std::vector<float> &a, const std::vector<float> &b) {
 dpc_sampler *create(const dpc_model *model, uint32_t spp, uint64_t seed) {
     dpc_sampler_options o;
     dpc_sampler_options_init(&o);
-    o.models = &model;
+    const dpc_model *models[] = {model};
+    o.models = models;
     o.n_models = 1;
     o.samples_per_pixel = spp;
     o.dimensions = 2;

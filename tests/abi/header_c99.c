@@ -1,5 +1,20 @@
-/* Its only job: prove dpc.h is C99 + -pedantic -Werror clean and usable from C. */
+/* Its only job: prove dpc.h is C99 + -pedantic -Werror clean and usable from C, in the forms
+ * the header documents (the sampler's models array, the model search's buffer). */
 #include "dpc/dpc.h"
+
+int dpc_header_c99_sampler(dpc_model *model, dpc_sampler **out);
+int dpc_header_c99_sampler(dpc_model *model, dpc_sampler **out) {
+    const dpc_model *models[] = {model}; /* what options.models points to */
+    dpc_sampler_options o;
+    char path[DPC_PATH_MAX];
+    dpc_sampler_options_init(&o);
+    o.models = models;
+    o.n_models = 1;
+    o.progress = NULL;
+    o.user = NULL;
+    if (dpc_model_find("bnot-2d", path, sizeof path) != DPC_OK) return -1;
+    return (int)dpc_sampler_create(&o, out);
+}
 
 int dpc_header_c99_check(void);
 int dpc_header_c99_check(void) {

@@ -364,6 +364,19 @@ DPC_API dpc_status dpc_order_levels(float *points, size_t n_points, size_t dims,
 /* ---------------------------------------------------------------------------------------------
  * Sampler: values for (pixel, sample index, dimension), for a renderer
  *
+ * The rules a renderer follows:
+ * 1. A "dimension" is one 2-D slot: take either one value (dpc_sampler_get_1d) or one pair
+ *    (dpc_sampler_get_2d) from each dimension, never both from the same one, and number the
+ *    dimensions 0, 1, 2, ... in the order the renderer consumes them, the same for every sample.
+ * 2. Dimension 0 is the film position (the sample's place in the pixel): give it to the camera.
+ *    By default it is not folded (options.fold_from) and, for spp a power of two, it is a net.
+ * 3. Pass the pixel's integer coordinates (x, y) and the sample index 0 .. spp - 1; set spp
+ *    (options.samples_per_pixel) to the samples you take per pixel.
+ * 4. Create the sampler once, before rendering: lookups are then lock-free on any thread, and
+ *    the models may be freed.
+ * 5. options.models points to const model pointers: `const dpc_model *models[] = {model};
+ *    o.models = models;` (in C, the address of a `dpc_model *` variable does not convert).
+ *
  * A sampler holds, for each of its D dimension slots, a dpc point set of spp points (spp =
  * samples per pixel), generated once when it is created on the CPU backend (whose ISA paths all
  * give the same bits; up to 16 sets at once, on the first model's threads, one thread per set),
@@ -386,21 +399,21 @@ DPC_API dpc_status dpc_order_levels(float *points, size_t n_points, size_t dims,
  *   sampler's models or none): tables are read in order, not rotated per pixel, so a pixel's
  *   first 2^k samples (k >= 4) are a blue-noise set of their own and an adaptive renderer may
  *   stop at any of them, or between them (each level's points come in the order that fills the
- *   emptiest place first: dpc_order_levels) (with dpc.relax, e.g. progressive-2d-relaxed, each prefix is better
- *   blue noise and a table takes about 1.4 s per 1,024 points to make); get_1d then uses the stratum of point i's x rank
- *   (docs/progressive.md). Net slots are then read in order (the first in the net's Sobol'
+ *   emptiest place first: dpc_order_levels; with dpc.relax, e.g. progressive-2d-relaxed, each
+ *   prefix is better blue noise, and creation takes far longer: see options.progress);
+ *   get_1d then uses the stratum of point i's x rank (docs/progressive.md). Net slots are then read in order (the first in the net's Sobol'
  *   order, later ones shuffled within each octave [2^(k-1), 2^k)), so their first 2^k samples
  *   are a (0,k,2)-net.
  * - Each value, over seeds, is uniformly distributed on a grid of 2^-24: estimates are unbiased.
  * - get_1d draws from the stratified lattice (j + u) / spp (one value per stratum, u the pixel's
  *   mask value), get_2d from the model's set; dimension d of get_1d and of get_2d share their
- *   index rotation and shift, so use each dimension for one of them.
+ *   index rotation and shift (hence rule 1).
  * - Dimensions from options.fold_from on (default 1: all but the pixel position, dimension 0)
  *   are folded by the baker's transform, which makes smooth integrands periodic over the table;
  *   net slots (options.net_dims) are never folded.
  * - A created sampler is immutable: lookups take no lock, allocate nothing and may run on any
  *   number of threads. It does not keep the models: they may be freed after dpc_sampler_create.
- *   To stay within a few nanoseconds, lookups leave the thread's error message alone unless
+ *   To stay cheap, lookups leave the thread's error message alone unless
  *   they fail (the one exception to the convention at the top of this header).
  * - Memory: sizeof(dpc_sampler) + D * (8 * spp + 8) + min(D, 64) * 12,288 bytes, plus
  *   N * 4 * spp for the nets, N the net slots (below) (64 spp, 16 dimensions, the default's 16
