@@ -238,3 +238,14 @@ def test_doc_block_runs(checkout, tmp_path, b: Block):
         return
     cmd = ["bash", "-euo", "pipefail", "-c", b.code] if b.kind == "bash" else [sys.executable, "-c", b.code]
     check(subprocess.run(cmd, cwd=checkout, capture_output=True, text=True, timeout=1200), b.kind)
+
+
+def test_the_all_extra_brings_every_extra():
+    """`pip install ".[all]"` (README, Installing) is every other extra in one install."""
+    tomllib = pytest.importorskip("tomllib")  # Python 3.11+
+    extras = tomllib.loads((REPO / "pyproject.toml").read_text(encoding="utf-8"))["project"]["optional-dependencies"]
+    (ref,) = extras["all"]
+    name, listed = re.fullmatch(r"([\w.-]+)\[([\w,-]+)\]", ref).groups()
+    assert name == "deep-point-correlation" and sorted(listed.split(",")) == sorted(set(extras) - {"all"})
+    readme = (REPO / "README.md").read_text(encoding="utf-8")
+    assert 'pip install ".[all]"' in readme
