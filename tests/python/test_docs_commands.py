@@ -149,7 +149,7 @@ def test_the_docs_run_blocks_of_every_language():
     found = {(b.doc, b.kind) for b in all_blocks() if b.mark == "test"}
     for want in [("README.md", "bash"), ("README.md", "python"), ("README.md", "c"), ("training.md", "bash")]:
         assert want in found, want
-    assert ("rendering.md", "python") in found and ("models.md", "python") in found
+    assert ("rendering.md", "python") in found and ("rendering.md", "cpp") in found and ("models.md", "python") in found
 
 
 @pytest.fixture(scope="module")
