@@ -66,6 +66,14 @@ class Sampler:
     docs/rendering.md defines every step. Values are float32 in [0, 1); the same C object backs
     the C API, the Mitsuba plugin and this class, so all three give the same bits.
 
+    The tables are made off the calling thread: Ctrl-C raises KeyboardInterrupt at once (a large
+    progressive-2d-relaxed table takes minutes), and ``progress(done, total)``, if given, is
+    called on this thread with the sets made so far (an exception from it stops the creation).
+    ``models``: a :class:`Model`, a model name or ``.onnx`` path, or a list or tuple of them.
+    Lookups broadcast their arguments like numpy's, evaluated in chunks (memory beyond the
+    output stays small), and refuse an output beyond ``max_bytes`` (default 4 GiB, or
+    $DPC_MAX_OUTPUT_BYTES) with :class:`LimitError` before any work.
+
     >>> s = dpc.Sampler("bnot-2d-stratified", samples_per_pixel=16)
     >>> s.get_2d(x=np.arange(640)[None, :], y=np.arange(480)[:, None], index=0, dimension=0).shape
     (480, 640, 2)

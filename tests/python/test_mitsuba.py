@@ -4,6 +4,9 @@ fast, and says clearly what it cannot do."""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 import time
 
 import numpy as np
@@ -202,10 +205,6 @@ def test_a_fifo_named_like_a_model_on_dpc_model_path_is_skipped_not_opened(tmp_p
     """The plugin finds names by libdpc's search (regular files only): a FIFO bnot-2d.onnx first
     on DPC_MODEL_PATH is passed over for the bundled bnot-2d, and a FIFO given as a path is
     refused at once. A hang fails the test by its timeout."""
-    import os
-    import subprocess
-    import sys
-
     fifo = tmp_path / "bnot-2d.onnx"
     os.mkfifo(fifo)
     env = dict(os.environ, DPC_MODEL_PATH=str(tmp_path))
