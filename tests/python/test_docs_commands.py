@@ -249,3 +249,15 @@ def test_the_all_extra_brings_every_extra():
     assert name == "deep-point-correlation" and sorted(listed.split(",")) == sorted(set(extras) - {"all"})
     readme = (REPO / "README.md").read_text(encoding="utf-8")
     assert 'pip install ".[all]"' in readme
+
+
+@pytest.mark.parametrize("src", sorted(p.name for p in (REPO / "docs" / "examples").glob("*.c")))
+def test_the_docs_example_programs_compile_cleanly(tmp_path, src):
+    """docs/examples/*.c, which the pages link as whole programs (the mask tests run them): no
+    warning under gcc or clang either."""
+    include, lib = installed_c_library()
+    for cc in COMPILERS["c"][0]:
+        exe = tmp_path / f"{src}-{cc}"
+        flags = ["-std=c11", "-Wall", "-Wextra", "-Werror", "-O1", f"-I{include}"]
+        cmd = [cc, *flags, str(REPO / "docs" / "examples" / src), str(lib), "-lm", "-o", str(exe)]
+        check(subprocess.run(cmd, capture_output=True, text=True, timeout=300), cc)
