@@ -34,12 +34,17 @@ if [ "$n_seeds" -lt 5 ]; then
   exit 1
 fi
 
+# Per-input timeout: the target bounds each input's work (MAX_WORK in fuzz_reader.c, the
+# relaxation's steps included) to well under a second under ASan (the relaxation's worst cases
+# measure about 0.2 s unloaded); 60 s leaves room for a machine loaded by other jobs (a 10 s
+# timeout was tripped there) while a real hang still stops the run within a minute.
+INPUT_TIMEOUT=60
 LOG="$WORK/fuzz.log"
 echo "fuzzing $BIN for $SECONDS_TO_RUN s from $n_seeds seeds (log: $LOG)"
 set +e
 ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=1 \
 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
-  "$BIN" -max_total_time="$SECONDS_TO_RUN" -max_len=65536 -timeout=10 -rss_limit_mb=2048 \
+  "$BIN" -max_total_time="$SECONDS_TO_RUN" -max_len=65536 -timeout="$INPUT_TIMEOUT" -rss_limit_mb=2048 \
          -print_final_stats=1 -artifact_prefix="$WORK/artifacts/" \
          "$WORK/corpus" "$SEEDS" > "$LOG" 2>&1
 status=$?
