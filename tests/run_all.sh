@@ -41,7 +41,7 @@ step "python packages"
 # torch first and pinned to the version the tests ran with, the CPU build where it can be had:
 # from PyTorch's CPU index when that is reachable, else from pip's configured indexes (PyPI's
 # Linux wheel is the CUDA build: several GB, and it runs the tests on the CPU just the same).
-# An installed torch==2.13.0 (this image's CPU build) is kept without asking any index.
+# Either way pip keeps an installed torch==2.13.0 (this image's CPU build, also in /opt/wheels).
 TORCH=torch==2.13.0
 install_torch() { # python
   if "$1" -c "import urllib.request as u; u.urlopen('https://download.pytorch.org/whl/cpu/', timeout=10)" 2>/dev/null; then
