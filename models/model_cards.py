@@ -266,7 +266,8 @@ def model_header(name: str, model) -> list[str]:
             f"(impl {cfg.get('impl', 'torch')}, {cfg.get('threads', 1)} thread(s), torch "
             f"{meta.get('dpc.train.torch', '?')})"]
     if "dpc.loss" in meta:
-        out += ["- loss:", "", "```python", meta["dpc.loss"].strip(), "```"]
+        # the doc tests evaluate each loss on the model's own sets (tests/python/test_docs_commands.py)
+        out += ["- loss:", "", f"<!-- doc-test: loss {name} -->", "```python", meta["dpc.loss"].strip(), "```"]
     return out
 
 
