@@ -187,12 +187,14 @@ TEST(MaskDesign, CancelDuringTheVoidAndClusterStartIsPrompt) {
     struct Stop {
         std::chrono::steady_clock::time_point start, stopped;
         bool stop = false, proposals = false;
+        int calls_after_stop = 0;
     } st;
     dpc_mask_options o = options(256, 1, 1, 0);
     o.user = &st;
     o.progress = [](void *user, uint64_t done, uint64_t total) -> int {
         Stop *s = static_cast<Stop *>(user);
         s->proposals |= done != 0 || total != 1;
+        if (s->stop) s->calls_after_stop++; // a callback that asked to stop is not called again
         if (!s->stop && std::chrono::steady_clock::now() - s->start > std::chrono::milliseconds(200)) {
             s->stop = true;
             s->stopped = std::chrono::steady_clock::now();
@@ -204,6 +206,7 @@ TEST(MaskDesign, CancelDuringTheVoidAndClusterStartIsPrompt) {
     EXPECT_EQ(dpc_mask_design(&o, 3, out.data(), nullptr), DPC_ERROR_CANCELLED);
     ASSERT_TRUE(st.stop);
     EXPECT_FALSE(st.proposals);
+    EXPECT_EQ(st.calls_after_stop, 0);
     EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - st.stopped).count(), 0.5);
     EXPECT_NE(std::string(dpc_last_error()).find("cancel"), std::string::npos) << dpc_last_error();
 }

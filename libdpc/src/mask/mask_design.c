@@ -64,15 +64,18 @@ static int next_below(splitmix *r, int n) { return (int)(((next_u64(r) >> 32) * 
 typedef struct poller {
     const dpc_mask_options *o;
     uint64_t total, work;
+    int stopped; /* the callback asked to stop: it is not called again */
 } poller;
 
-/* Count `work` more steps; whether the callback asked to stop. */
+/* Count `work` more steps; whether the callback asked to stop (now or before). */
 static int poll_stop(poller *p, uint64_t work) {
     if (!p || !p->o->progress) return 0;
+    if (p->stopped) return 1;
     p->work += work;
     if (p->work < POLL_WORK) return 0;
     p->work = 0;
-    return p->o->progress(p->o->user, 0, p->total) != 0;
+    p->stopped = p->o->progress(p->o->user, 0, p->total) != 0;
+    return p->stopped;
 }
 
 /* ---- void-and-cluster ----------------------------------------------------------------------- */
@@ -136,9 +139,8 @@ static dpc_status void_and_cluster(uint32_t size, uint64_t seed, int32_t *ranks,
         order[i] = order[j], order[j] = t;
         vac_toggle(&v, order[i], 1);
     }
-    int stopped = 0;
     /* relax: tightest cluster -> largest void until the pixel removed is the one refilled */
-    for (long long it = 0; it < 50LL * s && !(stopped = poll_stop(poll, 2 * (uint64_t)s)); it++) {
+    for (long long it = 0; it < 50LL * s && !poll_stop(poll, 2 * (uint64_t)s); it++) {
         const int c = vac_extreme(&v, 1);
         vac_toggle(&v, c, 0);
         const int z = vac_extreme(&v, 0);
@@ -149,22 +151,21 @@ static dpc_status void_and_cluster(uint32_t size, uint64_t seed, int32_t *ranks,
     uint8_t *proto_on = v.on + s;
     memcpy(proto_e, v.e, sizeof(double) * (size_t)s);
     memcpy(proto_on, v.on, (size_t)s);
-    for (int rank = ones - 1; rank >= 0 && !(stopped |= poll_stop(poll, s));
-         rank--) { /* phase 1: remove tightest clusters */
+    for (int rank = ones - 1; rank >= 0 && !poll_stop(poll, s); rank--) { /* phase 1: remove tightest clusters */
         const int c = vac_extreme(&v, 1);
         vac_toggle(&v, c, 0);
         ranks[c] = rank;
     }
     memcpy(v.e, proto_e, sizeof(double) * (size_t)s);
     memcpy(v.on, proto_on, (size_t)s);
-    for (int rank = ones; rank < s && !(stopped |= poll_stop(poll, s));
-         rank++) { /* phases 2, 3: fill the largest voids */
+    for (int rank = ones; rank < s && !poll_stop(poll, s); rank++) { /* phases 2, 3: fill the largest voids */
         const int z = vac_extreme(&v, 0);
         vac_toggle(&v, z, 1);
         ranks[z] = rank;
     }
     free(v.kernel), free(v.e), free(v.on), free(order);
-    return stopped ? dpc_fail(DPC_ERROR_CANCELLED, "the progress callback cancelled the mask design") : DPC_OK;
+    return poll && poll->stopped ? dpc_fail(DPC_ERROR_CANCELLED, "the progress callback cancelled the mask design")
+                                 : DPC_OK;
 }
 
 dpc_status dpc_void_and_cluster_ranks(uint32_t size, uint64_t seed, int32_t *ranks) {
@@ -667,7 +668,7 @@ dpc_status dpc_mask_design_run(const dpc_mask_options *o, uint64_t seed, uint32_
     dpc_status st = annealer_init(&a, n, (int)o->frames, joint);
     if (st != DPC_OK) return st;
     const uint64_t steps = (uint64_t)o->steps_per_pixel * (uint64_t)S * (uint64_t)T;
-    poller poll = {o, steps ? steps : 1, 0};
+    poller poll = {o, steps ? steps : 1, 0, 0};
     for (int f = 0; f < T && st == DPC_OK; f++) /* one void-and-cluster start per frame or channel */
         st = void_and_cluster(o->size, seed + 1000003ull * (uint64_t)f, a.rank + (size_t)f * S, &poll);
     dpc_mask_stats local = {0, 0, 0};
