@@ -121,32 +121,38 @@ def _run_cancellable(call, progress=None):
     ``progress``, the poll stops libdpc at its next call and the exception propagates at once."""
     reports: queue.SimpleQueue = queue.SimpleQueue()
     state = {"result": None, "error": None}
-    stop = threading.Event()
+    stop, done = threading.Event(), threading.Event()
 
-    def poll(done, total):
+    def poll(count, total):
         if stop.is_set():
             raise _Stop
-        reports.put((done, total))
+        reports.put((count, total))
 
     def work():
         try:
             state["result"] = call(poll)
         except BaseException as e:  # noqa: BLE001 - handed to the waiting thread
             state["error"] = e
+        finally:
+            done.set()
 
     def forward():
         while progress is not None and not reports.empty():
             progress(*reports.get())
 
-    worker = threading.Thread(target=work, name="dpc-mask-design", daemon=True)
+    # Not a daemon: the interpreter waits for it at exit (it stops at libdpc's next poll), so
+    # no thread is inside libdpc while Python shuts down.
+    worker = threading.Thread(target=work, name="dpc-mask-design")
     worker.start()
     try:
-        while worker.is_alive():
-            worker.join(0.05)
+        # Event.wait, not Thread.join: a Ctrl-C inside join(timeout) can leave the thread marked
+        # as finished while it runs (Python 3.11), and the interpreter would then exit without
+        # waiting for it.
+        while not done.wait(0.05):
             forward()
         forward()
     except BaseException:
-        stop.set()  # the worker stops at libdpc's next poll; nobody waits for it
+        stop.set()  # the worker stops at libdpc's next poll; the exception goes on at once
         raise
     if state["error"] is not None:
         raise state["error"]

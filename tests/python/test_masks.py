@@ -4,6 +4,10 @@ formats, and the `dpc mask` / `dpc dither` commands."""
 
 from __future__ import annotations
 
+import os
+import struct
+import zlib
+
 import numpy as np
 import pytest
 
@@ -355,3 +359,164 @@ def test_mask_st_32x16_at_least_as_good_as_stbn():
     assert ours["accumulated_rmse"][-1] <= stbn["accumulated_rmse"][-1]
     assert ours["mask_elow_mean"] <= stbn["mask_elow_mean"]
     assert ours["levels_elow_mean"] <= stbn["levels_elow_mean"]
+
+
+# ---------------------------------------------------------------- PNG without extra packages
+def _png_filters(path) -> set:
+    """The filter types used by the rows of a (non-interlaced, 1-IDAT-stream) PNG."""
+    data = path.read_bytes()
+    pos, idat, w, h, stride = 8, b"", 0, 0, 0
+    while pos < len(data):
+        length, kind = struct.unpack(">I4s", data[pos : pos + 8])
+        body = data[pos + 8 : pos + 8 + length]
+        if kind == b"IHDR":
+            w, h, bits, colour = struct.unpack(">IIBB", body[:10])
+            stride = w * {0: 1, 2: 3, 4: 2, 6: 4}[colour] * bits // 8
+        elif kind == b"IDAT":
+            idat += body
+        pos += 12 + length
+    raw = zlib.decompress(idat)
+    return {raw[y * (stride + 1)] for y in range(h)}
+
+
+@pytest.mark.parametrize("shape", [(24, 24), (24, 24, 2), (16, 16, 3)])
+@pytest.mark.parametrize("bits", [8, 16])
+def test_png_codes_are_exact_and_read_by_other_decoders(tmp_path, shape, bits):
+    """write_mask's PNG (the standard library's zlib, no pypng) holds exactly floor(v · 2^bits):
+    Pillow and pypng (where installed) decode the same codes, and so does read_mask."""
+    from PIL import Image
+
+    a = B.white_mask(shape, 11)
+    (path,) = M.write_mask(tmp_path / "m.png", a, bits=bits)
+    want = M.quantise(a, bits)
+    if want.ndim == 3:  # stored as R, G, B with the missing channels 0
+        want = np.concatenate([want, np.zeros(shape[:2] + (3 - shape[2],), want.dtype)], axis=2)
+    back = M.quantise(M.read_mask(path), bits)  # the first two values of a vector mask
+    assert np.array_equal(back, M.quantise(a, bits)[..., :2] if a.ndim == 3 else M.quantise(a, bits))
+    with Image.open(path) as im:
+        assert im.size == (shape[1], shape[0])
+        if bits == 8 or len(shape) == 2:  # Pillow keeps 16 bits for grey only
+            assert np.array_equal(np.asarray(im).astype(np.int64), want.astype(np.int64))
+    png = pytest.importorskip("png")
+    with open(path, "rb") as fh:
+        w, h, rows, info = png.Reader(file=fh).read()
+        got = np.array([np.asarray(r) for r in rows]).reshape(want.shape)
+    assert info["bitdepth"] == bits and np.array_equal(got, want)
+
+
+@pytest.mark.parametrize("mode", ["L", "I;16", "RGB", "RGBA"])
+def test_read_mask_decodes_every_png_filter(tmp_path, mode):
+    """PNGs from Pillow (adaptive filters: Sub, Up, Average, Paeth per row) read back as Pillow
+    reads them."""
+    from PIL import Image
+
+    rng = np.random.default_rng(3)
+    y, x = np.mgrid[0:48, 0:64]
+    smooth = (x * 3 + y * 5) % 256  # predictable rows: Pillow picks the predicting filters
+    noise = rng.integers(0, 256, (48, 64))
+    grey = np.where(y < 24, smooth, noise)
+    if mode == "I;16":
+        arr = (grey * 257 + (x % 7)).astype(np.uint16)
+    elif mode == "L":
+        arr = grey.astype(np.uint8)
+    else:
+        arr = np.stack([grey, (grey + x) % 256, (grey * 3) % 256, 255 - grey][: len(mode)], axis=-1).astype(np.uint8)
+    path = tmp_path / f"{mode.replace(';', '')}.png"
+    Image.fromarray(arr).save(path)
+    assert len(_png_filters(path) - {0}) >= 2, _png_filters(path)
+    bits = 16 if mode == "I;16" else 8
+    with Image.open(path) as im:
+        want = np.asarray(im).astype(np.int64)
+    got = np.floor(M.read_mask(path) * (1 << bits)).astype(np.int64)
+    if got.ndim == 3:  # read_mask keeps the first two channels
+        want = want[..., :2]
+    assert np.array_equal(got, want)
+
+
+def test_mask_file_readers_refuse_non_regular_files(tmp_path):
+    for name in ("f.png", "f.npy", "f.exr"):
+        os.mkfifo(tmp_path / name)
+        with pytest.raises(InvalidArgumentError, match="FIFO"):
+            M.read_mask(tmp_path / name)  # at once: a FIFO without a writer would block a read
+    (tmp_path / "d.png").mkdir()
+    with pytest.raises(InvalidArgumentError, match="folder"):
+        M.read_mask(tmp_path / "d.png")
+    with pytest.raises(InvalidArgumentError, match="no such file"):
+        M.read_mask(tmp_path / "missing.npy")
+    (tmp_path / "bad.png").write_bytes(b"\x89PNG\r\n\x1a\n" + b"\0" * 40)
+    with pytest.raises(InvalidArgumentError, match="not a PNG"):
+        M.read_mask(tmp_path / "bad.png")
+
+
+def test_exr_without_openexr_is_refused_before_the_work(tmp_path, monkeypatch):
+    import builtins
+
+    real_import = builtins.__import__
+
+    def no_openexr(name, *args, **kwargs):
+        if name == "OpenEXR":
+            raise ImportError("No module named 'OpenEXR'")
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_openexr)
+    with pytest.raises(InvalidArgumentError, match=r"\[masks\]"):
+        M.check_mask_path(tmp_path / "m.exr")
+    with pytest.raises(InvalidArgumentError, match=r"\[masks\]"):
+        M.write_mask(tmp_path / "m.exr", B.white_mask((8, 8), 0))
+    assert list(tmp_path.iterdir()) == []
+    M.write_mask(tmp_path / "m.png", B.white_mask((8, 8), 0))  # PNG needs nothing
+
+
+# ---------------------------------------------------------------- Ctrl-C
+def test_ctrl_c_stops_mask_making_within_half_a_second_every_time():
+    """20 interrupts each of an annealed design (libdpc on a worker thread, cancelled through
+    its progress poll) and of void-and-cluster (numpy): KeyboardInterrupt within 0.5 s each
+    time, and no design keeps running afterwards."""
+    import json
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    probe = Path(__file__).resolve().parent / "interrupt_probe.py"
+    r = subprocess.run([sys.executable, str(probe), "masks", "20"], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    res = json.loads(r.stdout.strip().splitlines()[-1])
+    print(res)
+    for kind in ("annealed", "void_and_cluster"):
+        lat = res[kind]
+        assert len(lat) == 20 and all(t is not None and t < 0.5 for t in lat), (kind, lat)
+    assert res["design_threads_left"] == 0 and res["cpu_after_s"] < 0.2, res
+
+
+def test_ctrl_c_stops_dpc_mask_and_leaves_nothing(tmp_path):
+    """`dpc mask` designing an annealed 128 x 128 on the spot (minutes): SIGINT is answered with
+    "dpc: interrupted" within 0.5 s, the process exits with 130 once libdpc has seen the cancel
+    at its next poll (no abort from a thread left inside libdpc), and no file is written."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    for _ in range(3):
+        p = subprocess.Popen(
+            [sys.executable, "-m", "dpc.cli", "mask", "-n", "128", "-s", "5", "-o", str(tmp_path / "m.png")],
+            stderr=subprocess.PIPE,
+            text=True,
+            env={**os.environ, "COLUMNS": "80"},
+        )
+        time.sleep(3.0)  # started and designing
+        assert p.poll() is None
+        t0 = time.monotonic()
+        p.send_signal(signal.SIGINT)
+        err = ""
+        while "interrupted" not in err:
+            chunk = p.stderr.read(1)
+            assert chunk, err
+            err += chunk
+        took = time.monotonic() - t0
+        p.wait(timeout=60)
+        err += p.stderr.read()
+        p.stderr.close()
+        assert took < 0.5, took
+        assert p.returncode == 130 and "terminate" not in err, err
+        assert list(tmp_path.iterdir()) == []
