@@ -1,6 +1,8 @@
 """The ``dpc`` command line: list, generate, analyze, compare, mask, dither.
 
-UTK-style short flags: -m model, -n points, -d dims, -s seed, -c sets, -i input, -o output.
+UTK-style short flags: -m model (in mask and dither: the mask's source, a model or baseline;
+--mask is still accepted there), -n points (mask, dither: pixels per side), -d dims, -s seed,
+-c sets, -i input, -o output.
 Models are bundled names (``dpc list``; more in the folders of $DPC_MODEL_PATH) or ``.onnx``
 paths, in every command. Errors print one line ``dpc: error: ...`` and exit with 2 (bad usage)
 or 1 (anything else); set DPC_DEBUG=1 to get the traceback instead. Ctrl-C stops any command
@@ -919,7 +921,8 @@ def _compare_plots(results, out: Path, nu_max: float, formats=("png",), targets=
     type=click.Path(dir_okay=False, writable=True),
     default=None,
     help="Output: .npy (float64), .png (8/16-bit codes; R, G for 2 values) or .exr "
-    "(float32). Spatiotemporal masks: one .npy, or stem_000.png ... per frame.",
+    '(float32; needs OpenEXR: pip install "deep-point-correlation[masks]"). Spatiotemporal '
+    "masks: one .npy, or stem_000.png ... per frame.",
 )
 @click.option("--bits", type=click.Choice(["8", "16"]), default="16", show_default=True, help="PNG bit depth.")
 @_max_pixels_option("mask (frames x size^2 x channels)")

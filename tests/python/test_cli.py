@@ -272,3 +272,34 @@ def test_compare_with_stratified_model_inputs(tmp_path, capsys):
     assert rc == 0, err
     rows = {r["label"]: r for r in json.loads((out / "compare.json").read_text())["rows"]}
     assert set(rows) == {"bnot-2d (stratified)", "jitter"}, rows.keys()
+
+
+def test_option_names_are_the_same_in_every_command(tmp_path, capsys):
+    """-m is --model in generate, mask and dither (the mask's source there); mask's old --mask
+    still works but is not shown."""
+    import matplotlib.image as mpimg
+
+    for cmd in ("generate", "mask", "dither"):
+        rc, out, _ = run(capsys, cmd, "--help")
+        assert rc == 0 and "-m, --model" in out and "--mask " not in out and "--mask," not in out, out
+        for flag in ("-s, --seed", "-o, --output"):
+            assert flag in out, (cmd, flag)
+    a, b = tmp_path / "a.npy", tmp_path / "b.npy"
+    assert run(capsys, "mask", "-m", "white", "-n", 8, "-s", 2, "-o", a)[0] == 0
+    assert run(capsys, "mask", "--mask", "white", "-n", 8, "-s", 2, "-o", b)[0] == 0
+    assert run(capsys, "mask", "--model", "white", "-n", 8, "-s", 3, "-o", tmp_path / "c.npy")[0] == 0
+    assert np.array_equal(np.load(a), np.load(b)) and not np.array_equal(np.load(a), np.load(tmp_path / "c.npy"))
+    img = tmp_path / "in.png"
+    mpimg.imsave(img, np.linspace(0, 1, 64).reshape(8, 8), cmap="gray")
+    for flag in ("--model", "--mask"):
+        assert run(capsys, "dither", img, flag, "white", "-n", 4, "-o", tmp_path / f"o{flag}.png")[0] == 0
+
+
+def test_counts_are_singular_or_plural(tmp_path, capsys):
+    rc, _, err = run(capsys, "generate", "-m", "white", "-n", 16, "-c", 1, "-o", tmp_path / "one.npy")
+    assert rc == 0 and "wrote 1 set of 16" in err
+    rc, out, _ = run(capsys, "analyze", "-i", "white", "-n", 64, "-c", 1, "--discrepancy", "none", "-o", tmp_path / "a")
+    assert rc == 0 and "white: 1 set of 64" in out
+    from dpc.analysis._common import count_of
+
+    assert count_of(1) == "1 set" and count_of(2) == "2 sets" and count_of(0) == "0 sets"

@@ -1,5 +1,7 @@
 """Point-set files: round trips in every format, UTK compatibility, clear errors."""
 
+import os
+
 import numpy as np
 import pytest
 
@@ -140,3 +142,37 @@ def test_dims_check_and_write_errors(tmp_path):
     with pytest.raises(PointFileError):
         write_points(tmp_path / "e.bin", np.zeros((2, 2)), bin_dtype="int8")
     assert issubclass(PointFileError, InvalidArgumentError)
+
+
+@pytest.mark.parametrize("ext", [".npy", ".dat", ".csv", ".bin"])
+@pytest.mark.parametrize("kind", ["fifo", "folder", "device"])
+def test_non_regular_files_are_refused_at_once(tmp_path, ext, kind):
+    """A FIFO (a plain read would block forever), a folder or a device is refused before any
+    read, naming what it is."""
+    path = tmp_path / f"p{ext}"
+    if kind == "fifo":
+        os.mkfifo(path)
+        what = "FIFO"
+    elif kind == "folder":
+        path.mkdir()
+        what = "folder"
+    else:
+        path.symlink_to("/dev/zero")  # endless zeros: a reader without the check never ends
+        what = "device"
+    with pytest.raises(PointFileError, match=f"is a {what}, not a regular file"):
+        read_points(path)
+
+
+def test_model_file_reader_refuses_non_regular_files(tmp_path):
+    pytest.importorskip("onnx")
+    from dpc.errors import ModelIOError
+    from dpc.model_file import read_model
+
+    os.mkfifo(tmp_path / "m.onnx")
+    with pytest.raises(ModelIOError, match="FIFO"):
+        read_model(tmp_path / "m.onnx")
+    (tmp_path / "d.onnx").mkdir()
+    with pytest.raises(ModelIOError, match="folder"):
+        read_model(tmp_path / "d.onnx")
+    with pytest.raises(ModelIOError, match="no such file"):
+        read_model(tmp_path / "missing.onnx")
