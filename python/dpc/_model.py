@@ -6,7 +6,6 @@ import math
 import numbers
 import os
 import re
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -131,9 +130,8 @@ def _search_dirs() -> list[Path]:
     """The folders libdpc's model search reads, in its order: $DPC_MODEL_PATH's (separated by
     ':'), then the package's models folder (dpc_model_dir() of the package's libdpc)."""
     dirs = [Path(p) for p in os.environ.get("DPC_MODEL_PATH", "").split(":") if p]
-    bundled = _core.model_dir()
-    dirs.append(Path(bundled) if bundled else Path(str(resources.files("dpc") / "models")))
-    return dirs
+    bundled = _core.model_dir()  # "" when the package has no models folder
+    return dirs + ([Path(bundled)] if bundled else [])
 
 
 def isa_supported(isa: str) -> bool:
