@@ -1,6 +1,6 @@
 """Benchmark of `dpc analyze` (the whole command: start-up, reading, every metric, the plots).
 
-    python bench/bench_analysis.py         # prints the figures, writes docs/performance-analysis.md
+    python bench/bench_analysis.py         # prints the figures, writes docs/reports/performance-analysis.md
     python bench/bench_analysis.py --repeats 1 --no-write
 
 Cases (requirement: under 10 s and under 60 s on the project's 2-core machine):
@@ -31,22 +31,12 @@ from pathlib import Path
 import numpy as np
 
 CASES = [("100 x 1,024", 100, 1024, 10.0), ("16 x 65,536", 16, 65536, 60.0)]
-ROOT = Path(__file__).resolve().parent.parent
+from common import ROOT, cpu_name
 
 
 def command() -> list[str]:
     exe = shutil.which("dpc")
     return [exe] if exe else [sys.executable, "-m", "dpc.cli"]
-
-
-def cpu_name() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
 
 
 def versions() -> dict:
@@ -146,7 +136,7 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--no-write", action="store_true", help="do not write the docs page")
-    ap.add_argument("--output", type=Path, default=ROOT / "docs" / "performance-analysis.md")
+    ap.add_argument("--output", type=Path, default=ROOT / "docs" / "reports" / "performance-analysis.md")
     args = ap.parse_args()
     try:
         cores = len(os.sched_getaffinity(0))

@@ -31,16 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-BUILD = ROOT / "build" / "bench"
-
-
-def build() -> Path:
-    subprocess.run(["cmake", "-S", str(ROOT), "-B", str(BUILD), "-G", "Ninja", "-DCMAKE_BUILD_TYPE=Release",
-                    "-DDPC_BUILD_BENCH=ON"], check=True, stdout=subprocess.DEVNULL)
-    subprocess.run(["cmake", "--build", str(BUILD), "--target", "dpc_bench_generate"], check=True,
-                   stdout=subprocess.DEVNULL)
-    return BUILD / "bench" / "dpc_bench_generate"
+from common import BUILD, ROOT, build, cpu_name
 
 
 def build_revision(rev: str) -> Path:
@@ -57,11 +48,7 @@ def build_revision(rev: str) -> Path:
             f.seek(0)
             with tarfile.open(fileobj=f) as t:
                 t.extractall(src, filter="data")
-    subprocess.run(["cmake", "-S", str(src), "-B", str(out), "-G", "Ninja", "-DCMAKE_BUILD_TYPE=Release",
-                    "-DDPC_BUILD_BENCH=ON"], check=True, stdout=subprocess.DEVNULL)
-    subprocess.run(["cmake", "--build", str(out), "--target", "dpc_bench_generate"], check=True,
-                   stdout=subprocess.DEVNULL)
-    return out / "bench" / "dpc_bench_generate"
+    return build("dpc_bench_generate", src, out)
 
 
 def against(rev: str, exe: Path, isas: list[str]) -> list[str]:
@@ -113,28 +100,13 @@ def run(exe: Path, model: Path, isa: str, counts: list[int]) -> list[dict]:
     return [json.loads(line) for line in out.splitlines() if line.strip()]
 
 
-def cpu_name() -> str:
-    """The CPU's model name, with family/model and whether it has AVX-512: cloud CPUs often name
-    only the brand ("AMD EPYC"), and which generation it is decides the ISA paths measured."""
-    try:
-        info = dict(
-            (k.strip(), v.strip())
-            for k, v in (line.split(":", 1) for line in Path("/proc/cpuinfo").read_text().splitlines() if ":" in line)
-        )
-    except OSError:
-        return platform.processor() or "unknown CPU"
-    simd = "AVX-512" if "avx512f" in info.get("flags", "").split() else "no AVX-512"
-    family, model = info.get("cpu family", "?"), info.get("model", "?")
-    return f"{info.get('model name', 'unknown CPU')} (family {family} model {model}, {simd})"
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="skip the 1,048,576-point runs")
     ap.add_argument("--out", default=str(ROOT / "docs" / "performance.md"))
     ap.add_argument("--against", metavar="REV", help="also time git revision REV's build, alternately")
     args = ap.parse_args()
-    exe = build()
+    exe = build("dpc_bench_generate")
     counts = [1024, 16384, 262144] + ([] if args.quick else [1048576])
     import dpc  # noqa: PLC0415  (the installed package, for dpc.isa_supported)
 

@@ -24,8 +24,8 @@ import argparse
 from pathlib import Path
 
 import numpy as np
-from bench_generate import alternate, build, build_revision, cpu_name, run
-from doc_sections import replace_section
+from bench_generate import alternate, build_revision, run
+from common import build, cpu_name, replace_section
 
 import dpc
 
@@ -46,7 +46,7 @@ def main() -> None:
     ap.add_argument("--previous", default="c89e46c", metavar="REV")
     ap.add_argument("--max-m", type=int, default=65536)
     args = ap.parse_args()
-    exe, old, prev = build(), build_revision(args.against), build_revision(args.previous)
+    exe, old, prev = build("dpc_bench_generate"), build_revision(args.against), build_revision(args.previous)
     isa = fastest_isa()
     ten = ROOT / "models" / "bnot-10d.onnx"
     counts = [m for m in (1024, 2048, 4096, 8192, 16384, 32768, 65536) if m <= args.max_m]

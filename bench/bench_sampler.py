@@ -19,24 +19,15 @@ import subprocess
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "bench"))
-from bench_generate import BUILD, cpu_name  # noqa: E402  (shared build folder and CPU name)
+from common import ROOT, build, cpu_name
+
 
 CASES = ["1:16", "4:16", "16:16", "64:16", "256:16", "64:64", "1024:16"]
 MODEL = ROOT / "models" / "bnot-2d-stratified.onnx"
 
 
-def build() -> Path:
-    subprocess.run(["cmake", "-S", str(ROOT), "-B", str(BUILD), "-G", "Ninja", "-DCMAKE_BUILD_TYPE=Release",
-                    "-DDPC_BUILD_BENCH=ON"], check=True, stdout=subprocess.DEVNULL)
-    subprocess.run(["cmake", "--build", str(BUILD), "--target", "dpc_bench_sampler"], check=True,
-                   stdout=subprocess.DEVNULL)
-    return BUILD / "bench" / "dpc_bench_sampler"
-
-
 def main() -> None:
-    exe = build()
+    exe = build("dpc_bench_sampler")
     out = subprocess.run([str(exe), str(MODEL), *CASES], check=True, capture_output=True, text=True).stdout
     rows = [json.loads(line) for line in out.splitlines() if line.strip()]
     cpu = cpu_name()

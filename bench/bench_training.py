@@ -31,17 +31,16 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "training"))
-sys.path.insert(0, str(ROOT / "tests" / "python"))
+import torch
 
-import torch  # noqa: E402
+from common import ROOT, cpu_name
 
-from bench_generate import cpu_name  # noqa: E402  (one CPU description for every benchmark page)
-from cpu_isa import VECTOR_ISAS  # noqa: E402
-from dpc import _core  # noqa: E402
-from dpc_train.config import load_config  # noqa: E402
-from dpc_train.trainer import Trainer  # noqa: E402
+import dpc
+from dpc import _core
+from dpc_train.config import load_config
+from dpc_train.trainer import Trainer
+
+VECTOR_ISAS = [isa for isa in ("avx2", "avx512") if dpc.isa_supported(isa)]
 
 # name: (dims, subspace mask, rho) as in training/configs/<name>.toml
 LAYERS = {"bnot-2d": (2, 0b11, 4.0), "bnot-4d": (4, 0b1111, 2.0), "bnot-10d": (10, (1 << 10) - 1, 1.0)}

@@ -29,33 +29,16 @@ import platform
 import subprocess
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+from common import ROOT, build, cpu_name
+
 BUILD = ROOT / "build" / "bench-vulkan"
 HEADING = "## Vulkan"
-
-
-def build() -> Path:
-    subprocess.run(["cmake", "-S", str(ROOT), "-B", str(BUILD), "-G", "Ninja", "-DCMAKE_BUILD_TYPE=Release",
-                    "-DDPC_BUILD_BENCH=ON", "-DDPC_VULKAN=ON"], check=True, stdout=subprocess.DEVNULL)
-    subprocess.run(["cmake", "--build", str(BUILD), "--target", "dpc_bench_vulkan"], check=True,
-                   stdout=subprocess.DEVNULL)
-    return BUILD / "bench" / "dpc_bench_vulkan"
 
 
 def run(exe: Path, model: Path, backend: str, sets: int, counts: list[int]) -> list[dict]:
     out = subprocess.run([str(exe), str(model), backend, str(sets), *map(str, counts)], check=True,
                          capture_output=True, text=True).stdout
     return [json.loads(line) for line in out.splitlines() if line.strip()]
-
-
-def cpu_name() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown CPU"
 
 
 def ms(seconds: float) -> str:
@@ -82,7 +65,7 @@ def main() -> None:
     ap.add_argument("--exe", help="folder of a prebuilt dpc_bench_vulkan (no build)")
     ap.add_argument("--out", default=str(ROOT / "docs" / "performance.md"))
     args = ap.parse_args()
-    exe = Path(args.exe) / "dpc_bench_vulkan" if args.exe else build()
+    exe = Path(args.exe) / "dpc_bench_vulkan" if args.exe else build("dpc_bench_vulkan", ROOT, BUILD, "-DDPC_VULKAN=ON")
     load_before = os.getloadavg()
     models = ROOT / "models"
     counts2d = [1024] + ([] if args.quick else [1048576])

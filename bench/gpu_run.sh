@@ -3,7 +3,7 @@
 #   run(command="bash bench/gpu_run.sh", carry=[".gpu", ".gl"], timeout_s=600)
 # 1. the Vulkan C tests (parity with the CPU on every test model, errors, threads) on the GPU;
 # 2. bench/bench_vulkan.py with the prebuilt benchmark, which judges issue 6's goals;
-# 3. bench/vulkan_quality.py dump: every bundled model's sets on both backends (compare them here).
+# 3. lab/gpu/vulkan_quality.py dump: every bundled model's sets on both backends (compare them here).
 # DPC_BENCH_ARGS=--quick skips the 1,048,576-point cases. Logs, the test report and the updated docs/performance.md come back in $OUT.
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -41,8 +41,8 @@ alone 'NoVulkanLoader.*' DPC_VULKAN_LOADER=/nonexistent/libvulkan.so.1
 alone 'NoVulkanDriver.*' VK_DRIVER_FILES=/nonexistent/no_icd.json VK_ICD_FILENAMES=/nonexistent/no_icd.json
 python3 bench/bench_vulkan.py --exe .gpu ${DPC_BENCH_ARGS:-} 2>&1 | tee "$out/bench_vulkan.log"
 bench=${PIPESTATUS[0]}
-# Every bundled model's sets on both backends, for `python bench/vulkan_quality.py compare` here.
-python3 bench/vulkan_quality.py dump --lib .gpu/libdpc.so.0 --out "$out/vulkan_sets.npz" 2>&1 | tee "$out/vulkan_quality.log"
+# Every bundled model's sets on both backends, for `python -m lab.gpu.vulkan_quality compare` here.
+python3 -m lab.gpu.vulkan_quality dump --lib .gpu/libdpc.so.0 --out "$out/vulkan_sets.npz" 2>&1 | tee "$out/vulkan_quality.log"
 [ "${PIPESTATUS[0]}" -eq 0 ] || bench=1
 cp docs/performance.md "$out/"
 echo "dpc_test_vulkan exit $tests, bench_vulkan.py exit $bench"

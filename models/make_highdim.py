@@ -18,8 +18,8 @@ a schedule over depth instead of training:
   differs, so the file is for m near 8,192.
 
 The schedules were chosen by development sweeps over 32 sets (these runs are not in the repo);
-the numbers measured with the files are in docs/high-dimensions.md (python
-models/highdim_report.py). Amplitudes near the ones here are close to instability: projective-3d's
+the numbers measured with the files are in docs/reports/high-dimensions.md (python
+lab/models/highdim_report.py). Amplitudes near the ones here are close to instability: projective-3d's
 tail at A = 0.75, projective-4d's at A = 0.6 (c = 3) and blue-10d at sigma = 1.0 diverge.
 
     python models/make_highdim.py                 # writes the three files

@@ -6,7 +6,7 @@ g(d) = -A exp(-d^2 / (2 sigma^2)) (d, g in mean spacings of the current level; A
 3.75 sigma), sigma falling geometrically from 2.0 to 0.9 spacings over the layers: wide kernels
 first even out the density of the new points over several spacings, narrow ones then settle
 each into its hole. Each level's new points are filtered past the earlier levels' points, which
-stay in place. Chosen by the sweep of bench/progressive_alternatives.py: the trained set cascades
+stay in place. Chosen by the sweep of lab/progressive/alternatives.py: the trained set cascades
 (bnot-2d-stratified, bnot-2d, repeated 1-8 times) and fine-tuning bnot-2d-stratified on a loss over
 the prefixes (training/configs/bnot-2d-progressive-finetune.toml) all left the prefixes more
 low-frequency energy than a repulsion, and the falling sigma less than a fixed one (the previous
@@ -63,7 +63,7 @@ def schedule_layers(
     amplitude: float, first: float, last: float, rho_per_sigma: float, layers: int, rho_max: float = np.inf
 ) -> list[Layer]:
     """sigma from first to last, geometrically, radius rho_per_sigma * sigma (at most rho_max: an
-    alternative of bench/progressive_alternatives.py, not progressive-2d's)."""
+    alternative of lab/progressive/alternatives.py, not progressive-2d's)."""
     return [repulsion_layer(amplitude, s, min(rho_per_sigma * s, rho_max)) for s in np.geomspace(first, last, layers)]
 
 

@@ -1,7 +1,7 @@
 """Point-set quality of every bundled model on the Vulkan backend against the CPU backend.
 
-    python3 bench/vulkan_quality.py dump --lib .gpu/libdpc.so.0 --out sets.npz   # where the GPU is
-    python bench/vulkan_quality.py compare sets_*.npz                              # here: the table
+    python3 -m lab.gpu.vulkan_quality dump --lib .gpu/libdpc.so.0 --out sets.npz   # where the GPU is
+    python -m lab.gpu.vulkan_quality compare sets_*.npz                              # here: the table
 
 The trained cascades amplify float32 rounding (docs/training.md, "Precision sensitivity"), so a
 GPU returns other points than the CPU for one seed. What must agree is their quality. `dump` needs
@@ -25,7 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
+from lab.common import ROOT, replace_section  # no dpc import: dump runs where the package is not installed
+
 SETS = 16
 BACKENDS = {"cpu": 1, "vulkan": 2}  # dpc_backend
 SHARD = 15 << 20
@@ -93,9 +94,6 @@ def dump(lib_path: str, out: str, only: list[str]) -> None:
 
 
 def compare(npzs: list[str], doc: Path) -> None:
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from doc_sections import replace_section
-
     from dpc import analysis
 
     data = {}
@@ -132,7 +130,7 @@ def compare(npzs: list[str], doc: Path) -> None:
         print(rows[-1], flush=True)
     same = sum(r.endswith("same |") for r in rows)
     lines = [
-        f"`python bench/vulkan_quality.py compare` on sets that `bench/gpu_run.sh` made on **{device}** "
+        f"`python -m lab.gpu.vulkan_quality compare` on sets that `bench/gpu_run.sh` made on **{device}** "
         f"(`vulkan_quality.py dump`: {SETS} sets per model and backend, dpc_generate_batch with seed 0, "
         "each model's own point count; the CPU column is the same machine's CPU backend). Columns: the "
         "largest toroidal difference between a Vulkan point and the CPU point of the same index; "

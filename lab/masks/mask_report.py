@@ -1,14 +1,14 @@
 """Measure dpc's blue-noise masks against void-and-cluster, STBN and white noise; write
-docs/masks.md (the sections marked <!-- key -->) and docs/figures/masks/.
+docs/reports/masks.md (the sections marked <!-- key -->) and docs/reports/figures/masks/.
 
-    python models/mask_report.py scalar     # scalar masks 32, 64, 128 (a few minutes on 1 core)
-    python models/mask_report.py vector     # 2-value masks 64 x 64
-    python models/mask_report.py st         # spatiotemporal masks 32 x 32 x 16 and 64 x 64 x 16
-    python models/mask_report.py cost       # generation times
-    python models/mask_report.py all
+    python -m lab.masks.mask_report scalar     # scalar masks 32, 64, 128 (a few minutes on 1 core)
+    python -m lab.masks.mask_report vector     # 2-value masks 64 x 64
+    python -m lab.masks.mask_report st         # spatiotemporal masks 32 x 32 x 16 and 64 x 64 x 16
+    python -m lab.masks.mask_report cost       # generation times
+    python -m lab.masks.mask_report all
 
 Metrics: dpc.analysis.masks (white-noise mask = 1; low band 0 < |q| <= 6 cycles per tile).
-Each section replaces its part of docs/masks.md; the rest of the page is kept.
+Each section replaces its part of docs/reports/masks.md; the rest of the page is kept.
 """
 
 from __future__ import annotations
@@ -31,9 +31,10 @@ from dpc import masks as M  # noqa: E402
 from dpc.analysis import dither as D  # noqa: E402
 from dpc.analysis import masks as AM  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
-FIG = ROOT / "docs" / "figures" / "masks"
-PAGE = ROOT / "docs" / "masks.md"
+from lab.common import REPORTS  # noqa: E402
+
+FIG = REPORTS / "figures" / "masks"
+PAGE = REPORTS / "masks.md"
 KEYS = ("scalar", "vector", "st", "cost")
 
 SCALAR_MODEL = "mask-64"
@@ -151,7 +152,7 @@ def scalar() -> None:
               "largest single-frequency power | seam ratio | seconds per mask |",
               "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     lines = ["## Scalar masks", "",
-             "`python models/mask_report.py scalar`. Per size: the dpc models (at their trained "
+             "`python -m lab.masks.mask_report scalar`. Per size: the dpc models (at their trained "
              "grid, or filtered at another size with radii that scale with the point count), "
              "the annealed masks of `dpc.mask_design` (the bundled designs where there are some, "
              "else designed here; their design times are in the cost section), void-and-cluster (σ = 1.5), white noise and Bayer; seeds 0 … count−1. Seam ratio: "
@@ -213,7 +214,7 @@ def scalar() -> None:
 def vector() -> None:
     n = 64
     lines = ["## Vector (2-value) masks", "",
-             "`python models/mask_report.py vector`. 64 × 64, seeds 0 … count−1. Per channel: the "
+             "`python -m lab.masks.mask_report vector`. 64 × 64, seeds 0 … count−1. Per channel: the "
              "worse channel's scalar numbers. Joint: the pixels whose value pair lies in the box "
              "[0, a) × [0, b), a, b ∈ {1/4, 1/2, 3/4}, as binary patterns (mean and worst of the 9 "
              "boxes). Two independent void-and-cluster masks are blue per channel but not jointly.",
@@ -263,7 +264,7 @@ def golden_offsets(n: int, frames: int, seed: int) -> np.ndarray:
 
 def st() -> None:
     lines = ["## Spatiotemporal masks", "",
-             "`python models/mask_report.py st`. Per frame: the scalar numbers of each frame "
+             "`python -m lab.masks.mask_report st`. Per frame: the scalar numbers of each frame "
              "(mean over frames and volumes; worst: the worst frame's mean over levels). Temporal "
              "E_low: each pixel's values along time, power at 0 < k ≤ T/4 (white = 1). "
              "Accumulated RMSE: pixel p after n frames estimates ∫ f by the mean of f(v_t(p)), "
@@ -318,7 +319,7 @@ def st() -> None:
 # ---- cost ---------------------------------------------------------------------------------
 
 def cost() -> None:
-    lines = ["## Cost of making a mask", "", "`python models/mask_report.py cost`: wall seconds for "
+    lines = ["## Cost of making a mask", "", "`python -m lab.masks.mask_report cost`: wall seconds for "
              "one mask on this (shared, 2-core) machine, seed 0.", "",
              "| mask | size | seconds |", "|---|---|---:|"]
     for n in (32, 64, 128, 256):

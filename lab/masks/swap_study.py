@@ -1,7 +1,7 @@
 """A lead for issue #13: a 64 x 64 mask refined by greedy value swaps on a spectral energy.
 
-    python bench/mask_swap_study.py            # about 6 minutes on one core; the "mask_swap" section of docs/masks.md
-    python bench/mask_swap_study.py --swaps 20000 --no-write   # a quick look
+    python -m lab.masks.swap_study            # about 6 minutes on one core; the "mask_swap" section of docs/reports/masks.md
+    python -m lab.masks.swap_study --swaps 20000 --no-write   # a quick look
 
 Not a product path and not a dpc model: a study of what a direct optimiser of the masks' spectra
 reaches, to set against void-and-cluster (docs/masks.md, "Summary"). The energy is the
@@ -28,7 +28,7 @@ import numpy as np
 from dpc import baselines, masks
 from dpc.analysis.dither import mask_quality, rank_normalise
 
-ROOT = Path(__file__).resolve().parents[1]
+from lab.common import REPORTS, replace_section
 N, SIGMA, REACH = 64, 1.5, 8
 LEVELS = np.arange(1, 16) / 16.0
 
@@ -93,7 +93,7 @@ def main() -> None:
         print(rows[-2], rows[-1], sep="\n", flush=True)
     body = "\n".join(
         [
-            f"`python bench/mask_swap_study.py` (one mask each, 64 × 64, seed 0; {args.swaps:,} proposed swaps; "
+            f"`python -m lab.masks.swap_study` (one mask each, 64 × 64, seed 0; {args.swaps:,} proposed swaps; "
             "energy and steps in the script's docstring). Columns as in the scalar tables: mask E_low and "
             "thresholded mean / worst level over 0 < |q| ≤ 6, then mask and thresholded mean over |q| ≤ 12.",
             "",
@@ -105,10 +105,8 @@ def main() -> None:
     )
     print(body)
     if not args.no_write:
-        sys.path.insert(0, str(Path(__file__).resolve().parent))
-        from doc_sections import replace_section
 
-        doc = ROOT / "docs" / "masks.md"
+        doc = REPORTS / "masks.md"
         if "<!-- mask_swap:begin -->" not in doc.read_text():
             sys.exit(f"{doc} has no <!-- mask_swap:begin --> ... end marker pair to replace")
         replace_section(doc, "mask_swap", body)

@@ -1,10 +1,10 @@
-"""Issue 14 item 1, 2-D past BNOT: blue-2d measured against every goal, written to docs/beyond-bnot.md.
+"""Issue 14 item 1, 2-D past BNOT: blue-2d measured against every goal, written to docs/reports/beyond-bnot.md.
 
-    python models/beyond_bnot.py            # about 3 minutes on 2 cores
-    python models/beyond_bnot.py --model F  # another 2-D model file in blue-2d's place
+    python -m lab.models.beyond_bnot            # about 3 minutes on 2 cores
+    python -m lab.models.beyond_bnot --model F  # another 2-D model file in blue-2d's place
 
 For the model, bnot-2d-stratified (trained towards BNOT), the authors' BNOT sets, scrambled Sobol
-and white noise: the spectral metrics of the model cards (models/model_cards.py) over 100 sets at
+and white noise: the spectral metrics of the model cards (lab/models/model_cards.py) over 100 sets at
 m = 1,024 and at m/4 ... 64 m, the relative variance of Gaussian and half-plane integrands
 (dpc.analysis.integration_study: 10 integrands, 64 realisations) at m = 1,024 and 4,096, and the
 generation time against bnot-2d's. The authors ship 10 BNOT sets at m = 1,024 and none at 4,096:
@@ -30,15 +30,11 @@ import numpy as np  # noqa: E402
 import dpc  # noqa: E402
 from dpc import analysis, baselines  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import model_cards as MC  # noqa: E402  (the cards' metrics and targets)
+from lab.common import REPORTS, cpu_name  # noqa: E402
+from lab.models import model_cards as MC  # noqa: E402  (the cards' metrics and targets)
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
-from bench_generate import cpu_name  # noqa: E402  (one CPU description for every measured page)
-
-ROOT = Path(__file__).resolve().parents[1]
-PAGE = ROOT / "docs" / "beyond-bnot.md"
-FIG = ROOT / "docs" / "figures" / "beyond-bnot.png"
+PAGE = REPORTS / "beyond-bnot.md"
+FIG = REPORTS / "figures" / "beyond-bnot.png"
 M = 1024
 SCALES = [(0.25, 100), (1, 100), (4, 40), (16, 10), (64, 4)]  # (m / 1,024, sets)
 COUNTS = (1024, 4096)  # integration study
@@ -339,8 +335,8 @@ def main(argv=None) -> None:
     lines = [
         "# Past BNOT in 2-D",
         "",
-        f"`python models/beyond_bnot.py` (model `{args.model}`): issue 14 item 1's goals, measured. "
-        "Conventions as in [analysis.md](analysis.md): P normalised so that white noise = 1, ν = |q|/√m, "
+        f"`python -m lab.models.beyond_bnot` (model `{args.model}`): issue 14 item 1's goals, measured. "
+        "Conventions as in [analysis.md](../analysis.md): P normalised so that white noise = 1, ν = |q|/√m, "
         "E_low(ν) = mean P over the integer frequencies with 0 < ν' < ν, δ_min = the smallest pair distance "
         "over the densest packing's, anisotropy = mean over 0.5 ≤ ν ≤ 4 of 10·log10(variance / mean²) of "
         "the set-averaged P over each ring (dB; white noise over 100 sets gives about −20 dB). "

@@ -1,7 +1,7 @@
 """Count the sets of a model that keep two points closer than a fraction of the mean spacing.
 
-    python models/close_pairs.py bnot-10d                 # seeds 0 ... 9,999 at m = 1,024
-    python models/close_pairs.py bnot-10d --seeds 1000 --below 0.05
+    python -m lab.models.close_pairs bnot-10d                 # seeds 0 ... 9,999 at m = 1,024
+    python -m lab.models.close_pairs bnot-10d --seeds 1000 --below 0.05
 
 A pair closer than eps * h (the filter's cutoff, 1e-4 spacings) is invisible to every later layer,
 so a cascade that makes one keeps it (docs/training.md §2, max_attraction). Prints the count, the

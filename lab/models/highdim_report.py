@@ -1,8 +1,8 @@
 """Projective and high-dimensional blue noise: issue #14 items 2 and 3, measured.
 
-    python models/highdim_report.py            # writes docs/high-dimensions.md (about 15 minutes)
-    python models/highdim_report.py --quick    # 16 sets, prints only (dart throwing in 10-D skipped)
-    python models/highdim_report.py --projections-study   # only the projective-4d study section (a minute)
+    python -m lab.models.highdim_report            # writes docs/reports/high-dimensions.md (about 15 minutes)
+    python -m lab.models.highdim_report --quick    # 16 sets, prints only (dart throwing in 10-D skipped)
+    python -m lab.models.highdim_report --projections-study   # only the projective-4d study section (a minute)
 
 For each goal the bundled model, the file it replaced (models/previous/, where there is one) and
 the classic reference: E_low below nu = 0.5 / 0.75 (exact over the integer frequencies,
@@ -28,11 +28,10 @@ from dpc import analysis, baselines
 from dpc.analysis.reference import reference_copied_from, reference_radial_spectrum
 from dpc.analysis.spectrum import low_frequency_energy
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import model_cards as MC  # noqa: E402  (targets and rel. L1, as on the cards)
+from lab.common import REPORTS
+from lab.models import model_cards as MC  # targets and rel. L1, as on the cards
 
-ROOT = Path(__file__).resolve().parents[1]
-PAGE = ROOT / "docs" / "high-dimensions.md"
+PAGE = REPORTS / "high-dimensions.md"
 
 
 def load(name: str, previous: bool = False):
@@ -298,7 +297,7 @@ def main() -> None:
 INTRO = [
     "# Projective and high-dimensional blue noise",
     "",
-    "`python models/highdim_report.py` (this page is its output; about 15 minutes, a quarter of it "
+    "`python -m lab.models.highdim_report` (this page is its output; about 15 minutes, a quarter of it "
     "dart throwing in 10-D): issue #14 items 2 and 3, measured with 100 sets (seeds 0 … 99) unless stated. "
     "E_low(ν) = mean P over the integer frequencies with 0 < |q|/m^(1/n) < ν, exact "
     "(`dpc.analysis.low_frequency_energy`; white noise = 1); δ_min = minimum toroidal distance over the "
@@ -362,7 +361,7 @@ OUTRO = [
     "whose 2-D projections are already stratified (an Owen-scrambled (0,m,2)-net in each pair, as "
     "the sampler's nets) would start the cascade where it now has to get to; libdpc's inputs are "
     "uniform or stratified in the full space only (docs/model-format.md §5).",
-    "- **blue-10d's cost** is about 2 s per 8,192-point set on one thread, about 18× bnot-10d's (the table above). Its radius (1.23 spacings once capped at half the torus) holds about 20 points where bnot-10d's holds about 3, it has twice the layers, and that many neighbours turn libdpc's neighbour lists off ([performance.md](performance.md#high-dimensions)), so every layer runs the prefilter over all pairs. Raising the lists' limits (64 and 256 expected points instead of 24 and 160) saved 5% in a development run: points that move a quarter spacing per layer force rebuilds. Issue #14's 100 ms goal is for bnot-10d, where it holds; a 10-D model with both this low band and that speed needs a search for about 20 neighbours in 10-D that does not rescan all pairs when points move that far.",
+    "- **blue-10d's cost** is about 2 s per 8,192-point set on one thread, about 18× bnot-10d's (the table above). Its radius (1.23 spacings once capped at half the torus) holds about 20 points where bnot-10d's holds about 3, it has twice the layers, and that many neighbours turn libdpc's neighbour lists off ([performance.md](../performance.md#high-dimensions)), so every layer runs the prefilter over all pairs. Raising the lists' limits (64 and 256 expected points instead of 24 and 160) saved 5% in a development run: points that move a quarter spacing per layer force rebuilds. Issue #14's 100 ms goal is for bnot-10d, where it holds; a 10-D model with both this low band and that speed needs a search for about 20 neighbours in 10-D that does not rescan all pairs when points move that far.",
     "",
 ]
 

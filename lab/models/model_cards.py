@@ -1,8 +1,8 @@
-"""Measure every bundled model the way docs/models.md reports it, next to its target and the
+"""Measure every bundled model the way docs/reports/models.md reports it, next to its target and the
 classics.
 
-    python models/model_cards.py              # all models: docs/models.md, docs/figures/models/*
-    python models/model_cards.py bnot-2d ...  # only these cards (the page keeps the others)
+    python -m lab.models.model_cards              # all models: docs/reports/models.md, docs/reports/figures/models/*
+    python -m lab.models.model_cards bnot-2d ...  # only these cards (the page keeps the others)
 
 Each card: 100 realisations at the model's trained point count (seeds 0..99; fewer where
 stated), and the same metrics for the authors' BNOT sets, jitter and white noise. Conventions
@@ -33,9 +33,10 @@ import dpc  # noqa: E402
 from dpc import analysis, baselines  # noqa: E402
 from dpc.analysis import plots  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
-FIGURES = ROOT / "docs" / "figures" / "models"
-PAGE = ROOT / "docs" / "models.md"
+from lab.common import REPORTS, ROOT  # noqa: E402
+
+FIGURES = REPORTS / "figures" / "models"
+PAGE = REPORTS / "models.md"
 SETS = 100
 AXES = "xyzw"
 PREVIOUS = " (previous)"  # a model name with this suffix: the file it replaced, models/previous/NAME.onnx
@@ -157,7 +158,7 @@ CARDS = {
     "bnot-2d": Card("plane", {"xy": "bnot"}, scales=True),
     "bnot-2d-wide": Card("plane", {"xy": "bnot"}, scales=True),
     "bnot-2d-stratified": Card("plane", {"xy": "bnot"}, scales=True),
-    "blue-2d": Card("plane", {"xy": "bnot"}, scales=True),  # aims below BNOT: docs/beyond-bnot.md
+    "blue-2d": Card("plane", {"xy": "bnot"}, scales=True),  # aims below BNOT: docs/reports/beyond-bnot.md
     "progressive-2d": Card("plane", {"xy": "bnot"}, scales=True),  # prefixes: docs/progressive.md
     "progressive-2d-balanced": Card("plane", {"xy": "bnot"}, scales=True),
     "progressive-2d-relaxed": Card("plane", {"xy": "bnot"}, scales=True),
@@ -172,7 +173,7 @@ CARDS = {
     "bnot-4d": Card("nd", {"xyzw": "bnot"}),
     "bnot-5d": Card("nd", {"all": "bnot"}),
     "bnot-10d": Card("nd", {"all": "bnot"}),
-    "blue-10d": Card("nd", {"all": "bnot"}),  # m = 8,192: the 1,024-point target in ν (docs/high-dimensions.md)
+    "blue-10d": Card("nd", {"all": "bnot"}),  # m = 8,192: the 1,024-point target in ν (docs/reports/high-dimensions.md)
     "projective-3d": Card("subspaces", {"xy": "bnot", "xz": "bnot", "yz": "bnot"}, full="bnot"),
     "projective-4d": Card("subspaces", {p: "bnot" for p in ("xy", "xz", "xw", "yz", "yw", "zw")}),
     "mixed-3d": Card("subspaces", {"xy": "step", "xz": "jitter", "yz": "bnot"}),
@@ -340,16 +341,16 @@ def torus_scale_note(model) -> str:
     if model.order == "progressive" and model.balance:
         return ("Each level of this progressive model ends with the balance of its prefix (model-format.md "
                 "§5.1, §6), so the last column is 0 at every m, at the price of low-band energy above the "
-                "balanced frequencies (docs/progressive.md, \"Balanced levels\").")
+                "balanced frequencies (docs/reports/progressive.md, \"Balanced levels\").")
     if model.order == "progressive" and model.relax:
         return ("After its levels this progressive model relaxes every prefix jointly (model-format.md §6.1), "
                 "with a term that cancels each prefix's power at 0 < |q| <= min(8, sqrt(n)/4): the last "
-                "column stays near 0 at every m (docs/progressive.md, \"Jointly relaxed prefixes\").")
+                "column stays near 0 at every m (docs/reports/progressive.md, \"Jointly relaxed prefixes\").")
     if model.order == "progressive":
         return ("A progressive model's levels hold their earlier points in place, so whatever imbalance a "
                 "level's insertion leaves at the torus scale stays in every larger set: the last column "
                 "keeps a small power that the stratified input of a set model would not leave "
-                "(bnot-2d-stratified: at most 0.0008; docs/progressive.md).")
+                "(bnot-2d-stratified: at most 0.0008; docs/reports/progressive.md).")
     if model.input == "uniform":
         return ("A cascade of local filters moves each point a bounded distance per layer, so density "
                 "fluctuations on scales far beyond the receptive field relax slowly: E_low stays within "
@@ -524,7 +525,7 @@ def card_dither(name: str, card: Card, model) -> list[str]:
 def card_mask(name: str, card: Card, model) -> list[str]:
     """Mask models (scalar, vector, spatiotemporal): dpc.analysis.masks numbers next to
     void-and-cluster (STBN for spatiotemporal) and white noise at the trained size, 8 masks
-    (4 volumes) each; docs/masks.md has the full comparison (python models/mask_report.py)."""
+    (4 volumes) each; docs/reports/masks.md has the full comparison (python -m lab.masks.mask_report)."""
     from dpc import masks as M
     from dpc.analysis import masks as AM
     kind = M.mask_kind(model)
@@ -571,8 +572,8 @@ KINDS = {"plane": card_plane, "nd": card_nd, "subspaces": card_subspaces,
 # ---- the page -------------------------------------------------------------------------------
 
 INTRO = ["# Bundled models", "",
-         "Made by `python models/model_cards.py` (this page and `docs/figures/models/` are its "
-         "output; `python models/model_cards.py NAME` redoes one card). "
+         "Made by `python -m lab.models.model_cards` (this page and `docs/reports/figures/models/` are its "
+         "output; `python -m lab.models.model_cards NAME` redoes one card). "
          "Conventions: P = |Σ_k e^{2πi⟨q,x_k⟩}|²/m at integer q, white noise = 1; rings "
          "b ≤ |q| < b + 1; ν = |q|/m^(1/n); E_low(ν) = mean P over 0 < ν' < ν; anisotropy = mean "
          "over 0.5 ≤ ν ≤ 4 in dB (the isotropic floor of 100 sets is about −20 dB); δ_min = "

@@ -1,11 +1,11 @@
 """The paper's result figures redone with dpc's bundled models and analysis tools.
 
-    python models/results.py fig8     # one figure: its PNG and its section of docs/results.md
-    python models/results.py all      # every figure (about 15 minutes on 2 cores)
+    python -m lab.models.results fig8     # one figure: its PNG and its section of docs/reports/results.md
+    python -m lab.models.results all      # every figure (about 15 minutes on 2 cores)
 
 Figures: 8 (2-D patterns vs their targets), 9 (blue noise in 2 … 10 dimensions), 10 (3-D
 subspace patterns), 11 (discrepancy vs point count), 12 (integration error vs point count),
-17 (point counts other than the trained one), 23 (dithering). Each section of docs/results.md is
+17 (point counts other than the trained one), 23 (dithering). Each section of docs/reports/results.md is
 replaced by the command that makes it; the rest of the page is kept.
 """
 
@@ -26,18 +26,17 @@ import numpy as np  # noqa: E402
 import dpc  # noqa: E402
 from dpc import analysis, baselines  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import model_cards as MC  # noqa: E402  (targets and metrics shared with the model cards)
+from lab.common import REPORTS  # noqa: E402
+from lab.models import model_cards as MC  # noqa: E402  (targets and metrics shared with the model cards)
 
-ROOT = Path(__file__).resolve().parents[1]
-FIG = ROOT / "docs" / "figures" / "results"
-PAGE = ROOT / "docs" / "results.md"
+FIG = REPORTS / "figures" / "results"
+PAGE = REPORTS / "results.md"
 SETS = 100
 
 HEAD = ["# Results: the paper's figures redone with dpc", "",
-        "Every section is made by the command in its first line (`python models/results.py all` "
+        "Every section is made by the command in its first line (`python -m lab.models.results all` "
         "makes them all); numbers are measured on the bundled models "
-        "([models.md](models.md) has their cards). Conventions as in [analysis.md](analysis.md): "
+        "([models.md](models.md) has their cards). Conventions as in [analysis.md](../analysis.md): "
         "P normalised so that white noise = 1, ν = |q|/m^(1/n), E_low(ν) = mean P over "
         "0 < ν' < ν, rel. L1 = Σ|P − T| / Σ T over the target's rings.", ""]
 TAIL = ["Reference data (targets, BNOT sets, integrand spectra): `sinbag/deepsampling`, BSD "
@@ -115,7 +114,7 @@ def fig8() -> None:
     path = savefig(fig, "fig8.png")
     print("\n".join(rows))
     write_section("fig8", ["## Fig. 8: 2-D patterns against their targets", "",
-                           "`python models/results.py fig8`: one set, the mean power spectrum and the "
+                           "`python -m lab.models.results fig8`: one set, the mean power spectrum and the "
                            "radial mean (100 sets) against the target, for each 2-D model.", "",
                            *rows, "", f"![Fig. 8]({path})", ""])
 
@@ -159,7 +158,7 @@ def fig9() -> None:
     path = savefig(fig, "fig9.png")
     print("\n".join(rows))
     write_section("fig9", ["## Fig. 9: blue noise from 2-D to 10-D", "",
-                           "`python models/results.py fig9`: radial mean spectra (2-D exact; 3-D and "
+                           "`python -m lab.models.results fig9`: radial mean spectra (2-D exact; 3-D and "
                            "up Monte Carlo, 128 frequencies per ring, as the paper's Sec. 4.5) of "
                            "each n-D model, 100 sets, against the authors' BNOT target of that "
                            "dimension. Their 5-D and 10-D files are their 2-D BNOT spectrum re-indexed in "
@@ -212,7 +211,7 @@ def fig10() -> None:
     path = savefig(fig, "fig10.png")
     print("\n".join(rows))
     write_section("fig10", ["## Fig. 10: different patterns in different subspaces", "",
-                            "`python models/results.py fig10`: the 2-D spectra of the xy, xz and yz "
+                            "`python -m lab.models.results fig10`: the 2-D spectra of the xy, xz and yz "
                             "projections of the 3-D models (100 sets) and their radial means against "
                             "each projection's target; for projective-3d, whose loss also has a 3-D term, the "
                             "3-D spectrum (Monte Carlo, 128 frequencies per ring) against the 3-D "
@@ -260,7 +259,7 @@ def fig11() -> None:
     path = savefig(fig, "fig11.png")
     print("\n".join(rows))
     write_section("fig11", ["## Fig. 11: discrepancy", "",
-                            "`python models/results.py fig11`: L2-star discrepancy "
+                            "`python -m lab.models.results fig11`: L2-star discrepancy "
                             "(`scipy.stats.qmc.discrepancy`, non-periodic unit cube), mean of 20 sets "
                             "per point count; 3-D counts are 64, 512, 4,096 (cubes, for jitter). dpc "
                             "models use the scale-aware radius away from their trained m = 1,024.",
@@ -295,7 +294,7 @@ def fig12() -> None:
     path = savefig(fig, "fig12.png")
     print("\n".join(rows))
     write_section("fig12", ["## Fig. 12: Monte Carlo integration error vs point count", "",
-                            "`python models/results.py fig12`: relative variance (variance of the "
+                            "`python -m lab.models.results fig12`: relative variance (variance of the "
                             "estimate over 64 realisations / its squared mean, mean over 10 "
                             "integrands; `dpc.analysis.integration_study`) for Gaussian and "
                             "Heaviside (half-space) integrands, 2-D and 3-D. 3-D counts are cubes "
@@ -337,7 +336,7 @@ def fig17() -> None:
     path = savefig(fig, "fig17.png")
     print("\n".join(rows))
     write_section("fig17", ["## Fig. 17: point counts other than the trained one", "",
-                            f"`python models/results.py fig17`: bnot-2d (trained at m = {m:,}) run at "
+                            f"`python -m lab.models.results fig17`: bnot-2d (trained at m = {m:,}) run at "
                             "m' = m/4 … 64 m with the scale-aware radius, against the authors' BNOT "
                             "target for m = 1,024 in normalised frequency ν (the paper went from m/2 "
                             "to 2 m), from the uniform input points it was trained on and from "
@@ -380,7 +379,7 @@ def fig23() -> None:
     path = savefig(fig, "fig23.png")
     print("\n".join(rows))
     write_section("fig23", ["## Fig. 23: dithering", "",
-                            "`python models/results.py fig23` (same as `dpc dither IMAGE -m dither-32 -o out.png`): "
+                            "`python -m lab.models.results fig23` (same as `dpc dither IMAGE -m dither-32 -o out.png`): "
                             "matplotlib's sample photograph dithered with the dither-32 mask (seed 0), "
                             "a white-noise mask and the 32 × 32 Bayer matrix. The error column "
                             "compares the dithered and original images after the same Gaussian blur "

@@ -1,7 +1,7 @@
 """The design study behind progressive dpc (docs/progressive.md, "Design"): prefix quality of
 the alternatives measured before progressive-2d was chosen.
 
-    python bench/progressive_alternatives.py            # 16 sets of 1,024 points, prints a table
+    python -m lab.progressive.alternatives            # 16 sets of 1,024 points, prints a table
 
 For each alternative and prefix n = 16 ... 1,024: E_low nu<0.5 of the prefixes over that of a
 bnot-2d-stratified set made for n points (the progressive-dpc issue's goal: <= 3), and delta_min.
@@ -35,9 +35,7 @@ import dpc
 from dpc.analysis.pcf import min_distance
 from dpc.analysis.spectrum import low_frequency_energy, radial_spectrum
 from dpc.model_file import ModelSpec, read_model, write_model
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "models"))
-from make_progressive_2d import PROGRESSIVE, repulsion_layers, schedule_layers  # noqa: E402
+from models.make_progressive_2d import PROGRESSIVE, repulsion_layers, schedule_layers
 
 
 def eliminate(points: np.ndarray, target: int) -> tuple[np.ndarray, np.ndarray]:

@@ -1,8 +1,8 @@
 """Quality of every power-of-two prefix of progressive point sets (docs/progressive.md).
 
-    python bench/bench_progressive.py                 # 64 sets, m = 1,024 and 4,096: writes docs/progressive.md
-    python bench/bench_progressive.py --quick         # 16 sets, m = 1,024, prints only
-    python bench/bench_progressive.py --quick --model runs/x.onnx    # another progressive model
+    python -m lab.progressive.bench_progressive                 # 64 sets, m = 1,024 and 4,096: writes docs/reports/progressive.md
+    python -m lab.progressive.bench_progressive --quick         # 16 sets, m = 1,024, prints only
+    python -m lab.progressive.bench_progressive --quick --model runs/x.onnx    # another progressive model
 
 For each m and each prefix n = 16, 32, ..., m, over the same sets: E_low below nu = 0.5 and 0.75
 (exact, dpc.analysis.low_frequency_energy; white noise = 1), delta_min (minimum toroidal distance
@@ -24,18 +24,16 @@ import time
 from pathlib import Path
 
 import numpy as np
-from bench_generate import cpu_name  # one CPU description for every benchmark page
-from doc_sections import replace_section
-from progressive_alternatives import levels_model, repulsion_layers  # the design study's cascades
 
 import dpc
 from dpc import baselines
 from dpc.analysis.integration import integrands, relative_variance
 from dpc.analysis.pcf import min_distance
 from dpc.analysis.spectrum import low_frequency_energy
+from lab.common import REPORTS, ROOT, cpu_name, replace_section
+from lab.progressive.alternatives import levels_model, repulsion_layers  # the design study's cascades
 
-ROOT = Path(__file__).resolve().parents[1]
-DOC = ROOT / "docs" / "progressive.md"
+DOC = REPORTS / "progressive.md"
 PROGRESSIVE = "progressive-2d"
 BALANCED = "progressive-2d-balanced"
 SET_MODEL = "bnot-2d-stratified"
@@ -197,7 +195,7 @@ def section(
 ) -> str:
     sizes = sorted(next(iter(ms.values())))
     lines = [
-        f"Measured by `python bench/bench_progressive.py` (tree {tree()}) on {cpu_name()}: {count} sets of each "
+        f"Measured by `python -m lab.progressive.bench_progressive` (tree {tree()}) on {cpu_name()}: {count} sets of each "
         "sampler and size, set i from seed i. White noise has E_low = 1; delta_min = 1 is the densest packing.",
         "",
         "Goals:",

@@ -1,7 +1,7 @@
 """Jointly relaxed progressive sets: every prefix against the issue's goals (docs/progressive.md).
 
-    python bench/bench_progressive_relaxed.py            # 64 sets, m = 1,024 and 4,096: writes docs/progressive.md
-    python bench/bench_progressive_relaxed.py --quick    # 8 sets, m = 1,024, prints only
+    python -m lab.progressive.bench_progressive_relaxed            # 64 sets, m = 1,024 and 4,096: writes docs/reports/progressive.md
+    python -m lab.progressive.bench_progressive_relaxed --quick    # 8 sets, m = 1,024, prints only
 
 progressive-2d-relaxed's sets (libdpc: progressive-2d's levels, then the prefix relaxation of
 docs/model-format.md §6.1, every point moving under the energy of every prefix 16 * 2^j at once),
@@ -17,8 +17,11 @@ import argparse
 import time
 
 import numpy as np
-from bench_generate import cpu_name
-from bench_progressive import (
+
+import dpc
+from dpc import baselines
+from lab.common import cpu_name, replace_section
+from lab.progressive.bench_progressive import (
     DOC,
     PROGRESSIVE,
     SET_MODEL,
@@ -30,10 +33,6 @@ from bench_progressive import (
     tradeoff_table,
     tree,
 )
-from doc_sections import replace_section
-
-import dpc
-from dpc import baselines
 
 RELAXED_MODEL = "progressive-2d-relaxed"
 RELAXED = "progressive dpc, relaxed"
@@ -83,7 +82,7 @@ def section(
     results: dict[int, dict], checks, count: int, seconds: dict[int, dict[str, float]], curve: dict, curve_m: int
 ) -> str:
     lines = [
-        f"Measured by `python bench/bench_progressive_relaxed.py` (tree {tree()}) on {cpu_name()}: {count} sets "
+        f"Measured by `python -m lab.progressive.bench_progressive_relaxed` (tree {tree()}) on {cpu_name()}: {count} sets "
         f"of each sampler and size, set i from seed i; `{RELAXED_MODEL}`'s sets (libdpc), median seconds per set "
         "on one thread: "
         + ", ".join(

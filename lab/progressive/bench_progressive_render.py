@@ -1,9 +1,9 @@
 """Progressive samplers in Mitsuba 3: image error against samples per pixel (docs/progressive.md).
 
-    python bench/bench_progressive_render.py            # writes docs/progressive.md's rendering section
-    python bench/bench_progressive_render.py --quick    # smaller, prints only
+    python -m lab.progressive.bench_progressive_render            # writes docs/reports/progressive.md's rendering section
+    python -m lab.progressive.bench_progressive_render --quick    # smaller, prints only
 
-The soft-shadow scene of bench/bench_rendering.py (direct lighting, a large area light) at
+The soft-shadow scene of lab/rendering/bench_rendering.py (direct lighting, a large area light) at
 `--width`^2 pixels, rendered at 1, 2, 4, ..., `--max-spp` samples per pixel over `--seeds` seeds
 with: the dpc plugin on progressive-2d (progressive tables: a pixel's first n samples are
 the table's prefix), on progressive-2d-balanced (the same, each level balanced: dpc.balance)
@@ -19,9 +19,9 @@ progressive, pool" is that sampler on progressive-2d's sets (the same levels, un
 two rows show what the relaxation does in one sampler, without the dpc plugin's screen-space
 shifts and folding.
 Image MSE against bench_rendering.py's reference (ldsampler at 8,192 spp, two halves of other seeds),
-mean over seeds; a figure of MSE against spp goes to docs/figures/progressive/.
+mean over seeds; a figure of MSE against spp goes to docs/reports/figures/progressive/.
 
-    python bench/bench_progressive_render.py --stop     # a renderer that stops early: own section, ~30 min
+    python -m lab.progressive.bench_progressive_render --stop     # a renderer that stops early: own section, ~30 min
 
 The stop-early study: the pool sampler on sequences of 128 points rendered at n < 128 samples
 per pixel reads each sequence's first n points, also between the levels (24, 40, 48, ... spp),
@@ -38,13 +38,11 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "bench"))
-import bench_rendering as BR  # noqa: E402  (the scenes and the reference of the rendering bench)
-from doc_sections import replace_section  # noqa: E402
+from lab import common as BR  # the scenes and the reference of the rendering study
+from lab.common import REPORTS, replace_section
 
-DOC = ROOT / "docs" / "progressive.md"
-FIG = ROOT / "docs" / "figures" / "progressive" / "render-mse.png"
+DOC = REPORTS / "progressive.md"
+FIG = REPORTS / "figures" / "progressive" / "render-mse.png"
 SCENE = "soft-shadow"
 SAMPLERS = [
     "dpc progressive",
@@ -74,7 +72,7 @@ def pool_points(kind: str, max_spp: int) -> np.ndarray:
     kind "... shuffled": the same sets with each level's points in a random order (the order
     before docs/model-format.md §6 ordered the levels)."""
     import dpc
-    from bench_progressive_between import shuffled_levels
+    from lab.progressive.bench_progressive_between import shuffled_levels
     from dpc import baselines
 
     if kind == "pmj02bn":
@@ -210,7 +208,7 @@ def run_stop(width: int, seeds: int) -> dict:
 def stop_section(res: dict) -> str:
     rows = list(STOP_SAMPLERS)
     lines = [
-        f"Measured by `python bench/bench_progressive_render.py --stop` on {res['cpu']}: Mitsuba 3 `scalar_rgb`, "
+        f"Measured by `python -m lab.progressive.bench_progressive_render --stop` on {res['cpu']}: Mitsuba 3 `scalar_rgb`, "
         f"the {SCENE} scene at {res['width']} x {res['width']} pixels, {res['seeds']} seeds per cell; the pool "
         f"sampler of the table above on sequences of {STOP_TABLE} points, stopped at n samples per pixel (each "
         'pixel\'s first n points of its sequences). Image MSE; "levels shuffled": the same sets with each '
@@ -276,7 +274,7 @@ def figure(res: dict) -> None:
 def section(res: dict) -> str:
     counts = res["counts"]
     lines = [
-        f"Measured by `python bench/bench_progressive_render.py` on {res['cpu']}: Mitsuba 3 `scalar_rgb`, "
+        f"Measured by `python -m lab.progressive.bench_progressive_render` on {res['cpu']}: Mitsuba 3 `scalar_rgb`, "
         f"the {SCENE} scene at {res['width']} x {res['width']} pixels, {res['seeds']} seeds per cell; reference "
         f"ldsampler at {BR.REF_SPP:,} spp (its own MSE {res['ref_mse']:.1e}).",
         "",

@@ -1,6 +1,6 @@
 """dpc's sampler in a real renderer: Mitsuba 3 (scalar_rgb), against every built-in sampler.
 
-    python bench/bench_rendering.py [--width 128] [--seeds 48] [--quick]
+    python -m lab.rendering.bench_rendering [--width 128] [--seeds 48] [--quick]
 
 Three scenes built from Mitsuba's own scene dicts: the Cornell box with the `direct` integrator,
 a soft-shadow scene (a sphere over a plane under a large area light, `direct`), and the Cornell
@@ -29,71 +29,16 @@ import time
 from pathlib import Path
 
 import numpy as np
-from doc_sections import replace_section
 
-ROOT = Path(__file__).resolve().parents[1]
-CACHE = ROOT / "build" / "bench-rendering"
+from lab.common import CACHE, DIRECT_SCENES, REF_SPP, ROOT, SCENES, cpu_name, reference, render, replace_section
+
 DOC = ROOT / "docs" / "rendering.md"
 FIGS = ROOT / "docs" / "figures" / "rendering"
 SAMPLERS = ["independent", "stratified", "multijitter", "orthogonal", "ldsampler", "dpc"]
 MSE_SPP = [4, 16, 64, 256]
 SCREEN_SPP = [1, 2, 4, 16]
-REF_SPP = 8192
 BAND = 3 / 16
 TIME_SPP, TIME_REPEATS = 64, 7
-
-
-def scene_dict(mi, name: str, width: int) -> dict:
-    film = {"type": "hdrfilm", "width": width, "height": width, "rfilter": {"type": "box"}}
-    if name in ("cornell-direct", "cornell-path"):
-        d = mi.cornell_box()
-        d["sensor"]["film"] = film
-        d["integrator"] = {"type": "direct"} if name == "cornell-direct" else {"type": "path", "max_depth": 5}
-        return d
-    if name == "soft-shadow":
-        T = mi.ScalarTransform4f
-        return {
-            "type": "scene",
-            "integrator": {"type": "direct", "emitter_samples": 1, "bsdf_samples": 0},
-            "sensor": {"type": "perspective", "fov": 40,
-                       "to_world": T().look_at(origin=[0, -1.5, 4], target=[0, 0, 0], up=[0, 1, 0]),
-                       "film": film},
-            "floor": {"type": "rectangle", "to_world": T().scale([3, 3, 1]), "bsdf": {"type": "diffuse"}},
-            "occluder": {"type": "sphere", "center": [0, 0, 0.6], "radius": 0.5, "bsdf": {"type": "diffuse"}},
-            "light": {"type": "rectangle",
-                      "to_world": T().translate([1.0, 1.0, 2.2]).rotate([1, 0, 0], 180).scale([1.2, 1.2, 1]),
-                      "emitter": {"type": "area", "radiance": {"type": "rgb", "value": 2.0}}},
-        }
-    raise ValueError(name)
-
-
-SCENES = ["cornell-direct", "soft-shadow", "cornell-path"]
-DIRECT_SCENES = ["cornell-direct", "soft-shadow"]
-
-
-def render(mi, scene: str, sampler: str, spp: int, seed: int, width: int, props: dict | None = None):
-    """One render: (image, seconds, samples per pixel the sampler used); props: the sampler's other
-    properties."""
-    d = scene_dict(mi, scene, width)
-    d["sensor"]["sampler"] = {"type": sampler, "sample_count": spp, "seed": seed, **(props or {})}
-    sc = mi.load_dict(d)
-    used = sc.sensors()[0].sampler().sample_count()
-    t = time.perf_counter()
-    img = np.array(mi.render(sc), dtype=np.float64)
-    return img, time.perf_counter() - t, used
-
-
-def reference(mi, scene: str, width: int):
-    CACHE.mkdir(parents=True, exist_ok=True)
-    path = CACHE / f"ref-{scene}-{width}-{REF_SPP}.npz"
-    if path.is_file():
-        z = np.load(path)
-        return z["ref"], float(z["ref_mse"])
-    halves = [render(mi, scene, "ldsampler", REF_SPP // 2, 1000 + k, width)[0] for k in range(2)]
-    ref = 0.5 * (halves[0] + halves[1])
-    ref_mse = float(((halves[0] - halves[1]) ** 2).mean() / 4)   # error of the mean of two halves
-    np.savez(path, ref=ref, ref_mse=ref_mse)
-    return ref, ref_mse
 
 
 def low_band_energy(err: np.ndarray) -> float:
@@ -117,16 +62,6 @@ def radial_power(err: np.ndarray, bins: int = 24):
     return 0.5 * (edges[1:] + edges[:-1]), vals
 
 
-def cpu_name() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown CPU"
-
-
 def run(args) -> dict:
     import mitsuba as mi
 
@@ -140,7 +75,7 @@ def run(args) -> dict:
     errors_for_figure = {}
     for scene in SCENES:
         t0 = time.perf_counter()
-        ref, ref_mse = reference(mi, scene, args.width)
+        ref, ref_mse = reference(mi, scene, args.width, REF_SPP)
         lum_ref = ref.mean(-1)
         rs = {"ref_mse": ref_mse, "samplers": {}}
         print(f"{scene}: reference ldsampler {REF_SPP} spp ready ({time.perf_counter() - t0:.0f} s), "
@@ -285,7 +220,7 @@ def figures(res: dict) -> list[str]:
 
 
 def section(res: dict, checks, figs) -> str:
-    L = [f"Measured by `python bench/bench_rendering.py` (tree {res['commit']}) on {res['cpu']} (2 threads), Mitsuba "
+    L = [f"Measured by `python -m lab.rendering.bench_rendering` (tree {res['commit']}) on {res['cpu']} (2 threads), Mitsuba "
          f"{res['mitsuba']} `scalar_rgb`, {res['width']} x {res['width']} pixels, {res['seeds']} seeds per "
          f"cell (the sampler's `seed` property). Reference: ldsampler at {res['ref_spp']:,} spp.", ""]
     for scene in SCENES:

@@ -1,6 +1,6 @@
 """Edges by slope: why the sampler trails (0,2)-nets on a pixel footprint. A synthetic study.
 
-    python bench/sampler_edge_study.py            # about half a minute
+    python -m lab.rendering.edge_study            # about half a minute
 
 A pixel's footprint integrand is dominated by geometry edges, and in a rendered scene many run
 nearly along the pixel axes (walls, a light's rim, a box's sides). For straight edges through
@@ -12,7 +12,7 @@ projections), PMJ02BN (dpc.baselines.pmj02, 10 candidates) and Owen-scrambled So
 (scipy.stats.qmc), over seeds. (0,2)-nets stratify every elementary interval (2 x n/2,
 4 x n/4, ...), dpc's sets only the 1 x n and n x 1 ones and, by being blue noise, roughly the
 square ones.
-Writes the section `edge_study` of docs/rendering.md.
+Writes the section `edge_study` of docs/reports/rendering-studies.md.
 """
 
 from __future__ import annotations
@@ -21,10 +21,11 @@ import time
 from pathlib import Path
 
 import numpy as np
-from doc_sections import replace_section
-from sampler_fold_study import point_sets  # the same pixel, PMJ02BN and Sobol' sets
 
-ROOT = Path(__file__).resolve().parents[1]
+from lab.common import REPORTS, replace_section
+from lab.rendering.fold_study import point_sets  # the same pixel, PMJ02BN and Sobol' sets
+
+DOC = REPORTS / "rendering-studies.md"
 SEEDS = 256
 EDGES = 64
 COUNTS = (16, 64)
@@ -39,7 +40,7 @@ def main() -> None:
     grid = np.stack(np.meshgrid(g, g), -1).reshape(-1, 2)
     samplers = ["dpc net", "dpc set", "PMJ02BN", "Sobol' (Owen)"]
     lines = [
-        f"Measured by `python bench/sampler_edge_study.py` ({SEEDS} seeds, {EDGES} edges per angle; mean "
+        f"Measured by `python -m lab.rendering.edge_study` ({SEEDS} seeds, {EDGES} edges per angle; mean "
         f"squared error of the covered fraction; {{seconds}} s):",
         "",
         "| spp | edge angle (rad) | " + " | ".join(samplers) + " | net / PMJ02BN | set / PMJ02BN |",
@@ -63,8 +64,8 @@ def main() -> None:
             )
     body = "\n".join(lines).replace("{seconds}", f"{time.time() - t0:.0f}")
     print(body)
-    replace_section(ROOT / "docs" / "rendering.md", "edge_study", body)
-    print("wrote docs/rendering.md (edge_study)")
+    replace_section(DOC, "edge_study", body)
+    print(f"wrote {DOC} (edge_study)")
 
 
 if __name__ == "__main__":

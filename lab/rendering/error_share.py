@@ -1,14 +1,14 @@
 """Where in the image the rendering bench's MSE comes from (docs/rendering.md).
 
-    python bench/rendering_error_share.py            # a few minutes; uses bench_rendering's references
+    python -m lab.rendering.error_share            # a few minutes; uses bench_rendering's references
 
-For each scene of bench/bench_rendering.py at 16 and 64 spp: the pixels with the highest
+For each scene of lab/rendering/bench_rendering.py at 16 and 64 spp: the pixels with the highest
 per-pixel variance of the `independent` sampler (4 renders; a measure of the pixel's integrand
 that neither compared sampler chose) are split off (the top 1%), and for dpc, ldsampler and
 multijitter (8 seeds each, the bench's seeds) the share of the image MSE in those pixels and
 the ratio of dpc's MSE to each built-in sampler's inside and outside them are printed. It tells
 whether a sampler's image MSE is decided by a few pixels (an emitter's rim seen through the pixel
-footprint) or by the whole image. Writes the section `error_share` of docs/rendering.md.
+footprint) or by the whole image. Writes the section `error_share` of docs/reports/rendering-studies.md.
 """
 
 from __future__ import annotations
@@ -16,8 +16,10 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from bench_rendering import DOC, SCENES, reference, render
-from doc_sections import replace_section
+
+from lab.common import REPORTS, SCENES, reference, render, replace_section
+
+DOC = REPORTS / "rendering-studies.md"
 
 WIDTH, SEEDS, TOP = 128, 8, 0.01
 SAMPLERS = ["dpc", "ldsampler", "multijitter"]
@@ -31,7 +33,7 @@ def main() -> None:
 
     t0 = time.time()
     lines = [
-        f"Measured by `python bench/rendering_error_share.py` ({WIDTH} x {WIDTH} pixels, {SEEDS} seeds; "
+        f"Measured by `python -m lab.rendering.error_share` ({WIDTH} x {WIDTH} pixels, {SEEDS} seeds; "
         f"hot pixels: the top {TOP:.0%} by `independent`'s per-pixel variance; {{seconds}} s):",
         "",
         "| scene | spp | hot pixels' share of the MSE: dpc / ldsampler / multijitter "

@@ -1,6 +1,6 @@
 """What folding (the baker's transform) does to a pixel's estimate. A synthetic study, no renderer.
 
-    python bench/sampler_fold_study.py            # about a minute
+    python -m lab.rendering.fold_study            # about a minute
 
 A sampler pixel estimates the integral of f over [0,1)^2 with its table shifted toroidally
 (docs/rendering.md). Folded dimensions (fold_from) return fold(v) = 1 - |2v - 1| of each value
@@ -16,7 +16,7 @@ the sequences renderers use for such integrands:
 - half-planes through the square (an occluder's edge);
 - lobe x half-plane: a Gaussian lobe times a half-plane through the square (a penumbra pixel;
   in a soft-shadow scene most pixels see no edge).
-Writes the section `fold_study` of docs/rendering.md.
+Writes the section `fold_study` of docs/reports/rendering-studies.md.
 """
 
 from __future__ import annotations
@@ -25,13 +25,13 @@ import time
 from pathlib import Path
 
 import numpy as np
-from doc_sections import replace_section
 from scipy.stats import qmc
 
 import dpc
 from dpc import baselines
+from lab.common import REPORTS, replace_section
 
-ROOT = Path(__file__).resolve().parents[1]
+DOC = REPORTS / "rendering-studies.md"
 MODEL = "bnot-2d-stratified"
 SEEDS = 64
 COUNTS = (4, 16, 64, 256)
@@ -112,7 +112,7 @@ def main() -> None:
         print(f"n = {n} done ({time.time() - t0:.0f} s)", flush=True)
     samplers = ["dpc set", "dpc set, folded", "dpc net", "dpc net, folded", "PMJ02BN", "Sobol' (Owen)"]
     lines = [
-        f"Measured by `python bench/sampler_fold_study.py` (one pixel of `dpc.Sampler` with {MODEL}, "
+        f"Measured by `python -m lab.rendering.fold_study` (one pixel of `dpc.Sampler` with {MODEL}, "
         f"{SEEDS} seeds, {K} random integrands of each kind; mean squared error of the pixel's estimate; "
         f"{time.time() - t0:.0f} s):",
         "",
@@ -130,8 +130,8 @@ def main() -> None:
         lines.append("")
     body = "\n".join(lines).rstrip()
     print(body)
-    replace_section(ROOT / "docs" / "rendering.md", "fold_study", body)
-    print("wrote docs/rendering.md (fold_study)")
+    replace_section(DOC, "fold_study", body)
+    print(f"wrote {DOC} (fold_study)")
 
 
 if __name__ == "__main__":

@@ -1,6 +1,6 @@
 """Can a better mask make the sampler's error blue at 4 spp? A synthetic study, no renderer.
 
-    python bench/sampler_mask_study.py            # about 10 minutes on one core
+    python -m lab.rendering.mask_study            # about 10 minutes on one core
 
 The sampler shifts one n-point table per dimension pair by a per-pixel mask vector
 (docs/rendering.md). Its shipped mask is optimised for 1 spp, where a pixel's error is the
@@ -25,7 +25,7 @@ measure) and the per-pixel MSE, for:
   base-4 digit permuted by a random permutation chosen per prefix: every pixel gets a (0,m,2)-net
   and every aligned 2^k x 2^k block of pixels a larger one, so neighbours fill each other's gaps
   at every sample count (no table and no mask).
-Writes the section `mask_study` of docs/rendering.md.
+Writes the section `mask_study` of docs/reports/rendering-studies.md.
 """
 
 from __future__ import annotations
@@ -38,15 +38,14 @@ import time
 from pathlib import Path
 
 import numpy as np
-from bench_rendering import low_band_energy  # the renderer bench's measure, the same band
-from doc_sections import replace_section
 from scipy.stats import qmc
 
 import dpc
+from lab.common import REPORTS, replace_section
+from lab.rendering.bench_rendering import low_band_energy  # the renderer bench's measure, the same band
+from libdpc.src.sampler import make_sampler_mask as M  # the shipped mask's optimiser
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "libdpc" / "src" / "sampler"))
-import make_sampler_mask as M  # noqa: E402  (the shipped mask's optimiser)
+DOC = REPORTS / "rendering-studies.md"
 
 TILE = 32
 SCREEN = 64
@@ -224,7 +223,7 @@ def main() -> None:
     row("2 x 2 blocks of a 64 x 64 mask for 1 spp (no table)", 4, lambda r, s: screen_blocks(wide, 2, r))
     body = "\n".join(
         [
-            f"Measured by `python bench/sampler_mask_study.py` ({SEEDS} screens of {SCREEN} x {SCREEN} "
+            f"Measured by `python -m lab.rendering.mask_study` ({SEEDS} screens of {SCREEN} x {SCREEN} "
             "pixels, one random toroidal half-plane integrand each, tables from bnot-2d-stratified; "
             f"{time.time() - t0:.0f} s):",
             "",
@@ -233,8 +232,8 @@ def main() -> None:
             *rows,
         ]
     )
-    replace_section(ROOT / "docs" / "rendering.md", "mask_study", body)
-    print("wrote docs/rendering.md (mask_study)")
+    replace_section(DOC, "mask_study", body)
+    print(f"wrote {DOC} (mask_study)")
 
 
 if __name__ == "__main__":

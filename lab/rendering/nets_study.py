@@ -1,15 +1,15 @@
 """Nets in every slot against sets in every slot but the first, in Mitsuba 3.
 
-    python bench/sampler_nets_study.py            # about 10 minutes on 2 cores
+    python -m lab.rendering.nets_study            # about 10 minutes on 2 cores
 
 Below 32 spp the default sampler has a (0,m,2)-net in dimension 0 (the pixel position) and
 folded blue-noise sets in the other slots (`net_dims = 1`); from 32 spp on it has nets in every
 slot, the choice this study measures. It renders bench_rendering's soft-shadow scene and
 path-traced Cornell box with `net_dims = 1` and with nets in all 16 slots, unfolded
 (`net_dims = 16`, `fold_from = -1`), 32 seeds each (the sampler's `seed` property 0 ... 31), against
-bench_rendering's cached references (run `python bench/bench_rendering.py` first): image MSE,
+bench_rendering's cached references (run `python -m lab.rendering.bench_rendering` first): image MSE,
 the ratio with its standard error, and the screen-space low-frequency error energy (white = 1).
-Writes the section `nets_study` of docs/rendering.md.
+Writes the section `nets_study` of docs/reports/rendering-studies.md.
 """
 
 from __future__ import annotations
@@ -18,8 +18,12 @@ import time
 
 import numpy as np
 
-import bench_rendering as br
-from doc_sections import replace_section
+
+from lab import common
+from lab.common import REPORTS, replace_section
+from lab.rendering import bench_rendering as br
+
+DOC = REPORTS / "rendering-studies.md"
 
 SEEDS = 32
 SCENES = ("soft-shadow", "cornell-path")
@@ -36,7 +40,7 @@ def main() -> None:
 
     t0 = time.time()
     lines = [
-        f"Measured by `python bench/sampler_nets_study.py` (Mitsuba {mi.__version__} `scalar_rgb`, 128 x 128 "
+        f"Measured by `python -m lab.rendering.nets_study` (Mitsuba {mi.__version__} `scalar_rgb`, 128 x 128 "
         f"pixels, {SEEDS} seeds; {{seconds}} s): dpc with sets in every slot but dimension 0 (`net_dims = 1`, "
         "the default below 32 spp) against nets in all 16 slots, unfolded (`net_dims = 16`, `fold_from = -1`, "
         "the default from 32 spp on).",
@@ -45,13 +49,13 @@ def main() -> None:
         "|---|---:|---:|---:|---:|---:|---:|",
     ]
     for scene in SCENES:
-        ref = np.load(br.CACHE / f"ref-{scene}-128-{br.REF_SPP}.npz")["ref"]
+        ref = np.load(common.CACHE / f"ref-{scene}-128-{common.REF_SPP}.npz")["ref"]
         for spp in COUNTS:
             stats = []
             for extra in (SETS, NETS):
                 mse, el = [], []
                 for seed in range(SEEDS):
-                    err = br.render(mi, scene, "dpc", spp, seed, 128, extra)[0] - ref
+                    err = common.render(mi, scene, "dpc", spp, seed, 128, extra)[0] - ref
                     mse.append(float((err**2).mean()))
                     el.append(br.low_band_energy(err.mean(-1)))
                 stats.append({"mse": float(np.mean(mse)), "mse_se": float(np.std(mse, ddof=1) / np.sqrt(SEEDS)),
@@ -63,8 +67,8 @@ def main() -> None:
             lines.append(line)
             print(line, flush=True)
     body = "\n".join(lines).replace("{seconds}", f"{time.time() - t0:.0f}")
-    replace_section(br.DOC, "nets_study", body)
-    print("wrote docs/rendering.md (nets_study)")
+    replace_section(DOC, "nets_study", body)
+    print(f"wrote {DOC} (nets_study)")
 
 
 if __name__ == "__main__":

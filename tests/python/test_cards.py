@@ -1,4 +1,4 @@
-"""A sample of docs/models.md's numbers, recomputed the way models/model_cards.py makes them
+"""A sample of docs/reports/models.md's numbers, recomputed the way lab/models/model_cards.py makes them
 (100 sets: generate_batch(100, seed=0) on the CPU, whose ISA paths all give the same bits), so
 a card that no longer follows its model or its stated definition fails here."""
 
@@ -7,7 +7,7 @@ from pathlib import Path
 import dpc
 from dpc import analysis
 
-PAGE = (Path(__file__).resolve().parents[2] / "docs" / "models.md").read_text()
+PAGE = (Path(__file__).resolve().parents[2] / "docs" / "reports" / "models.md").read_text()
 
 
 def card_row(model: str, label: str) -> list[str]:

@@ -1,5 +1,5 @@
 """The bundled model zoo: every model loads by name from the installed package, generates valid
-points, has a card spec (models/model_cards.py), a card in docs/models.md and a row in
+points, has a card spec (lab/models/model_cards.py), a card in docs/reports/models.md and a row in
 models/README.md; models derived from the authors' targets ship with their licence."""
 
 import sys
@@ -28,13 +28,10 @@ def test_model_loads_generates_and_is_documented(name):
     assert np.all((pts >= 0) & (pts < 1))
     assert np.array_equal(pts, model.generate(seed=7))
     assert model.metadata.get("dpc.description")
-    sys.path.insert(0, str(REPO / "models"))
-    try:
-        import model_cards
-    finally:
-        sys.path.pop(0)
-    assert name in model_cards.CARDS, "add a card spec to models/model_cards.py"
-    assert f"\n## {name}\n" in (REPO / "docs" / "models.md").read_text()
+    from lab.models import model_cards
+
+    assert name in model_cards.CARDS, "add a card spec to lab/models/model_cards.py"
+    assert f"\n## {name}\n" in (REPO / "docs" / "reports" / "models.md").read_text()
     assert f"`{name}.onnx`" in (REPO / "models" / "README.md").read_text()
 
 
@@ -44,12 +41,12 @@ def test_card_names_the_shipped_file(name):
     import hashlib
     import re
 
-    page = (REPO / "docs" / "models.md").read_text()
+    page = (REPO / "docs" / "reports" / "models.md").read_text()
     section = page.split(f"\n## {name}\n", 1)[1].split("\n## ", 1)[0]
     found = re.search(r"sha256 `([0-9a-f]{64})`", section)
     assert found, f"no sha256 in the card of {name}"
     assert found.group(1) == hashlib.sha256((REPO / "models" / f"{name}.onnx").read_bytes()).hexdigest(), (
-        f"docs/models.md describes another {name}.onnx: run python models/model_cards.py {name}"
+        f"docs/reports/models.md describes another {name}.onnx: run python -m lab.models.model_cards {name}"
     )
 
 
@@ -71,7 +68,7 @@ def test_headline_quality_of_the_2d_blue_noise_models():
 
 
 def test_blue_2d_is_below_bnot():
-    """docs/beyond-bnot.md on 16 sets (the page uses 100): blue-2d's low band a fraction of
+    """docs/reports/beyond-bnot.md on 16 sets (the page uses 100): blue-2d's low band a fraction of
     bnot-2d-stratified's (which matches the authors' BNOT sets), with BNOT's peak height and a
     larger minimum distance, also at 16 m; its tables end at 0 at the radius (continuous = true)."""
     from dpc import analysis
@@ -91,15 +88,12 @@ def test_blue_2d_is_below_bnot():
 
 def test_bnot_10d_keeps_no_coincident_pair():
     """Issue 14 item 3: the seeds whose sets kept a pair about 1e-5 spacings apart before
-    max_attraction (docs/training.md §2; python models/close_pairs.py bnot-10d counts 10,000
+    max_attraction (docs/training.md §2; python -m lab.models.close_pairs bnot-10d counts 10,000
     seeds) keep every pair apart, and every table respects the cap of its config (0.4 d)."""
     from dpc.model_file import read_model
 
-    sys.path.insert(0, str(REPO / "models"))
-    try:
-        from close_pairs import closest_in_spacings
-    finally:
-        sys.path.pop(0)
+    from lab.models.close_pairs import closest_in_spacings
+
     model = dpc.load("bnot-10d")
     for seed in (1050, 3890, 9487):
         assert closest_in_spacings(model.generate(seed=seed)) > 0.5, seed
@@ -110,7 +104,7 @@ def test_bnot_10d_keeps_no_coincident_pair():
 
 
 def test_projective_3d_is_blue_in_every_projection_and_in_3d():
-    """Issue 14 item 2 on 16 sets (docs/high-dimensions.md uses 100): every 2-D projection's
+    """Issue 14 item 2 on 16 sets (docs/reports/high-dimensions.md uses 100): every 2-D projection's
     E_low nu<0.5 near 0.0094 (goal 0.01) and the 3-D set's near 0.018 (goal 0.02); the trained file
     it replaced had 0.060 and 0.028."""
     from dpc.analysis.spectrum import low_frequency_energy
@@ -122,7 +116,7 @@ def test_projective_3d_is_blue_in_every_projection_and_in_3d():
 
 
 def test_projective_4d_is_blue_in_all_six_projections():
-    """docs/high-dimensions.md on 16 sets: each of the six projections near 0.035 (the trained file
+    """docs/reports/high-dimensions.md on 16 sets: each of the six projections near 0.035 (the trained file
     it replaced: 0.11; Owen-scrambled Sobol' 0.32)."""
     from dpc.analysis.spectrum import low_frequency_energy
 
@@ -134,7 +128,7 @@ def test_projective_4d_is_blue_in_all_six_projections():
 @pytest.mark.parametrize("name, floor", [("bnot-4d", 0.74), ("bnot-5d", 0.70)])
 def test_bnot_4d_and_5d_keep_points_further_apart_than_dart_throwing(name, floor):
     """Issue 14 item 3 on 16 sets: delta_min above relaxed dart throwing's (0.68 in 4-D, 0.69 in
-    5-D at m = 1,024, docs/high-dimensions.md); the files they replaced had 0.43 and 0.34."""
+    5-D at m = 1,024, docs/reports/high-dimensions.md); the files they replaced had 0.43 and 0.34."""
     from dpc import analysis
 
     assert analysis.min_distance(dpc.load(name).generate_batch(16, seed=0)).mean_ratio >= floor
@@ -159,11 +153,8 @@ def test_hand_designed_models_only_repel_and_match_their_script(name):
     coincident pairs), and no layer jumps at the radius."""
     from dpc.model_file import read_model
 
-    sys.path.insert(0, str(REPO / "models"))
-    try:
-        import make_highdim
-    finally:
-        sys.path.pop(0)
+    from models import make_highdim
+
     spec = make_highdim.MODELS[name]()
     layers = read_model(dpc.model_path(name)).layers
     assert len(layers) == len(spec.layers)
@@ -178,7 +169,7 @@ def test_dither_mask_beats_white_noise():
 
     model = dpc.load("dither-32")
     levels = [D.mask_quality(D.model_mask(model, seed=s))["levels_elow_mean"] for s in range(8)]
-    assert np.mean(levels) < 0.25, levels  # white-noise masks: 1.0 (docs/models.md)
+    assert np.mean(levels) < 0.25, levels  # white-noise masks: 1.0 (docs/reports/models.md)
 
 
 def _cpu_isas() -> list[str]:
@@ -264,7 +255,7 @@ def test_stratified_input_keeps_large_sets_blue_at_the_largest_scales():
 def test_bnot_2d_stratified_gets_its_input_by_default_and_stays_blue_at_every_scale():
     """The model records dpc.input = stratified, so the default input (auto) is stratified; at
     the trained count it is within issue #5's BNOT bounds, and at 16x it keeps E_low and has
-    no torus-scale power (docs/models.md card: ratio <= 1.03, power <= 0.0008)."""
+    no torus-scale power (docs/reports/models.md card: ratio <= 1.03, power <= 0.0008)."""
     from dpc import analysis
 
     model = dpc.load("bnot-2d-stratified")

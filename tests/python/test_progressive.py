@@ -247,7 +247,7 @@ def shuffled_levels(sets: np.ndarray, seed: int, base: int = 16) -> np.ndarray:
 
 
 def test_prefixes_between_the_levels_are_spread():
-    """A small case of bench/bench_progressive_between.py: 32 sets of 256 points of the bundled
+    """A small case of lab/progressive/bench_progressive_between.py: 32 sets of 256 points of the bundled
     progressive-2d, prefixes that end inside a level. Their E_low is below the same sets' with
     each level in a random order and below PMJ02BN's at the same n, and so is their Gaussian
     variance summed over the prefixes."""
@@ -280,7 +280,7 @@ def test_progress_counts_every_level(prog_path):
 
 
 def test_bundled_model_prefixes_are_blue_noise():
-    """A small case of bench/bench_progressive.py: 16 sets of 256 points; each power-of-two
+    """A small case of lab/progressive/bench_progressive.py: 16 sets of 256 points; each power-of-two
     prefix's low-frequency energy (white noise: 1) and minimum distance."""
     sets = dpc.load("progressive-2d", backend="cpu").generate_batch(16, 0, 256).astype(np.float64)
     for n in (16, 32, 64, 128, 256):
@@ -306,7 +306,7 @@ def test_stratify_02_makes_every_power_of_two_prefix_a_net():
 
 
 def test_relaxed_model_lowers_every_prefix_and_the_full_set():
-    """A small case of bench/bench_progressive_relaxed.py: 8 sets of 256 points of the bundled
+    """A small case of lab/progressive/bench_progressive_relaxed.py: 8 sets of 256 points of the bundled
     progressive-2d-relaxed, against the same levels unrelaxed (progressive-2d) and a dpc set of
     each size: the issue's goal (at most 3x a dpc set's E_low) for every prefix."""
     relaxed = dpc.load("progressive-2d-relaxed", backend="cpu").generate_batch(8, 0, 256).astype(np.float64)
@@ -349,14 +349,8 @@ def test_relax_prefixes_is_deterministic_matches_the_reference_and_checks_its_in
 )
 def test_bundled_progressive_models_are_what_their_script_writes(tmp_path, name, kwargs):
     """models/make_progressive_2d.py (the command each card names) remakes each file byte for byte."""
-    import sys
-
     from dpc.model_file import write_model
+    from models import make_progressive_2d
 
-    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "models"))
-    try:
-        import make_progressive_2d
-    finally:
-        sys.path.pop(0)
     write_model(make_progressive_2d.progressive_spec(name=name, **kwargs), tmp_path / "made.onnx")
     assert (tmp_path / "made.onnx").read_bytes() == Path(dpc.model_path(name)).read_bytes()

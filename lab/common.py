@@ -1,0 +1,78 @@
+"""What the lab's studies share: the repository root, the CPU's description, builds of the
+benchmark programs and the replacement of a docs page's generated section (one copy each, in
+bench/common.py, which the benchmarks use too), where the reports go, and the Mitsuba scenes with
+their cached references that the rendering and progressive studies render.
+
+Run a study from the repository root: python -m lab.<topic>.<name>."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from bench.common import ROOT, build, cpu_name, replace_section
+
+__all__ = ["ROOT", "build", "cpu_name", "replace_section", "REPORTS", "CACHE", "REF_SPP", "SCENES", "DIRECT_SCENES",
+           "scene_dict", "render", "reference"]
+
+# The measured pages (docs/reports/): measurements, not the manual.
+REPORTS = ROOT / "docs" / "reports"
+# The rendering studies' cached references and results.
+CACHE = ROOT / "build" / "bench-rendering"
+REF_SPP = 8192
+
+
+def scene_dict(mi, name: str, width: int) -> dict:
+    film = {"type": "hdrfilm", "width": width, "height": width, "rfilter": {"type": "box"}}
+    if name in ("cornell-direct", "cornell-path"):
+        d = mi.cornell_box()
+        d["sensor"]["film"] = film
+        d["integrator"] = {"type": "direct"} if name == "cornell-direct" else {"type": "path", "max_depth": 5}
+        return d
+    if name == "soft-shadow":
+        T = mi.ScalarTransform4f
+        return {
+            "type": "scene",
+            "integrator": {"type": "direct", "emitter_samples": 1, "bsdf_samples": 0},
+            "sensor": {"type": "perspective", "fov": 40,
+                       "to_world": T().look_at(origin=[0, -1.5, 4], target=[0, 0, 0], up=[0, 1, 0]),
+                       "film": film},
+            "floor": {"type": "rectangle", "to_world": T().scale([3, 3, 1]), "bsdf": {"type": "diffuse"}},
+            "occluder": {"type": "sphere", "center": [0, 0, 0.6], "radius": 0.5, "bsdf": {"type": "diffuse"}},
+            "light": {"type": "rectangle",
+                      "to_world": T().translate([1.0, 1.0, 2.2]).rotate([1, 0, 0], 180).scale([1.2, 1.2, 1]),
+                      "emitter": {"type": "area", "radiance": {"type": "rgb", "value": 2.0}}},
+        }
+    raise ValueError(name)
+
+
+SCENES = ["cornell-direct", "soft-shadow", "cornell-path"]
+DIRECT_SCENES = ["cornell-direct", "soft-shadow"]
+
+
+def render(mi, scene: str, sampler: str, spp: int, seed: int, width: int, props: dict | None = None):
+    """One render: (image, seconds, samples per pixel the sampler used); props: the sampler's other
+    properties."""
+    d = scene_dict(mi, scene, width)
+    d["sensor"]["sampler"] = {"type": sampler, "sample_count": spp, "seed": seed, **(props or {})}
+    sc = mi.load_dict(d)
+    used = sc.sensors()[0].sampler().sample_count()
+    t = time.perf_counter()
+    img = np.array(mi.render(sc), dtype=np.float64)
+    return img, time.perf_counter() - t, used
+
+
+def reference(mi, scene: str, width: int, spp: int = REF_SPP):
+    """The scene's reference image at spp samples per pixel (ldsampler, two halves of other seeds,
+    cached in CACHE) and the squared error of that mean, from the halves' difference."""
+    CACHE.mkdir(parents=True, exist_ok=True)
+    path = CACHE / f"ref-{scene}-{width}-{spp}.npz"
+    if path.is_file():
+        z = np.load(path)
+        return z["ref"], float(z["ref_mse"])
+    halves = [render(mi, scene, "ldsampler", spp // 2, 1000 + k, width)[0] for k in range(2)]
+    ref = 0.5 * (halves[0] + halves[1])
+    ref_mse = float(((halves[0] - halves[1]) ** 2).mean() / 4)   # error of the mean of two halves
+    np.savez(path, ref=ref, ref_mse=ref_mse)
+    return ref, ref_mse

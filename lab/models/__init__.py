@@ -1,0 +1,1 @@
+"""The models studies and reports."""

@@ -1,0 +1,1 @@
+"""The progressive studies and reports."""
