@@ -1,4 +1,5 @@
-"""Runs the code blocks of README.md and docs/*.md that a reader copies, on the installed package,
+"""Runs the code blocks of README.md, docs/*.md (the manual) and docs/reports/*.md (the lab's
+measurements) that a reader copies, on the installed package,
 in a fresh copy of the repository's tracked files (so relative paths such as
 models/bnot-2d.onnx resolve as they do for a reader).
 
@@ -58,6 +59,8 @@ class Block:
 
 
 def parse(doc: Path) -> list[Block]:
+    name = doc.relative_to(REPO).as_posix() if doc.is_relative_to(REPO) else doc.name
+    name = name.removeprefix("docs/")
     lines = doc.read_text(encoding="utf-8").split("\n")
     out, i = [], 0
     while i < len(lines):
@@ -67,18 +70,20 @@ def parse(doc: Path) -> list[Block]:
             continue
         ticks, lang = m.group(1), m.group(2).lower()
         end = next((j for j in range(i + 1, len(lines)) if lines[j].strip() == ticks), None)
-        assert end is not None, f"{doc.name}:{i + 1}: a fence that is never closed"
+        assert end is not None, f"{name}:{i + 1}: a fence that is never closed"
         indent = len(lines[i]) - len(lines[i].lstrip())
         code = "\n".join(ln[indent:] if ln[:indent].isspace() else ln for ln in lines[i + 1 : end]) + "\n"
         mk = MARK.match(lines[i - 1]) if i else None
         mark, arg = (mk.group(1), (mk.group(2) or "").strip()) if mk else ("", "")
-        out.append(Block(doc.name, i + 1, lang, RUN_LANGS.get(lang, ""), mark, arg, code))
+        out.append(Block(name, i + 1, lang, RUN_LANGS.get(lang, ""), mark, arg, code))
         i = end + 1
     return out
 
 
 def docs() -> list[Path]:
-    return [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]
+    """README, the manual (docs/*.md) and the lab's reports (docs/reports/*.md)."""
+    manual, reports = sorted((REPO / "docs").glob("*.md")), sorted((REPO / "docs" / "reports").glob("*.md"))
+    return [REPO / "README.md", *manual, *reports]
 
 
 def all_blocks() -> list[Block]:
@@ -149,7 +154,19 @@ def test_the_docs_run_blocks_of_every_language():
     found = {(b.doc, b.kind) for b in all_blocks() if b.mark == "test"}
     for want in [("README.md", "bash"), ("README.md", "python"), ("README.md", "c"), ("training.md", "bash")]:
         assert want in found, want
-    assert ("rendering.md", "python") in found and ("rendering.md", "cpp") in found and ("models.md", "python") in found
+    assert ("rendering.md", "python") in found and ("rendering.md", "cpp") in found
+    assert ("reports/models.md", "python") in found
+
+
+def test_every_report_says_it_is_measurements():
+    """docs/reports/ holds the lab's output, not the manual: each page says so first, with the
+    command that makes it and the machine it ran on."""
+    pages = sorted((REPO / "docs" / "reports").glob("*.md"))
+    assert len(pages) >= 5, pages
+    for page in pages:
+        head = page.read_text(encoding="utf-8").split("\n\n")[1]
+        assert head.startswith("> Measurements, not the manual: made by `python "), (page.name, head[:80])
+        assert "machine:" in head, (page.name, head[:200])
 
 
 @pytest.fixture(scope="module")
