@@ -61,7 +61,7 @@ _OLD_TEMP_AGE = 3600.0  # seconds; pid-less temporaries carry no writer to ask a
 
 
 def _running(pid: int) -> bool:
-    if pid == os.getpid():
+    if pid == os.getpid() or os.name == "nt":  # Windows' os.kill(pid, 0) would end the process
         return True
     try:
         os.kill(pid, 0)

@@ -220,7 +220,7 @@ def available() -> dict[str, str]:
 
 
 def mask(
-    name: str,
+    name: str = "annealed",
     size: int | None = None,
     seed: int = 0,
     frames: int | None = None,
@@ -228,10 +228,11 @@ def mask(
     progress=None,
     max_pixels: int | None = None,
 ) -> np.ndarray:
-    """A rank-normalised mask from a gridded model (bundled name or .onnx path) or a baseline
-    (see the module doc). ``size`` (pixels per side) defaults to the model's grid; ``frames``:
-    spatiotemporal masks; ``channels``: baselines and ``annealed`` only (a vector model has its
-    own). ``progress(done, total)``: reports an ``annealed`` design made on the spot
+    """A rank-normalised mask from a gridded model (bundled name or .onnx path), ``annealed``
+    (the default, as in ``dpc mask``) or a baseline (see the module doc). ``size`` (pixels per
+    side) defaults to the model's grid (64 for ``annealed``); ``frames``: spatiotemporal masks;
+    ``channels``: baselines and ``annealed`` only (a vector model has its own).
+    ``progress(done, total)``: reports an ``annealed`` design made on the spot
     (:func:`dpc.mask_design.anneal_mask`).
 
     Limits, checked before any work (:class:`dpc.errors.LimitError` beyond them): the mask's

@@ -152,3 +152,11 @@ def test_images_are_checked_by_their_header_before_decoding(tmp_path):
     with pytest.raises(InvalidArgumentError) as e:
         read_image(big, max_pixels=math.inf)  # gets past the header; the data is too short
     assert not isinstance(e.value, LimitError)
+
+
+def test_dpc_mask_of_a_huge_size_is_a_limit_error():
+    """dpc.mask's default source is annealed, as dpc mask's: 2^40 per side is refused before any
+    work, not a TypeError from the binding."""
+    with pytest.raises(LimitError, match="1099511627776 x 1099511627776"):
+        dpc.mask(size=2**40)
+    assert np.array_equal(dpc.mask(), M.mask("annealed", size=64, seed=0))
