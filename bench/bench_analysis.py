@@ -29,9 +29,9 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 import numpy as np
+from common import ROOT, cpu_name
 
 CASES = [("100 x 1,024", 100, 1024, 10.0), ("16 x 65,536", 16, 65536, 60.0)]
-from common import ROOT, cpu_name
 
 
 def command() -> list[str]:
@@ -42,10 +42,16 @@ def command() -> list[str]:
 def versions() -> dict:
     import matplotlib
     import scipy
-    out = {"python": platform.python_version(), "numpy": np.__version__,
-           "scipy": scipy.__version__, "matplotlib": matplotlib.__version__}
+
+    out = {
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+        "matplotlib": matplotlib.__version__,
+    }
     try:
         import threadpoolctl
+
         out["threadpoolctl"] = threadpoolctl.__version__
         blas = [i for i in threadpoolctl.threadpool_info() if i["user_api"] == "blas"]
         if blas:
@@ -57,6 +63,7 @@ def versions() -> dict:
 
 def run_case(sets: int, m: int, repeats: int, tmp: Path) -> dict:
     from dpc import baselines
+
     data = tmp / f"jitter-{sets}x{m}.npy"
     np.save(data, baselines.generate("jitter", m, dims=2, count=sets, seed=0))
     walls, cpus, loads = [], [], []
@@ -65,18 +72,23 @@ def run_case(sets: int, m: int, repeats: int, tmp: Path) -> dict:
         loads.append(os.getloadavg()[0])
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         t0 = time.perf_counter()
-        r = subprocess.run(command() + ["analyze", "-i", str(data), "-o", str(out)],
-                           capture_output=True, text=True)
+        r = subprocess.run(command() + ["analyze", "-i", str(data), "-o", str(out)], capture_output=True, text=True)
         walls.append(time.perf_counter() - t0)
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
         cpus.append(after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime)
         if r.returncode != 0:
             raise SystemExit(f"dpc analyze failed: {r.stderr.strip()}")
     metrics = json.loads((out / "metrics.json").read_text())
-    return {"walls": walls, "median": statistics.median(walls), "best": min(walls),
-            "cpu": statistics.median(cpus),
-            "load": statistics.mean(loads), "stages": metrics["timings_s"],
-            "notes": metrics["notes"], "discrepancy_sets": metrics["discrepancy"]["sets"]}
+    return {
+        "walls": walls,
+        "median": statistics.median(walls),
+        "best": min(walls),
+        "cpu": statistics.median(cpus),
+        "load": statistics.mean(loads),
+        "stages": metrics["timings_s"],
+        "notes": metrics["notes"],
+        "discrepancy_sets": metrics["discrepancy"]["sets"],
+    }
 
 
 def report(results: dict, info: dict) -> str:
@@ -96,19 +108,20 @@ def report(results: dict, info: dict) -> str:
         "| case | target | median wall [s] | best [s] | CPU time (user+sys) [s] | load average |",
         "|---|---|---|---|---|---|",
     ]
-    for (label, _, _, target) in CASES:
+    for label, _, _, target in CASES:
         r = results[label]
         ok = "under" if r["median"] < target else "OVER"
-        lines.append(f"| {label} points | < {target:.0f} s | {r['median']:.2f} ({ok}) | "
-                     f"{r['best']:.2f} | {r['cpu']:.2f} | {r['load']:.2f} |")
+        lines.append(
+            f"| {label} points | < {target:.0f} s | {r['median']:.2f} ({ok}) | "
+            f"{r['best']:.2f} | {r['cpu']:.2f} | {r['load']:.2f} |"
+        )
     lines += ["", "Per-stage times of the last run (seconds, `timings_s` in metrics.json):", ""]
     stages = list(dict.fromkeys(k for r in results.values() for k in r["stages"]))
     lines.append("| stage | " + " | ".join(label for label, *_ in CASES) + " |")
     lines.append("|---|" + "---|" * len(CASES))
     for st in stages:
         cells = [results[label]["stages"].get(st) for label, *_ in CASES]
-        lines.append(f"| {st} | " + " | ".join("—" if v is None else f"{v:.2f}" for v in cells)
-                     + " |")
+        lines.append(f"| {st} | " + " | ".join("—" if v is None else f"{v:.2f}" for v in cells) + " |")
     lines += ["", "Notes written by the analysis:", ""]
     for label, *_ in CASES:
         for note in results[label]["notes"]:
@@ -142,16 +155,23 @@ def main() -> int:
         cores = len(os.sched_getaffinity(0))
     except AttributeError:
         cores = os.cpu_count()
-    info = {"date": datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC"), "cpu": cpu_name(),
-            "cores": cores, "versions": versions(), "repeats": args.repeats}
+    info = {
+        "date": datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+        "cpu": cpu_name(),
+        "cores": cores,
+        "versions": versions(),
+        "repeats": args.repeats,
+    }
     results = {}
     with tempfile.TemporaryDirectory() as tmp:
         for label, sets, m, target in CASES:
             r = run_case(sets, m, args.repeats, Path(tmp))
             results[label] = r
-            print(f"{label:12s} points: median {r['median']:.2f} s, best {r['best']:.2f} s "
-                  f"(target < {target:.0f} s), CPU {r['cpu']:.2f} s, load {r['load']:.2f}; stages "
-                  + ", ".join(f"{k} {v:.2f}" for k, v in r["stages"].items()))
+            print(
+                f"{label:12s} points: median {r['median']:.2f} s, best {r['best']:.2f} s "
+                f"(target < {target:.0f} s), CPU {r['cpu']:.2f} s, load {r['load']:.2f}; stages "
+                + ", ".join(f"{k} {v:.2f}" for k, v in r["stages"].items())
+            )
     text = report(results, info)
     if not args.no_write:
         args.output.write_text(text, encoding="utf-8")

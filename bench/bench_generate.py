@@ -30,7 +30,6 @@ import subprocess
 from pathlib import Path
 
 import numpy as np
-
 from common import BUILD, ROOT, build, cpu_name
 
 
@@ -39,8 +38,9 @@ def build_revision(rev: str) -> Path:
     import tarfile
     import tempfile
 
-    sha = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", rev], check=True, capture_output=True,
-                         text=True).stdout.strip()
+    sha = subprocess.run(
+        ["git", "-C", str(ROOT), "rev-parse", "--short", rev], check=True, capture_output=True, text=True
+    ).stdout.strip()
     src, out = ROOT / "build" / f"src-{sha}", ROOT / "build" / f"bench-{sha}"
     if not (src / "CMakeLists.txt").is_file():
         with tempfile.TemporaryFile() as f:
@@ -55,11 +55,17 @@ def against(rev: str, exe: Path, isas: list[str]) -> list[str]:
     """Both builds alternated, three rounds; the per-round medians' median of each."""
     old = build_revision(rev)
     counts = [1024, 16384, 262144]
-    lines = ["", f"## Against {rev}", "",
-             f"`python bench/bench_generate.py --against {rev}`: this tree and revision {rev} built alike and "
-             "timed alternately (three rounds; medians of thread CPU time, which a busy machine disturbs less "
-             "than wall time).", "",
-             f"| model | ISA | points | {rev} | this tree | ratio |", "|---|---|---:|---:|---:|---:|"]
+    lines = [
+        "",
+        f"## Against {rev}",
+        "",
+        f"`python bench/bench_generate.py --against {rev}`: this tree and revision {rev} built alike and "
+        "timed alternately (three rounds; medians of thread CPU time, which a busy machine disturbs less "
+        "than wall time).",
+        "",
+        f"| model | ISA | points | {rev} | this tree | ratio |",
+        "|---|---|---:|---:|---:|---:|",
+    ]
     for name in ("repulsion-2d", "bnot-2d"):
         model = ROOT / "models" / f"{name}.onnx"
         for isa in isas:
@@ -70,8 +76,9 @@ def against(rev: str, exe: Path, isas: list[str]) -> list[str]:
     return lines
 
 
-def alternate(old: Path, exe: Path, model: Path, isa: str, counts: list[int],
-              key: str = "cpu_median_s") -> tuple[dict, dict]:
+def alternate(
+    old: Path, exe: Path, model: Path, isa: str, counts: list[int], key: str = "cpu_median_s"
+) -> tuple[dict, dict]:
     """Thread CPU time (or, key="median_s", wall time: for several threads) per count of two
     builds run alternately, three rounds: the median of each build's per-round medians."""
     a = {m: [] for m in counts}
@@ -95,8 +102,9 @@ def all_pairs_model() -> Path:
 
 
 def run(exe: Path, model: Path, isa: str, counts: list[int]) -> list[dict]:
-    out = subprocess.run([str(exe), str(model), isa, *map(str, counts)], check=True,
-                         capture_output=True, text=True).stdout
+    out = subprocess.run(
+        [str(exe), str(model), isa, *map(str, counts)], check=True, capture_output=True, text=True
+    ).stdout
     return [json.loads(line) for line in out.splitlines() if line.strip()]
 
 
@@ -117,13 +125,19 @@ def main() -> None:
     pairs = {isa: run(exe, ap_model, isa, [4096])[0] for isa in isas}
 
     lines = [
-        "# Performance", "",
+        "# Performance",
+        "",
         "Measured by `python bench/bench_generate.py` (single thread, Release build, medians of "
-        "repeated runs; one run of the script gives every number and ratio below).", "",
-        f"Machine: {cpu_name()}, {os.cpu_count()} logical CPUs, {platform.system()} {platform.machine()}.", "",
-        "## Generation: 2-D, 40 layers, about 32 neighbours per point (`models/repulsion-2d.onnx`)", "",
-        "| points m | " + " | ".join(f"{isa} median (CPU)" for isa in isas)
-        + "".join(f" | {isa} speed-up" for isa in isas[1:]) + " |",
+        "repeated runs; one run of the script gives every number and ratio below).",
+        "",
+        f"Machine: {cpu_name()}, {os.cpu_count()} logical CPUs, {platform.system()} {platform.machine()}.",
+        "",
+        "## Generation: 2-D, 40 layers, about 32 neighbours per point (`models/repulsion-2d.onnx`)",
+        "",
+        "| points m | "
+        + " | ".join(f"{isa} median (CPU)" for isa in isas)
+        + "".join(f" | {isa} speed-up" for isa in isas[1:])
+        + " |",
         "|---:|" + "---:|" * (2 * len(isas) - 1),
     ]
     for k, m in enumerate(counts):
@@ -136,8 +150,13 @@ def main() -> None:
         t = np.array([r["median_s"] for r in rows[isa]])
         exps[isa] = float(np.polyfit(np.log(counts), np.log(t), 1)[0])
         lines.append(f"- {isa}: {exps[isa]:.3f}")
-    lines += ["", "## All-pairs throughput (radius covers the torus; m = 4,096, 4 layers)", "",
-              "| ISA | median | pair interactions/s |", "|---|---:|---:|"]
+    lines += [
+        "",
+        "## All-pairs throughput (radius covers the torus; m = 4,096, 4 layers)",
+        "",
+        "| ISA | median | pair interactions/s |",
+        "|---|---:|---:|",
+    ]
     rates = {}
     for isa in isas:
         r = pairs[isa]
@@ -148,8 +167,13 @@ def main() -> None:
     # neighbour count.
     from dpc.model_file import read_model
 
-    lines += ["", f"## Trained 2-D blue-noise models ({best}, 40 layers)", "",
-              "| model | rho (mean spacings) | m = 1,024 | m = 65,536 |", "|---|---:|---:|---:|"]
+    lines += [
+        "",
+        f"## Trained 2-D blue-noise models ({best}, 40 layers)",
+        "",
+        "| model | rho (mean spacings) | m = 1,024 | m = 65,536 |",
+        "|---|---:|---:|---:|",
+    ]
     for name in ("bnot-2d", "bnot-2d-wide"):
         path = ROOT / "models" / f"{name}.onnx"
         rho = read_model(path).layers[0].radius[0]
@@ -163,12 +187,20 @@ def main() -> None:
         checks.append((f"1,048,576 points <= 3 s ({best})", f"{t1m:.2f} s", t1m <= 3.0))
     checks.append((f"scaling exponent <= 1.1 ({best})", f"{exps[best]:.3f}", exps[best] <= 1.1))
     if "avx2" in rates:
-        checks.append(("all-pairs >= 0.5 G pair interactions/s per core with AVX2",
-                       f"{rates['avx2'] / 1e9:.3f} G/s", rates["avx2"] >= 0.5e9))
+        checks.append(
+            (
+                "all-pairs >= 0.5 G pair interactions/s per core with AVX2",
+                f"{rates['avx2'] / 1e9:.3f} G/s",
+                rates["avx2"] >= 0.5e9,
+            )
+        )
     lines += ["", "## Against the targets of issue 2", "", "| target | measured | met |", "|---|---:|---|"]
     lines += [f"| {name} | {value} | {'yes' if ok else '**no**'} |" for name, value, ok in checks]
-    lines += ["", "Wall-clock medians; thread CPU time in parentheses (it differs from wall time only "
-              "when the machine is busy). `auto` picks the last column's ISA on this CPU."]
+    lines += [
+        "",
+        "Wall-clock medians; thread CPU time in parentheses (it differs from wall time only "
+        "when the machine is busy). `auto` picks the last column's ISA on this CPU.",
+    ]
     out = Path(args.out)
     previous = out.read_text() if out.exists() else ""
     if args.against:
@@ -176,14 +208,14 @@ def main() -> None:
     elif "\n## Against " in previous:  # keep the last comparison until the next one
         start = previous.index("\n## Against ")
         end = previous.find("\n## ", start + 1)
-        lines += previous[start:end if end >= 0 else None].rstrip("\n").split("\n")
+        lines += previous[start : end if end >= 0 else None].rstrip("\n").split("\n")
     lines.append("")
     text = "\n".join(lines)
     print(text)
     if previous:  # keep other sections (e.g. training speed) written by other benchmarks
         marker = "\n## Training"
         if marker in previous:
-            text += previous[previous.index(marker):]
+            text += previous[previous.index(marker) :]
     out.write_text(text)
     print(f"\nwrote {out}")
 

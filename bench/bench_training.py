@@ -24,15 +24,12 @@ import argparse
 import os
 import platform
 import statistics
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
-
 import torch
-
 from common import ROOT, cpu_name
 
 import dpc
@@ -76,8 +73,11 @@ def time_layer(name: str, isa: str, threads: int, reps: int) -> tuple[float, flo
     g = rng.normal(size=x.shape)
     os.environ["DPC_ISA"] = isa
     try:
-        call = lambda: (_core.layer_forward(x, w, [mask], [rho], 1e-4, 0, threads),  # noqa: E731
-                        _core.layer_backward(x, w, [mask], [rho], 1e-4, 0, g, threads))
+
+        def call():
+            _core.layer_forward(x, w, [mask], [rho], 1e-4, 0, threads)
+            _core.layer_backward(x, w, [mask], [rho], 1e-4, 0, g, threads)
+
         call()
         walls, cpus = [], []
         clock = time.thread_time if threads == 1 else time.process_time
@@ -91,8 +91,9 @@ def time_layer(name: str, isa: str, threads: int, reps: int) -> tuple[float, flo
     return statistics.median(walls), statistics.median(cpus), BATCH * M * (M - 1), in_range_pairs(x, rho)
 
 
-def time_steps(config: str, m: int, impl: str, threads: int, steps: int, isa: str = "",
-               torch_threads: int = 0) -> tuple[float, float]:
+def time_steps(
+    config: str, m: int, impl: str, threads: int, steps: int, isa: str = "", torch_threads: int = 0
+) -> tuple[float, float]:
     """(median wall, median process CPU) seconds per training step. The trainer gives torch and
     the C kernels `threads` each; torch_threads > 0 then overrides torch's."""
     cfg = load_config(ROOT / "training" / "configs" / f"{config}.toml")
@@ -131,21 +132,29 @@ def main() -> None:
     load = [os.getloadavg()[0]]
     isas = ["scalar"] + VECTOR_ISAS
 
-    lines = ["## Training", "",
-             "Measured by `python bench/bench_training.py`.", "",
-             f"Machine: {cpu_name()}, {os.cpu_count()} logical CPUs, {platform.system()} {platform.machine()}; "
-             f"torch {torch.__version__}.", "",
-             "### Layer kernels", "",
-             f"One PointFilter layer, forward + backward (`dpc._core.layer_forward` / `layer_backward`), "
-             f"batch {BATCH}, m = {M:,}, 32 bins, uniform points, median of {args.reps} calls. Candidate pairs: "
-             "m (m - 1) ordered pairs per set (what an all-pairs search would test), in-range pairs: those "
-             "with e < d < r. 1 thread: thread CPU time; 2 threads: wall time (process CPU time in "
-             "parentheses). `scalar` is the code before the vector paths, bit for bit; `x40` is the "
-             "kernel time of one training step's 40 layers.", "",
-             "| layer | search | in range / point | ISA | threads | ms (fwd+bwd) | M candidate pairs/s | M in-range pairs/s | x40 s |",
-             "|---|---|---:|---|---:|---:|---:|---:|---:|"]
+    lines = [
+        "## Training",
+        "",
+        "Measured by `python bench/bench_training.py`.",
+        "",
+        f"Machine: {cpu_name()}, {os.cpu_count()} logical CPUs, {platform.system()} {platform.machine()}; "
+        f"torch {torch.__version__}.",
+        "",
+        "### Layer kernels",
+        "",
+        f"One PointFilter layer, forward + backward (`dpc._core.layer_forward` / `layer_backward`), "
+        f"batch {BATCH}, m = {M:,}, 32 bins, uniform points, median of {args.reps} calls. Candidate pairs: "
+        "m (m - 1) ordered pairs per set (what an all-pairs search would test), in-range pairs: those "
+        "with e < d < r. 1 thread: thread CPU time; 2 threads: wall time (process CPU time in "
+        "parentheses). `scalar` is the code before the vector paths, bit for bit; `x40` is the "
+        "kernel time of one training step's 40 layers.",
+        "",
+        "| layer | search | in range / point | ISA | threads | ms (fwd+bwd) | M candidate pairs/s | M in-range "
+        "pairs/s | x40 s |",
+        "|---|---|---:|---|---:|---:|---:|---:|---:|",
+    ]
     layer_t: dict = {}
-    for name, (n, _, rho) in LAYERS.items():
+    for name, (n, _, _) in LAYERS.items():
         for isa in isas:
             for threads in (1, 2):
                 if isa == "scalar" and threads == 2:
@@ -155,32 +164,55 @@ def main() -> None:
                 layer_t[name, isa, threads] = t
                 search = "grid" if n <= 3 else "all pairs"
                 cpu_note = "" if threads == 1 else f" ({cpu * 1e3:.1f})"
-                lines.append(f"| {name} | {search} | {inr / (BATCH * M):.0f} | {isa} | {threads} | "
-                             f"{t * 1e3:.2f}{cpu_note} | {rate(cand / t / 1e6)} | {rate(inr / t / 1e6)} | "
-                             f"{LAYER_COUNT * t:.2f} |")
+                lines.append(
+                    f"| {name} | {search} | {inr / (BATCH * M):.0f} | {isa} | {threads} | "
+                    f"{t * 1e3:.2f}{cpu_note} | {rate(cand / t / 1e6)} | {rate(inr / t / 1e6)} | "
+                    f"{LAYER_COUNT * t:.2f} |"
+                )
                 print(lines[-1], flush=True)
     load.append(os.getloadavg()[0])
     if VECTOR_ISAS:
         best = VECTOR_ISAS[-1]
-        lines += ["", f"Speed-up of `{best}` over `scalar`, 1 thread: " + ", ".join(
-            f"{name} {layer_t[name, 'scalar', 1] / layer_t[name, best, 1]:.1f}x" for name in LAYERS) + "."]
+        lines += [
+            "",
+            f"Speed-up of `{best}` over `scalar`, 1 thread: "
+            + ", ".join(f"{name} {layer_t[name, 'scalar', 1] / layer_t[name, best, 1]:.1f}x" for name in LAYERS)
+            + ".",
+        ]
 
-    lines += ["", "### Training steps", "",
-              "Median seconds per training step (forward through the cascade, loss, backward, Adam) of the "
-              "bnot-2d (40 layers, 32 bins, rho = 4, radial-spectrum loss), bnot-4d (rho = 2) and bnot-10d "
-              f"(rho = 1) configurations, batch 4, after one warm-up step; wall time, process CPU time "
-              "in parentheses. The `scalar` rows (DPC_ISA=scalar) are the kernels before the vector paths.", "",
-              "`threads` is `[train] threads` (torch's intra-op threads and the C kernels' threads); "
-              "`2 / torch 1` keeps torch on one thread.", "",
-              "| config | m | op | ISA | threads | s/step | steps/s |", "|---|---:|---|---|---:|---:|---:|"]
-    cases = [("bnot-2d", 1024, "torch", 1, "", 0), ("bnot-2d", 1024, "c", 1, "scalar", 0),
-             ("bnot-2d", 1024, "c", 1, "", 0), ("bnot-2d", 1024, "c", 2, "", 0), ("bnot-2d", 1024, "c", 2, "", 1),
-             ("bnot-2d", 4096, "torch", 1, "", 0), ("bnot-2d", 4096, "c", 1, "", 0),
-             ("bnot-2d", 4096, "c", 2, "", 0),
-             ("bnot-4d", 1024, "c", 1, "scalar", 0), ("bnot-4d", 1024, "c", 1, "", 0),
-             ("bnot-4d", 1024, "c", 2, "", 0), ("bnot-4d", 1024, "c", 2, "", 1),
-             ("bnot-10d", 1024, "c", 1, "scalar", 0), ("bnot-10d", 1024, "c", 1, "", 0),
-             ("bnot-10d", 1024, "c", 2, "", 0), ("bnot-10d", 1024, "c", 2, "", 1)]
+    lines += [
+        "",
+        "### Training steps",
+        "",
+        "Median seconds per training step (forward through the cascade, loss, backward, Adam) of the "
+        "bnot-2d (40 layers, 32 bins, rho = 4, radial-spectrum loss), bnot-4d (rho = 2) and bnot-10d "
+        "(rho = 1) configurations, batch 4, after one warm-up step; wall time, process CPU time "
+        "in parentheses. The `scalar` rows (DPC_ISA=scalar) are the kernels before the vector paths.",
+        "",
+        "`threads` is `[train] threads` (torch's intra-op threads and the C kernels' threads); "
+        "`2 / torch 1` keeps torch on one thread.",
+        "",
+        "| config | m | op | ISA | threads | s/step | steps/s |",
+        "|---|---:|---|---|---:|---:|---:|",
+    ]
+    cases = [
+        ("bnot-2d", 1024, "torch", 1, "", 0),
+        ("bnot-2d", 1024, "c", 1, "scalar", 0),
+        ("bnot-2d", 1024, "c", 1, "", 0),
+        ("bnot-2d", 1024, "c", 2, "", 0),
+        ("bnot-2d", 1024, "c", 2, "", 1),
+        ("bnot-2d", 4096, "torch", 1, "", 0),
+        ("bnot-2d", 4096, "c", 1, "", 0),
+        ("bnot-2d", 4096, "c", 2, "", 0),
+        ("bnot-4d", 1024, "c", 1, "scalar", 0),
+        ("bnot-4d", 1024, "c", 1, "", 0),
+        ("bnot-4d", 1024, "c", 2, "", 0),
+        ("bnot-4d", 1024, "c", 2, "", 1),
+        ("bnot-10d", 1024, "c", 1, "scalar", 0),
+        ("bnot-10d", 1024, "c", 1, "", 0),
+        ("bnot-10d", 1024, "c", 2, "", 0),
+        ("bnot-10d", 1024, "c", 2, "", 1),
+    ]
     best2d = 0.0
     step_t: dict = {}
     for config, m, impl, threads, isa, torch_threads in cases:
@@ -194,30 +226,42 @@ def main() -> None:
             best2d = max(best2d, 1 / wall)
         shown = isa or (("auto (" + (VECTOR_ISAS[-1] if VECTOR_ISAS else "scalar") + ")") if impl == "c" else "")
         shown_threads = f"{threads} / torch {torch_threads}" if torch_threads else f"{threads}"
-        lines.append(f"| {config} | {m:,} | {impl} | {shown} | {shown_threads} | {wall:.3f} ({cpu:.3f}) | "
-                     f"{1 / wall:.2f} |")
+        lines.append(
+            f"| {config} | {m:,} | {impl} | {shown} | {shown_threads} | {wall:.3f} ({cpu:.3f}) | {1 / wall:.2f} |"
+        )
         print(lines[-1], flush=True)
     load.append(os.getloadavg()[0])
     notes = []
     if not args.quick:
-        notes.append("Steps/s of `auto` over `scalar`, 1 thread: " + ", ".join(
-            f"{c} {step_t[c, 1024, 'c', 1, 'scalar', 0] / step_t[c, 1024, 'c', 1, '', 0]:.1f}x"
-            for c in ("bnot-2d", "bnot-4d", "bnot-10d")) + ".")
-    slower = [c for c in ("bnot-2d", "bnot-4d", "bnot-10d")
-              if step_t[c, 1024, "c", 2, "", 0] > step_t[c, 1024, "c", 1, "", 0]]
+        notes.append(
+            "Steps/s of `auto` over `scalar`, 1 thread: "
+            + ", ".join(
+                f"{c} {step_t[c, 1024, 'c', 1, 'scalar', 0] / step_t[c, 1024, 'c', 1, '', 0]:.1f}x"
+                for c in ("bnot-2d", "bnot-4d", "bnot-10d")
+            )
+            + "."
+        )
+    slower = [
+        c for c in ("bnot-2d", "bnot-4d", "bnot-10d") if step_t[c, 1024, "c", 2, "", 0] > step_t[c, 1024, "c", 1, "", 0]
+    ]
     if slower:
         busy = max(load) > 1.0 + 0.25 * (os.cpu_count() or 1)  # beyond this benchmark's own thread
-        notes.append(f"Two threads were slower than one here ({', '.join(slower)}): "
-                     + ("with other work on the machine the second thread finds no free core, and "
-                        if busy else "")
-                     + "torch's intra-op threads, which `[train] threads` sets too, cost more than they "
-                     "save on this step's small tensors (compare the `2 / torch 1` rows, which keep "
-                     "torch on one thread).")
+        notes.append(
+            f"Two threads were slower than one here ({', '.join(slower)}): "
+            + ("with other work on the machine the second thread finds no free core, and " if busy else "")
+            + "torch's intra-op threads, which `[train] threads` sets too, cost more than they "
+            "save on this step's small tensors (compare the `2 / torch 1` rows, which keep "
+            "torch on one thread)."
+        )
     lines += [""] + [" ".join(notes)] if notes else []
-    lines += ["", f"Load average (1 min) at the start, between the tables and at the end: "
-              f"{', '.join(f'{v:.2f}' for v in load)} on {os.cpu_count()} CPUs. Goal (issue 3): >= 4 steps/s "
-              f"for bnot-2d at m = 1,024 on this 2-core machine: best measured {best2d:.2f} steps/s (wall), "
-              f"{'met' if best2d >= 4 else '**not met**'}.", ""]
+    lines += [
+        "",
+        f"Load average (1 min) at the start, between the tables and at the end: "
+        f"{', '.join(f'{v:.2f}' for v in load)} on {os.cpu_count()} CPUs. Goal (issue 3): >= 4 steps/s "
+        f"for bnot-2d at m = 1,024 on this 2-core machine: best measured {best2d:.2f} steps/s (wall), "
+        f"{'met' if best2d >= 4 else '**not met**'}.",
+        "",
+    ]
     section = "\n".join(lines)
     out = Path(args.out)
     old = out.read_text() if out.exists() else "# Performance\n"

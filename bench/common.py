@@ -43,8 +43,18 @@ def build(target: str, source: Path = ROOT, folder: Path = BUILD, *defines: str)
     """The Release build of one benchmark program (bench/CMakeLists.txt) of the tree at source,
     in folder; defines: more -D options (e.g. -DDPC_VULKAN=ON)."""
     subprocess.run(
-        ["cmake", "-S", str(source), "-B", str(folder), "-G", "Ninja", "-DCMAKE_BUILD_TYPE=Release",
-         "-DDPC_BUILD_BENCH=ON", *defines],
+        [
+            "cmake",
+            "-S",
+            str(source),
+            "-B",
+            str(folder),
+            "-G",
+            "Ninja",
+            "-DCMAKE_BUILD_TYPE=Release",
+            "-DDPC_BUILD_BENCH=ON",
+            *defines,
+        ],
         check=True,
         stdout=subprocess.DEVNULL,
     )

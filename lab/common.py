@@ -13,8 +13,20 @@ import numpy as np
 
 from bench.common import ROOT, build, cpu_name, replace_section
 
-__all__ = ["ROOT", "build", "cpu_name", "replace_section", "REPORTS", "CACHE", "REF_SPP", "SCENES", "DIRECT_SCENES",
-           "scene_dict", "render", "reference"]
+__all__ = [
+    "ROOT",
+    "build",
+    "cpu_name",
+    "replace_section",
+    "REPORTS",
+    "CACHE",
+    "REF_SPP",
+    "SCENES",
+    "DIRECT_SCENES",
+    "scene_dict",
+    "render",
+    "reference",
+]
 
 # The measured pages (docs/reports/): measurements, not the manual.
 REPORTS = ROOT / "docs" / "reports"
@@ -35,14 +47,19 @@ def scene_dict(mi, name: str, width: int) -> dict:
         return {
             "type": "scene",
             "integrator": {"type": "direct", "emitter_samples": 1, "bsdf_samples": 0},
-            "sensor": {"type": "perspective", "fov": 40,
-                       "to_world": T().look_at(origin=[0, -1.5, 4], target=[0, 0, 0], up=[0, 1, 0]),
-                       "film": film},
+            "sensor": {
+                "type": "perspective",
+                "fov": 40,
+                "to_world": T().look_at(origin=[0, -1.5, 4], target=[0, 0, 0], up=[0, 1, 0]),
+                "film": film,
+            },
             "floor": {"type": "rectangle", "to_world": T().scale([3, 3, 1]), "bsdf": {"type": "diffuse"}},
             "occluder": {"type": "sphere", "center": [0, 0, 0.6], "radius": 0.5, "bsdf": {"type": "diffuse"}},
-            "light": {"type": "rectangle",
-                      "to_world": T().translate([1.0, 1.0, 2.2]).rotate([1, 0, 0], 180).scale([1.2, 1.2, 1]),
-                      "emitter": {"type": "area", "radiance": {"type": "rgb", "value": 2.0}}},
+            "light": {
+                "type": "rectangle",
+                "to_world": T().translate([1.0, 1.0, 2.2]).rotate([1, 0, 0], 180).scale([1.2, 1.2, 1]),
+                "emitter": {"type": "area", "radiance": {"type": "rgb", "value": 2.0}},
+            },
         }
     raise ValueError(name)
 
@@ -73,6 +90,6 @@ def reference(mi, scene: str, width: int, spp: int = REF_SPP):
         return z["ref"], float(z["ref_mse"])
     halves = [render(mi, scene, "ldsampler", spp // 2, 1000 + k, width)[0] for k in range(2)]
     ref = 0.5 * (halves[0] + halves[1])
-    ref_mse = float(((halves[0] - halves[1]) ** 2).mean() / 4)   # error of the mean of two halves
+    ref_mse = float(((halves[0] - halves[1]) ** 2).mean() / 4)  # error of the mean of two halves
     np.savez(path, ref=ref, ref_mse=ref_mse)
     return ref, ref_mse

@@ -20,13 +20,18 @@ AMPLITUDE, SIGMA, RHO, BINS, LAYERS, M = 0.3, 0.85, 3.2, 32, 40, 1024
 
 def repulsion_spec() -> ModelSpec:
     d = np.linspace(0.0, RHO, BINS)
-    kernel = -AMPLITUDE * np.exp(-d**2 / (2 * SIGMA**2))
+    kernel = -AMPLITUDE * np.exp(-(d**2) / (2 * SIGMA**2))
     kernel[-1] = 0.0  # continuous at the radius
     layers = [Layer(subspaces=[0b11], radius=[RHO], kernels=kernel[None, :]) for _ in range(LAYERS)]
     return ModelSpec(
-        dims=2, n_points=M, layers=layers, name="repulsion-2d",
-        description=("Hand-designed 2-D blue noise: 40 layers of a fixed Gaussian repulsion "
-                     "kernel (A=0.3, sigma=0.85, rho=3.2 mean spacings). Not trained."),
+        dims=2,
+        n_points=M,
+        layers=layers,
+        name="repulsion-2d",
+        description=(
+            "Hand-designed 2-D blue noise: 40 layers of a fixed Gaussian repulsion "
+            "kernel (A=0.3, sigma=0.85, rho=3.2 mean spacings). Not trained."
+        ),
         metadata={"dpc.source": "models/make_repulsion_2d.py", "dpc.trained": "no"},
     )
 

@@ -112,7 +112,7 @@ def compare(npzs: list[str], doc: Path) -> None:
         nu = 0.5 if 0.5 * m ** (1 / n) > 1 else 1.25 / m ** (1 / n)  # some |q| = 1 below nu
         measures = [
             (
-                lambda x: np.array([analysis.low_frequency_energy(s[None], nu) for s in x]),
+                lambda x, nu=nu: np.array([analysis.low_frequency_energy(s[None], nu) for s in x]),
                 "" if nu == 0.5 else f", nu < {nu:.2g}",
             ),
             (lambda x: analysis.min_distance(x).ratios, ""),
@@ -139,7 +139,8 @@ def compare(npzs: list[str], doc: Path) -> None:
         "standard errors of the difference of means (4 or more counts as differing, as in "
         "`tests/python/test_models.py`'s same-quality test).",
         "",
-        "| model | points | max \\|Vulkan - CPU\\| | E_low(0.5) CPU / Vulkan (z) | delta_min CPU / Vulkan (z) | quality |",
+        "| model | points | max \\|Vulkan - CPU\\| | E_low(0.5) CPU / Vulkan (z) | delta_min CPU / Vulkan (z) | "
+        "quality |",
         "|---|---|---:|---:|---:|---|",
         *rows,
         "",

@@ -1,6 +1,6 @@
-"""A lead for issue #13: a 64 x 64 mask refined by greedy value swaps on a spectral energy.
+"""A study: a 64 x 64 mask refined by greedy value swaps on a spectral energy.
 
-    python -m lab.masks.swap_study            # about 6 minutes on one core; the "mask_swap" section of docs/reports/masks.md
+    python -m lab.masks.swap_study    # about 6 minutes on one core; the "mask_swap" section of docs/reports/masks.md
     python -m lab.masks.swap_study --swaps 20000 --no-write   # a quick look
 
 Not a product path and not a dpc model: a study of what a direct optimiser of the masks' spectra
@@ -21,14 +21,13 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
 from dpc import baselines, masks
 from dpc.analysis.dither import mask_quality, rank_normalise
-
 from lab.common import REPORTS, replace_section
+
 N, SIGMA, REACH = 64, 1.5, 8
 LEVELS = np.arange(1, 16) / 16.0
 
@@ -105,7 +104,6 @@ def main() -> None:
     )
     print(body)
     if not args.no_write:
-
         doc = REPORTS / "masks.md"
         if "<!-- mask_swap:begin -->" not in doc.read_text():
             sys.exit(f"{doc} has no <!-- mask_swap:begin --> ... end marker pair to replace")

@@ -17,7 +17,6 @@ from __future__ import annotations
 import argparse
 import functools
 import os
-import sys
 import time
 from pathlib import Path
 
@@ -29,7 +28,6 @@ import numpy as np  # noqa: E402
 
 import dpc  # noqa: E402
 from dpc import analysis, baselines  # noqa: E402
-
 from lab.common import REPORTS, cpu_name  # noqa: E402
 from lab.models import model_cards as MC  # noqa: E402  (the cards' metrics and targets)
 
@@ -87,8 +85,18 @@ def axis_tradeoff(sets: np.ndarray, q_maxes=(32, 64, 128)) -> list[tuple]:
         x = np.stack([stratify_axes(p, q_max) for p in sets]) if q_max else sets
         met = MC.plane_metrics(x, None, (0.25, 3.0))
         moved = np.hypot(*np.moveaxis(np.abs((x - sets + 0.5) % 1.0 - 0.5), -1, 0)) * np.sqrt(sets.shape[1])
-        rows.append((q_max, rel_var(x, "heaviside"), rel_var(x, "gaussian"), met["elow50"], met["elow75"],
-                     met["dmin_mean"], met["aniso"], float(moved.max())))
+        rows.append(
+            (
+                q_max,
+                rel_var(x, "heaviside"),
+                rel_var(x, "gaussian"),
+                met["elow50"],
+                met["elow75"],
+                met["dmin_mean"],
+                met["aniso"],
+                float(moved.max()),
+            )
+        )
     return rows
 
 
@@ -146,8 +154,11 @@ def variance_sources(samplers: dict, m: int = M, sets: int = 64, grid: int = 102
     axis = ((qx == 0) | (qy == 0)) & inside
     g = (np.arange(grid) + 0.5) / grid
     pts = np.stack(np.meshgrid(g, g, indexing="ij"), -1)
-    bands = [("0 < \\|q\\| ≤ 3", (r > 0) & (r <= 3)), ("\\|q\\| > 3, ν < 0.75", (r > 3) & (r < 0.75 * np.sqrt(m))),
-             ("0.75 ≤ ν ≤ 2", (r >= 0.75 * np.sqrt(m)) & inside)]
+    bands = [
+        ("0 < \\|q\\| ≤ 3", (r > 0) & (r <= 3)),
+        ("\\|q\\| > 3, ν < 0.75", (r > 3) & (r < 0.75 * np.sqrt(m))),
+        ("0.75 ≤ ν ≤ 2", (r >= 0.75 * np.sqrt(m)) & inside),
+    ]
     out = {}
     for i, fam in enumerate(("gaussian", "heaviside")):
         family = integrands(fam, 10, dims=2, seed=i)  # the integration study's integrands
@@ -159,9 +170,14 @@ def variance_sources(samplers: dict, m: int = M, sets: int = 64, grid: int = 102
         weight /= family.count * m
         weight[kmax, kmax] = 0.0
         out[fam] = {
-            name: {"total": float((S.power * weight)[inside].sum()), "axes": float((S.power * weight)[axis].sum()),
-                   **{b: (float((S.power * weight)[sel & axis].sum()), float((S.power * weight)[sel & ~axis].sum()))
-                      for b, sel in bands}}
+            name: {
+                "total": float((S.power * weight)[inside].sum()),
+                "axes": float((S.power * weight)[axis].sum()),
+                **{
+                    b: (float((S.power * weight)[sel & axis].sum()), float((S.power * weight)[sel & ~axis].sum()))
+                    for b, sel in bands
+                },
+            }
             for name, S in spectra.items()
         }
     return out
@@ -242,8 +258,15 @@ def main(argv=None) -> None:
         moved = np.hypot(*np.moveaxis(np.abs((bal - alone + 0.5) % 1.0 - 0.5), -1, 0)) * np.sqrt(M)
         for label, x in ((f"{name}, cascade alone", alone), (name, bal)):
             r = analysis.radial_spectrum(x, nu_max=1.0)
-            balance_rows.append((label, float(analysis.power_spectrum_direct(x, q).mean()), r.low_frequency_energy(0.5), r.low_frequency_energy(0.75),
-                                 analysis.min_distance(x).mean_ratio))
+            balance_rows.append(
+                (
+                    label,
+                    float(analysis.power_spectrum_direct(x, q).mean()),
+                    r.low_frequency_energy(0.5),
+                    r.low_frequency_energy(0.75),
+                    analysis.min_distance(x).mean_ratio,
+                )
+            )
         balance_moved = (float(moved.mean()), float(moved.max()))
 
     # 3d. the half-plane goal against the others: the model's 64 study sets with stratified projections
@@ -263,6 +286,7 @@ def main(argv=None) -> None:
     dmin = min([me["dmin_mean"]] + [r[4] for r in scale_rows])
     g, h = rv["gaussian"], rv["heaviside"]
     t_ratio = [times[(name, m)] / times[("bnot-2d", m)] for m in (1024, 65536)]
+
     def iv(key):
         lo, hi = ci[key]
         return f"[{lo:.2e}, {hi:.2e}]"
@@ -399,7 +423,7 @@ def main(argv=None) -> None:
         "(relative to its integral; mean over the same 10 integrands). The integrands are not periodic: "
         "their jump at the square's edges puts a 1/|q|² tail of |F|² on the axes (q_x = 0 or q_y = 0). "
         f"The sum over |q| ≤ 2√m at m = {M:,}, 64 sets (BNOT: its 10), by band, axes / elsewhere "
-        f"(`variance_sources` in this script); \"{name}, cascade alone\" is the model's cascade without the "
+        f'(`variance_sources` in this script); "{name}, cascade alone" is the model\'s cascade without the '
         "output balance (`Model.filter` of its input points).",
         "",
     ]
@@ -445,12 +469,16 @@ def main(argv=None) -> None:
         "| q_max | half-plane variance | Gaussian variance | E_low ν<0.5 | E_low ν<0.75 | δ_min | "
         "anisotropy (dB) | largest move (spacings) |",
         "|---:|---:|---:|---:|---:|---:|---:|---:|",
-        *(f"| {'— (as generated)' if q == 0 else q} | {hv:.2e} | {gv:.2e} | {e5:.5f} | {e7:.4f} | {dm:.3f} | "
-          f"{an:.2f} | {mv:.3f} |" for q, hv, gv, e5, e7, dm, an, mv in axis_rows),
+        *(
+            f"| {'— (as generated)' if q == 0 else q} | {hv:.2e} | {gv:.2e} | {e5:.5f} | {e7:.4f} | {dm:.3f} | "
+            f"{an:.2f} | {mv:.3f} |"
+            for q, hv, gv, e5, e7, dm, an, mv in axis_rows
+        ),
         "",
         "Balancing the projections up to q = 2√m = 64 passes Sobol' on half-planes and breaks other goals "
         f"at once: it moves points by up to {axis_rows[2][7]:.2f} spacings, which raises E_low ν<0.5 "
-        f"{axis_rows[2][3] / axis_rows[0][3]:.0f}-fold, the Gaussian variance {axis_rows[2][2] / axis_rows[0][2]:.1f}-fold, "
+        f"{axis_rows[2][3] / axis_rows[0][3]:.0f}-fold, the Gaussian variance "
+        f"{axis_rows[2][2] / axis_rows[0][2]:.1f}-fold, "
         f"takes δ_min to {axis_rows[2][5]:.3f} and the anisotropy to {axis_rows[2][6] - axis_floor:.1f} dB above the "
         "floor (the axes set apart from the rings). Lower q_max costs less and does not reach Sobol'.",
         "",

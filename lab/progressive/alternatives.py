@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import argparse
 import heapq
-import sys
 import tempfile
 from pathlib import Path
 

@@ -1,7 +1,7 @@
 """Quality of every power-of-two prefix of progressive point sets (docs/progressive.md).
 
-    python -m lab.progressive.bench_progressive                 # 64 sets, m = 1,024 and 4,096: writes docs/reports/progressive.md
-    python -m lab.progressive.bench_progressive --quick         # 16 sets, m = 1,024, prints only
+    python -m lab.progressive.bench_progressive           # 64 sets, m = 1,024 and 4,096: docs/reports/progressive.md
+    python -m lab.progressive.bench_progressive --quick   # 16 sets, m = 1,024, prints only
     python -m lab.progressive.bench_progressive --quick --model runs/x.onnx    # another progressive model
 
 For each m and each prefix n = 16, 32, ..., m, over the same sets: E_low below nu = 0.5 and 0.75
@@ -195,7 +195,8 @@ def section(
 ) -> str:
     sizes = sorted(next(iter(ms.values())))
     lines = [
-        f"Measured by `python -m lab.progressive.bench_progressive` (tree {tree()}) on {cpu_name()}: {count} sets of each "
+        f"Measured by `python -m lab.progressive.bench_progressive` (tree {tree()}) on {cpu_name()}: {count} sets of "
+        "each "
         "sampler and size, set i from seed i. White noise has E_low = 1; delta_min = 1 is the densest packing.",
         "",
         "Goals:",

@@ -1,6 +1,6 @@
 """Prefixes between the levels of a progressive set (docs/progressive.md, "Between the levels").
 
-    python -m lab.progressive.bench_progressive_between     # 64 sets of 1,024 points: writes docs/reports/progressive.md
+    python -m lab.progressive.bench_progressive_between   # 64 sets of 1,024 points: writes docs/reports/progressive.md
 
 A sampler reads a progressive table in order, so a renderer that stops at n samples, n not a
 power of two, gets the first n points: the levels up to the largest power of two below n and
@@ -110,7 +110,8 @@ def section(names: list[str], res: dict, count: int, m: int, times: dict[int, tu
         return max(res[name][n][k] / res["pmj02bn"][n][k] for n in PREFIXES)
 
     lines = [
-        f"Measured by `python -m lab.progressive.bench_progressive_between` (tree {tree()}): {count} sets of {m:,} points "
+        f"Measured by `python -m lab.progressive.bench_progressive_between` (tree {tree()}): {count} sets of {m:,} "
+        "points "
         f'of each sampler, set i from seed i; level sizes in bold. "levels shuffled": the same sets with each '
         "level's points in a random order (the generator's order before `order_levels`).",
         "",

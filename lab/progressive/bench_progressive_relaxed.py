@@ -1,7 +1,7 @@
-"""Jointly relaxed progressive sets: every prefix against the issue's goals (docs/progressive.md).
+"""Jointly relaxed progressive sets: every prefix against the goals (docs/progressive.md).
 
-    python -m lab.progressive.bench_progressive_relaxed            # 64 sets, m = 1,024 and 4,096: writes docs/reports/progressive.md
-    python -m lab.progressive.bench_progressive_relaxed --quick    # 8 sets, m = 1,024, prints only
+    python -m lab.progressive.bench_progressive_relaxed  # 64 sets, m = 1,024, 4,096: docs/reports/progressive.md
+    python -m lab.progressive.bench_progressive_relaxed --quick  # 8 sets, m = 1,024, prints only
 
 progressive-2d-relaxed's sets (libdpc: progressive-2d's levels, then the prefix relaxation of
 docs/model-format.md §6.1, every point moving under the energy of every prefix 16 * 2^j at once),
@@ -82,7 +82,8 @@ def section(
     results: dict[int, dict], checks, count: int, seconds: dict[int, dict[str, float]], curve: dict, curve_m: int
 ) -> str:
     lines = [
-        f"Measured by `python -m lab.progressive.bench_progressive_relaxed` (tree {tree()}) on {cpu_name()}: {count} sets "
+        f"Measured by `python -m lab.progressive.bench_progressive_relaxed` (tree {tree()}) on {cpu_name()}: {count} "
+        "sets "
         f"of each sampler and size, set i from seed i; `{RELAXED_MODEL}`'s sets (libdpc), median seconds per set "
         "on one thread: "
         + ", ".join(

@@ -1,7 +1,7 @@
 """Progressive samplers in Mitsuba 3: image error against samples per pixel (docs/progressive.md).
 
-    python -m lab.progressive.bench_progressive_render            # writes docs/reports/progressive.md's rendering section
-    python -m lab.progressive.bench_progressive_render --quick    # smaller, prints only
+    python -m lab.progressive.bench_progressive_render           # docs/reports/progressive.md's rendering section
+    python -m lab.progressive.bench_progressive_render --quick   # smaller, prints only
 
 The soft-shadow scene of lab/rendering/bench_rendering.py (direct lighting, a large area light) at
 `--width`^2 pixels, rendered at 1, 2, 4, ..., `--max-spp` samples per pixel over `--seeds` seeds
@@ -32,9 +32,7 @@ random order (the order before the levels had one), and PMJ02BN.
 from __future__ import annotations
 
 import argparse
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
@@ -72,8 +70,8 @@ def pool_points(kind: str, max_spp: int) -> np.ndarray:
     kind "... shuffled": the same sets with each level's points in a random order (the order
     before docs/model-format.md §6 ordered the levels)."""
     import dpc
-    from lab.progressive.bench_progressive_between import shuffled_levels
     from dpc import baselines
+    from lab.progressive.bench_progressive_between import shuffled_levels
 
     if kind == "pmj02bn":
         return baselines.generate("pmj02bn", max_spp, 2, POOL, seed=0)
@@ -190,7 +188,7 @@ def run_stop(width: int, seeds: int) -> dict:
     import mitsuba as mi
 
     mi.set_variant("scalar_rgb")
-    for row, kind in STOP_SAMPLERS.items():
+    for kind in STOP_SAMPLERS.values():
         cls = pool_sampler_class(mi, pool_points(kind, STOP_TABLE))
         mi.register_sampler("stop_" + kind.replace(" ", "_"), lambda props, cls=cls: cls(props))
     ref, ref_mse = BR.reference(mi, SCENE, width)
@@ -208,7 +206,8 @@ def run_stop(width: int, seeds: int) -> dict:
 def stop_section(res: dict) -> str:
     rows = list(STOP_SAMPLERS)
     lines = [
-        f"Measured by `python -m lab.progressive.bench_progressive_render --stop` on {res['cpu']}: Mitsuba 3 `scalar_rgb`, "
+        f"Measured by `python -m lab.progressive.bench_progressive_render --stop` on {res['cpu']}: Mitsuba 3 "
+        "`scalar_rgb`, "
         f"the {SCENE} scene at {res['width']} x {res['width']} pixels, {res['seeds']} seeds per cell; the pool "
         f"sampler of the table above on sequences of {STOP_TABLE} points, stopped at n samples per pixel (each "
         'pixel\'s first n points of its sequences). Image MSE; "levels shuffled": the same sets with each '

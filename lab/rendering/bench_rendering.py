@@ -23,10 +23,8 @@ from __future__ import annotations
 
 import argparse
 import json
-import platform
 import subprocess
 import time
-from pathlib import Path
 
 import numpy as np
 
@@ -57,8 +55,12 @@ def radial_power(err: np.ndarray, bins: int = 24):
     p /= p[qq > 0].mean()
     edges = np.linspace(0, 0.5 * np.sqrt(2), bins + 1)
     idx = np.digitize(qq.ravel(), edges) - 1
-    vals = np.array([p.ravel()[(idx == b) & (qq.ravel() > 0)].mean() if np.any((idx == b) & (qq.ravel() > 0))
-                     else np.nan for b in range(bins)])
+    vals = np.array(
+        [
+            p.ravel()[(idx == b) & (qq.ravel() > 0)].mean() if np.any((idx == b) & (qq.ravel() > 0)) else np.nan
+            for b in range(bins)
+        ]
+    )
     return 0.5 * (edges[1:] + edges[:-1]), vals
 
 
@@ -68,18 +70,32 @@ def run(args) -> dict:
     mi.set_variant("scalar_rgb")
     import dpc.mitsuba  # noqa: F401  (registers the plugin)
 
-    commit = subprocess.run(["git", "-C", str(ROOT), "describe", "--always", "--dirty"], capture_output=True,
-                            text=True).stdout.strip() or "unknown"
-    results = {"commit": commit, "width": args.width, "seeds": args.seeds, "ref_spp": REF_SPP, "cpu": cpu_name(),
-               "mitsuba": mi.__version__, "scenes": {}}
+    commit = (
+        subprocess.run(
+            ["git", "-C", str(ROOT), "describe", "--always", "--dirty"], capture_output=True, text=True
+        ).stdout.strip()
+        or "unknown"
+    )
+    results = {
+        "commit": commit,
+        "width": args.width,
+        "seeds": args.seeds,
+        "ref_spp": REF_SPP,
+        "cpu": cpu_name(),
+        "mitsuba": mi.__version__,
+        "scenes": {},
+    }
     errors_for_figure = {}
     for scene in SCENES:
         t0 = time.perf_counter()
         ref, ref_mse = reference(mi, scene, args.width, REF_SPP)
         lum_ref = ref.mean(-1)
         rs = {"ref_mse": ref_mse, "samplers": {}}
-        print(f"{scene}: reference ldsampler {REF_SPP} spp ready ({time.perf_counter() - t0:.0f} s), "
-              f"its own MSE ~{ref_mse:.2e}", flush=True)
+        print(
+            f"{scene}: reference ldsampler {REF_SPP} spp ready ({time.perf_counter() - t0:.0f} s), "
+            f"its own MSE ~{ref_mse:.2e}",
+            flush=True,
+        )
         for sampler in SAMPLERS:
             rows = {}
             for spp in sorted(set(MSE_SPP) | set(SCREEN_SPP)):
@@ -87,19 +103,27 @@ def run(args) -> dict:
                 for seed in range(args.seeds):
                     img, t, used = render(mi, scene, sampler, spp, seed, args.width)
                     err = img - ref
-                    mse.append(float((err ** 2).mean()))
-                    rel.append(float((err ** 2 / (ref ** 2 + 0.01)).mean()))
+                    mse.append(float((err**2).mean()))
+                    rel.append(float((err**2 / (ref**2 + 0.01)).mean()))
                     el.append(low_band_energy(img.mean(-1) - lum_ref))
                     times.append(t)
                     if seed == 0 and spp in (1, 4):
                         errors_for_figure[(scene, sampler, spp)] = img.mean(-1) - lum_ref
-                rows[spp] = {"spp_used": used, "mse": float(np.mean(mse)), "mse_se": float(np.std(mse, ddof=1) / np.sqrt(len(mse))),
-                             "relmse": float(np.mean(rel)), "elow": float(np.mean(el)),
-                             "elow_se": float(np.std(el, ddof=1) / np.sqrt(len(el))),
-                             "time": float(np.median(times))}
-                print(f"  {sampler:12s} {spp:4d} spp (used {used:4d}): MSE {rows[spp]['mse']:.3e}  "
-                      f"rel {rows[spp]['relmse']:.3e}  E_low {rows[spp]['elow']:.3f}  "
-                      f"{rows[spp]['time']:.3f} s", flush=True)
+                rows[spp] = {
+                    "spp_used": used,
+                    "mse": float(np.mean(mse)),
+                    "mse_se": float(np.std(mse, ddof=1) / np.sqrt(len(mse))),
+                    "relmse": float(np.mean(rel)),
+                    "elow": float(np.mean(el)),
+                    "elow_se": float(np.std(el, ddof=1) / np.sqrt(len(el))),
+                    "time": float(np.median(times)),
+                }
+                print(
+                    f"  {sampler:12s} {spp:4d} spp (used {used:4d}): MSE {rows[spp]['mse']:.3e}  "
+                    f"rel {rows[spp]['relmse']:.3e}  E_low {rows[spp]['elow']:.3f}  "
+                    f"{rows[spp]['time']:.3f} s",
+                    flush=True,
+                )
             rs["samplers"][sampler] = rows
         # Render time: the two samplers alternated, so both see the same machine load.
         times = {"independent": [], "dpc": []}
@@ -107,8 +131,11 @@ def run(args) -> dict:
             for name in times:
                 times[name].append(render(mi, scene, name, TIME_SPP, 0, args.width)[1])
         rs["timing"] = {name: float(np.median(v)) for name, v in times.items()}
-        print(f"  render time at {TIME_SPP} spp (median of {TIME_REPEATS}, alternated): "
-              f"independent {rs['timing']['independent']:.3f} s, dpc {rs['timing']['dpc']:.3f} s", flush=True)
+        print(
+            f"  render time at {TIME_SPP} spp (median of {TIME_REPEATS}, alternated): "
+            f"independent {rs['timing']['independent']:.3f} s, dpc {rs['timing']['dpc']:.3f} s",
+            flush=True,
+        )
         results["scenes"][scene] = rs
     results["figure_errors"] = {f"{k[0]}|{k[1]}|{k[2]}": v for k, v in errors_for_figure.items()}
     return results
@@ -141,18 +168,38 @@ def goals(res: dict) -> list[tuple[str, bool, str]]:
                 fair = [n for n in SAMPLERS if n != "dpc" and s[n][spp]["spp_used"] == spp]
                 best_name = min(fair, key=lambda n: s[n][spp]["mse"])
                 b = s[best_name][spp]["mse"]
-                out.append((f"{scene}, {spp} spp: dpc MSE <= best built-in at {spp} spp ({best_name})", d <= b,
-                            mse_verdict(s["dpc"][spp], s[best_name][spp])))
+                out.append(
+                    (
+                        f"{scene}, {spp} spp: dpc MSE <= best built-in at {spp} spp ({best_name})",
+                        d <= b,
+                        mse_verdict(s["dpc"][spp], s[best_name][spp]),
+                    )
+                )
             else:
                 b = s["ldsampler"][spp]["mse"]
-                out.append((f"{scene}, {spp} spp: dpc MSE <= ldsampler", d <= b,
-                            mse_verdict(s["dpc"][spp], s["ldsampler"][spp])))
+                out.append(
+                    (
+                        f"{scene}, {spp} spp: dpc MSE <= ldsampler",
+                        d <= b,
+                        mse_verdict(s["dpc"][spp], s["ldsampler"][spp]),
+                    )
+                )
         d, b = s["dpc"][4]["elow"], s["ldsampler"][4]["elow"]
-        out.append((f"{scene}, 4 spp: dpc screen low-frequency energy <= 0.25 x ldsampler's", d <= 0.25 * b,
-                    f"{d:.3f} vs 0.25 x {b:.3f} = {0.25 * b:.3f} (ratio {d / b:.2f})"))
+        out.append(
+            (
+                f"{scene}, 4 spp: dpc screen low-frequency energy <= 0.25 x ldsampler's",
+                d <= 0.25 * b,
+                f"{d:.3f} vs 0.25 x {b:.3f} = {0.25 * b:.3f} (ratio {d / b:.2f})",
+            )
+        )
         t = res["scenes"][scene]["timing"]
-        out.append((f"{scene}, {TIME_SPP} spp: dpc render time <= 3 x independent's", t["dpc"] <= 3 * t["independent"],
-                    f"{t['dpc']:.3f} s vs {t['independent']:.3f} s (x{t['dpc'] / t['independent']:.2f})"))
+        out.append(
+            (
+                f"{scene}, {TIME_SPP} spp: dpc render time <= 3 x independent's",
+                t["dpc"] <= 3 * t["independent"],
+                f"{t['dpc']:.3f} s vs {t['independent']:.3f} s (x{t['dpc'] / t['independent']:.2f})",
+            )
+        )
     return out
 
 
@@ -188,8 +235,13 @@ def figures(res: dict) -> list[str]:
         for name in SAMPLERS:
             rows = res["scenes"][scene]["samplers"][name]
             xs = [rows[s]["spp_used"] for s in MSE_SPP]
-            ax.loglog(xs, [rows[s]["mse"] for s in MSE_SPP], "o-" if name == "dpc" else ".--", label=name,
-                      lw=2 if name == "dpc" else 1)
+            ax.loglog(
+                xs,
+                [rows[s]["mse"] for s in MSE_SPP],
+                "o-" if name == "dpc" else ".--",
+                label=name,
+                lw=2 if name == "dpc" else 1,
+            )
         ax.set_xlabel("samples per pixel")
         ax.set_ylabel("image MSE")
         ax.set_title(scene)
@@ -220,16 +272,22 @@ def figures(res: dict) -> list[str]:
 
 
 def section(res: dict, checks, figs) -> str:
-    L = [f"Measured by `python -m lab.rendering.bench_rendering` (tree {res['commit']}) on {res['cpu']} (2 threads), Mitsuba "
-         f"{res['mitsuba']} `scalar_rgb`, {res['width']} x {res['width']} pixels, {res['seeds']} seeds per "
-         f"cell (the sampler's `seed` property). Reference: ldsampler at {res['ref_spp']:,} spp.", ""]
+    L = [
+        f"Measured by `python -m lab.rendering.bench_rendering` (tree {res['commit']}) on {res['cpu']} (2 threads), "
+        "Mitsuba "
+        f"{res['mitsuba']} `scalar_rgb`, {res['width']} x {res['width']} pixels, {res['seeds']} seeds per "
+        f"cell (the sampler's `seed` property). Reference: ldsampler at {res['ref_spp']:,} spp.",
+        "",
+    ]
     for scene in SCENES:
         s = res["scenes"][scene]
         L += [f"### {scene}", "", f"Reference's own MSE (from its two halves): {s['ref_mse']:.1e}.", ""]
-        L += ["Image MSE (relative MSE), mean over seeds; samples per pixel actually used in brackets where "
-              "Mitsuba rounded the count:", ""]
-        L += ["| sampler | " + " | ".join(f"{spp} spp" for spp in MSE_SPP) + " |",
-              "|---|" + "---:|" * len(MSE_SPP)]
+        L += [
+            "Image MSE (relative MSE), mean over seeds; samples per pixel actually used in brackets where "
+            "Mitsuba rounded the count:",
+            "",
+        ]
+        L += ["| sampler | " + " | ".join(f"{spp} spp" for spp in MSE_SPP) + " |", "|---|" + "---:|" * len(MSE_SPP)]
         for name in SAMPLERS:
             cells = []
             for spp in MSE_SPP:
@@ -238,8 +296,10 @@ def section(res: dict, checks, figs) -> str:
                 cells.append(f"{r['mse']:.2e} ({r['relmse']:.2e}){used}")
             L.append(f"| {'**dpc**' if name == 'dpc' else name} | " + " | ".join(cells) + " |")
         L += ["", "Screen-space low-frequency error energy (white noise = 1), mean over seeds:", ""]
-        L += ["| sampler | " + " | ".join(f"{spp} spp" for spp in SCREEN_SPP) + " | time at 64 spp |",
-              "|---|" + "---:|" * (len(SCREEN_SPP) + 1)]
+        L += [
+            "| sampler | " + " | ".join(f"{spp} spp" for spp in SCREEN_SPP) + " | time at 64 spp |",
+            "|---|" + "---:|" * (len(SCREEN_SPP) + 1),
+        ]
         for name in SAMPLERS:
             cells = []
             for spp in SCREEN_SPP:
@@ -247,13 +307,16 @@ def section(res: dict, checks, figs) -> str:
                 used = f" [{r['spp_used']}]" if r["spp_used"] != spp else ""
                 cells.append(f"{r['elow']:.3f}{used}")
             t, t0 = s["samplers"][name][64]["time"], s["samplers"]["independent"][64]["time"]
-            L.append(f"| {'**dpc**' if name == 'dpc' else name} | " + " | ".join(cells)
-                     + f" | {t:.2f} s (x{t / t0:.2f}) |")
+            L.append(
+                f"| {'**dpc**' if name == 'dpc' else name} | " + " | ".join(cells) + f" | {t:.2f} s (x{t / t0:.2f}) |"
+            )
         tm = s["timing"]
         L.append("")
-        L.append(f"Render time at {TIME_SPP} spp, {TIME_REPEATS} renders each, independent and dpc alternated (the "
-                 f"table's last column is one render per seed, in turn with the other samplers): independent "
-                 f"{tm['independent']:.3f} s, dpc {tm['dpc']:.3f} s (x{tm['dpc'] / tm['independent']:.2f}).")
+        L.append(
+            f"Render time at {TIME_SPP} spp, {TIME_REPEATS} renders each, independent and dpc alternated (the "
+            f"table's last column is one render per seed, in turn with the other samplers): independent "
+            f"{tm['independent']:.3f} s, dpc {tm['dpc']:.3f} s (x{tm['dpc'] / tm['independent']:.2f})."
+        )
         L.append("")
     L += ["### Goals", "", "| goal | met | measured |", "|---|---|---|"]
     L += [f"| {g} | {'yes' if ok else '**no**'} | {m} |" for g, ok, m in checks]
@@ -268,8 +331,11 @@ def main() -> None:
     # to 0.12 (docs/rendering.md, "How sure these ratios are"); the goals print each ratio's
     # standard error
     ap.add_argument("--seeds", type=int, default=48)
-    ap.add_argument("--quick", action="store_true", help="64 x 64 pixels, 3 seeds, REF_SPP 4096: a smoke run "
-                    "that does not write docs/")
+    ap.add_argument(
+        "--quick",
+        action="store_true",
+        help="64 x 64 pixels, 3 seeds, REF_SPP 4096: a smoke run that does not write docs/",
+    )
     args = ap.parse_args()
     global REF_SPP
     if args.quick:

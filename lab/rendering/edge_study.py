@@ -18,7 +18,6 @@ Writes the section `edge_study` of docs/reports/rendering-studies.md.
 from __future__ import annotations
 
 import time
-from pathlib import Path
 
 import numpy as np
 

@@ -22,7 +22,6 @@ Writes the section `fold_study` of docs/reports/rendering-studies.md.
 from __future__ import annotations
 
 import time
-from pathlib import Path
 
 import numpy as np
 from scipy.stats import qmc

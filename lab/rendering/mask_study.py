@@ -33,9 +33,7 @@ from __future__ import annotations
 import contextlib
 import functools
 import itertools
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 from scipy.stats import qmc

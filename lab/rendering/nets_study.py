@@ -18,7 +18,6 @@ import time
 
 import numpy as np
 
-
 from lab import common
 from lab.common import REPORTS, replace_section
 from lab.rendering import bench_rendering as br
@@ -58,12 +57,19 @@ def main() -> None:
                     err = common.render(mi, scene, "dpc", spp, seed, 128, extra)[0] - ref
                     mse.append(float((err**2).mean()))
                     el.append(br.low_band_energy(err.mean(-1)))
-                stats.append({"mse": float(np.mean(mse)), "mse_se": float(np.std(mse, ddof=1) / np.sqrt(SEEDS)),
-                              "elow": float(np.mean(el))})
+                stats.append(
+                    {
+                        "mse": float(np.mean(mse)),
+                        "mse_se": float(np.std(mse, ddof=1) / np.sqrt(SEEDS)),
+                        "elow": float(np.mean(el)),
+                    }
+                )
             a, b = stats
             r, se = b["mse"] / a["mse"], br.ratio_se(b, a)
-            line = (f"| {scene} | {spp} | {a['mse']:.3e} | {b['mse']:.3e} | x{r:.3f} ± {se:.3f} | "
-                    f"{a['elow']:.3f} | {b['elow']:.3f} |")
+            line = (
+                f"| {scene} | {spp} | {a['mse']:.3e} | {b['mse']:.3e} | x{r:.3f} ± {se:.3f} | "
+                f"{a['elow']:.3f} | {b['elow']:.3f} |"
+            )
             lines.append(line)
             print(line, flush=True)
     body = "\n".join(lines).replace("{seconds}", f"{time.time() - t0:.0f}")
