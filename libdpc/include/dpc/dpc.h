@@ -193,9 +193,9 @@ DPC_API dpc_status dpc_model_load_named(const char *name, const dpc_load_options
  * characters of [A-Za-z0-9._-], not starting with '.' (so it never names a path), else
  * DPC_ERROR_INVALID_ARGUMENT. On success out_path holds the file's path (capacity bytes, the
  * terminating NUL included: DPC_PATH_MAX always suffices; less than the path needs gives
- * DPC_ERROR_LIMIT); DPC_ERROR_IO
- * with the folders searched when there is no such file. out_path is "" on failure. The
- * Python package (dpc.load) and its Mitsuba plugin use this search. */
+ * DPC_ERROR_LIMIT); DPC_ERROR_IO with the folders searched when there is no such file.
+ * out_path is "" on failure. The Python package (dpc.load) and its Mitsuba plugin use this
+ * search. */
 DPC_API dpc_status dpc_model_find(const char *name, char *out_path, size_t capacity);
 #define DPC_PATH_MAX 4096
 /* The folder `cmake --install` put the bundled models in: <prefix>/share/dpc/models found
@@ -401,9 +401,9 @@ DPC_API dpc_status dpc_order_levels(float *points, size_t n_points, size_t dims,
  *   stop at any of them, or between them (each level's points come in the order that fills the
  *   emptiest place first: dpc_order_levels; with dpc.relax, e.g. progressive-2d-relaxed, each
  *   prefix is better blue noise, and creation takes far longer: see options.progress);
- *   get_1d then uses the stratum of point i's x rank (docs/progressive.md). Net slots are then read in order (the first in the net's Sobol'
- *   order, later ones shuffled within each octave [2^(k-1), 2^k)), so their first 2^k samples
- *   are a (0,k,2)-net.
+ *   get_1d then uses the stratum of point i's x rank (docs/progressive.md). Net slots are then
+ *   read in order (the first in the net's Sobol' order, later ones shuffled within each octave
+ *   [2^(k-1), 2^k)), so their first 2^k samples are a (0,k,2)-net.
  * - Each value, over seeds, is uniformly distributed on a grid of 2^-24: estimates are unbiased.
  * - get_1d draws from the stratified lattice (j + u) / spp (one value per stratum, u the pixel's
  *   mask value), get_2d from the model's set; dimension d of get_1d and of get_2d share their
@@ -413,8 +413,8 @@ DPC_API dpc_status dpc_order_levels(float *points, size_t n_points, size_t dims,
  *   net slots (options.net_dims) are never folded.
  * - A created sampler is immutable: lookups take no lock, allocate nothing and may run on any
  *   number of threads. It does not keep the models: they may be freed after dpc_sampler_create.
- *   To stay cheap, lookups leave the thread's error message alone unless
- *   they fail (the one exception to the convention at the top of this header).
+ *   To stay cheap, lookups leave the thread's error message alone unless they fail (the one
+ *   exception to the convention at the top of this header).
  * - Memory: sizeof(dpc_sampler) + D * (8 * spp + 8) + min(D, 64) * 12,288 bytes, plus
  *   N * 4 * spp for the nets, N the net slots (below) (64 spp, 16 dimensions, the default's 16
  *   nets: 204.7 KiB; the third term holds each of the first 64 dimensions' mask with its
