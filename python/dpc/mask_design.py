@@ -101,8 +101,8 @@ def anneal_mask(
     steps = _bl._check_mask_size(steps_per_pixel, "steps_per_pixel", 0) if steps_per_pixel else 0
     if steps > MAX_STEPS_PER_PIXEL:
         raise LimitError(f"steps_per_pixel must be at most {MAX_STEPS_PER_PIXEL:,}, got {steps:,}")
-    shape = (n, n) + ((t,) if frames is not None else ()) + ((c,) if c > 1 else ())
-    _bl.check_pixels(t * n * n * c, f"annealed {' x '.join(map(str, shape))}", max_pixels, design=True)
+    what = f"annealed {n} x {n}" + (f", {t} frames" if frames is not None else "") + (", 2 channels" if c > 1 else "")
+    _bl.check_pixels(t * n * n * c, what, max_pixels, design=True)
     ranks, _stats = _run_cancellable(lambda poll: _core.mask_design(n, t, c, steps, s, poll), progress)
     values = (ranks.astype(np.float64) + 0.5) / (n * n)  # ranks: (frames, n, n, channels) uint32
     if c == 2:

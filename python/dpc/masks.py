@@ -161,9 +161,9 @@ def _baseline_mask(name: str, size, frames, channels, seed: int, max_pixels=None
     n = _bl._check_mask_size(size, "size", 2)
     c = 1 if channels is None else _bl._check_mask_size(channels, "channels", 1)
     t = None if frames is None else _bl._check_mask_size(frames, "frames", 1)
-    shape = (n, n) + ((t,) if t is not None else ()) + ((c,) if c > 1 else ())
+    what = f"{name} {n} x {n}" + (f", {t} frames" if t is not None else "") + (f", {c} channels" if c > 1 else "")
     design = name in ("void-and-cluster", "stbn")
-    _bl.check_pixels(math.prod(shape), f"{name} {' x '.join(map(str, shape))}", max_pixels, design)
+    _bl.check_pixels(n * n * (t or 1) * c, what, max_pixels, design)
     free = math.inf  # checked above for the whole mask
     if name == "white":
         if c > 1 and t is not None:
