@@ -194,7 +194,7 @@ def main() -> None:
                 rates["avx2"] >= 0.5e9,
             )
         )
-    lines += ["", "## Against the targets of issue 2", "", "| target | measured | met |", "|---|---:|---|"]
+    lines += ["", "## Against the speed targets", "", "| target | measured | met |", "|---|---:|---|"]
     lines += [f"| {name} | {value} | {'yes' if ok else '**no**'} |" for name, value, ok in checks]
     lines += [
         "",

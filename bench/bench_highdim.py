@@ -98,7 +98,7 @@ def main() -> None:
         shown = " and ".join(f"{t * 1e3:.0f} ms" for t in goal)
         lines += [
             "",
-            f"Goal of issue 14 (8,192 10-D points through bnot-10d in <= 100 ms on 2 cores): {met}: {shown} "
+            f"Goal (8,192 10-D points through bnot-10d in <= 100 ms on 2 cores): {met}: {shown} "
             "here (the scaling table's median, then the alternating rounds').",
         ]
     text = "\n".join(lines)

@@ -257,7 +257,7 @@ def main() -> None:
     lines += [
         "",
         f"Load average (1 min) at the start, between the tables and at the end: "
-        f"{', '.join(f'{v:.2f}' for v in load)} on {os.cpu_count()} CPUs. Goal (issue 3): >= 4 steps/s "
+        f"{', '.join(f'{v:.2f}' for v in load)} on {os.cpu_count()} CPUs. Goal: >= 4 steps/s "
         f"for bnot-2d at m = 1,024 on this 2-core machine: best measured {best2d:.2f} steps/s (wall), "
         f"{'met' if best2d >= 4 else '**not met**'}.",
         "",

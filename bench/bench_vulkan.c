@@ -97,7 +97,7 @@ int main(int argc, char **argv) {
             max_diff = 0.0;
             for (size_t e = 0; e < count; e++) {
                 double d = fabs((double)out[e] - (double)ref[e]);
-                d = d > 0.5 ? 1.0 - d : d; // on the torus: 0.99999 and 0.00001 are neighbours
+                d = d > 0.5 ? 1.0 - d : d;          // on the torus: 0.99999 and 0.00001 are neighbours
                 if (!(d <= max_diff)) max_diff = d; // NaN propagates
             }
             free(ref);

@@ -17,7 +17,7 @@ Medians over repeated runs after a warm-up. Each Vulkan row also gives the large
 difference from the CPU backend's points for the same seed. Then each model's load time. Only the
 "## Vulkan" section of the output file is replaced; the other sections belong to bench_generate.py
 and bench_training.py.
-Issue 6's goals (1,048,576 2-D points through 40 layers in <= 50 ms, 8,192 10-D points in <= 20 ms,
+The Vulkan backend's goals (1,048,576 2-D points through 40 layers in <= 50 ms, 8,192 10-D points in <= 20 ms,
 on an H100-class GPU) are judged on the 40-layer rows when the device is not a software driver.
 """
 
@@ -58,7 +58,7 @@ def replace_section(old: str, section: str) -> str:
     return old[:start].rstrip("\n") + "\n\n" + section.rstrip("\n") + "\n" + rest
 
 
-GOAL_2D_S, GOAL_10D_S = 0.050, 0.020  # issue 6, on an H100-class GPU
+GOAL_2D_S, GOAL_10D_S = 0.050, 0.020  # the Vulkan backend's goals, on an H100-class GPU
 
 
 def main() -> None:
@@ -153,7 +153,7 @@ def main() -> None:
             "batches included (a 2-D cascade of 40 layers is about 320 dispatches, recorded in one "
             "command buffer per submission).",
             "",
-            "Goals of issue 6 on an H100-class GPU: 1,048,576 2-D points through 40 layers in <= 50 ms, "
+            "Goals of the Vulkan backend on an H100-class GPU: 1,048,576 2-D points through 40 layers in <= 50 ms, "
             "and 8,192 10-D points in <= 20 ms. **Not measured**: no GPU was available where these "
             "numbers were taken, and a software driver's times say nothing about them. On a machine "
             "lent a GPU, `bash bench/gpu_kit.sh` prepares the binaries here and `bash bench/gpu_run.sh` "
@@ -168,7 +168,7 @@ def main() -> None:
             if goal is not None
         ]
         lines += [
-            f"Goals of issue 6 on an H100-class GPU, measured on {device}: " + "; ".join(verdicts) + ".",
+            f"Goals of the Vulkan backend on an H100-class GPU, measured on {device}: " + "; ".join(verdicts) + ".",
             "",
             "Made with `bash bench/gpu_kit.sh` (a Release build and the Vulkan loader, here) and "
             "`bash bench/gpu_run.sh` on the GPU machine, which also runs the Vulkan C tests there; "

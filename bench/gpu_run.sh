@@ -2,7 +2,7 @@
 # Runs on a GPU machine lent through the device tool, after bench/gpu_kit.sh here:
 #   run(command="bash bench/gpu_run.sh", carry=[".gpu", ".gl"], timeout_s=600)
 # 1. the Vulkan C tests (parity with the CPU on every test model, errors, threads) on the GPU;
-# 2. bench/bench_vulkan.py with the prebuilt benchmark, which judges issue 6's goals;
+# 2. bench/bench_vulkan.py with the prebuilt benchmark, which judges the Vulkan backend's goals;
 # 3. lab/gpu/vulkan_quality.py dump: every bundled model's sets on both backends (compare them here).
 # DPC_BENCH_ARGS=--quick skips the 1,048,576-point cases. Logs, the test report and the updated docs/performance.md come back in $OUT.
 set -uo pipefail

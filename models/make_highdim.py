@@ -1,4 +1,4 @@
-"""Write the hand-designed projective and high-dimensional models (issue #14 items 2 and 3).
+"""Write the hand-designed projective and high-dimensional models.
 
 Each is a cascade of Gaussian repulsion kernels g(d) = -A exp(-d^2 / (2 sigma^2)) (d, g in mean
 spacings of the subspace, table ending at 0 at the radius), run on stratified input points, with

@@ -49,12 +49,14 @@ install_torch() { # python
 }
 install_torch python3
 python3 -m pip install -q --disable-pip-version-check scikit-build-core pybind11 ninja cmake
-# ruff pinned: another version may format differently (the format check below).
-python3 -m pip install -q --disable-pip-version-check ruff==0.17.6
+# ruff pinned: another version may format differently (the format check below). lizard and
+# pylint: the duplicate-code check of tests/python/test_repo_rules.py (pinned: another version
+# may find other pairs); pytest runs that file before the package is built.
+python3 -m pip install -q --disable-pip-version-check ruff==0.17.6 lizard==1.24.3 pylint==4.1.4 "pytest>=7"
 
-step "formatting: clang-format (C/C++), ruff check and ruff format (Python)"
-# Exactly the files tests/format_files.sh lists (libdpc/, bindings/, tests/, python/, training/;
-# not models/, bench/, docs/ or generated files). To fix: clang-format -i / ruff format on them.
+step "formatting: clang-format (C/C++), ruff check and ruff format (Python), the repository's rules"
+# Exactly the files tests/format_files.sh lists (C/C++: libdpc/, bindings/, tests/, python/,
+# training/, bench/; Python: every file but generated ones). To fix: clang-format -i / ruff format.
 mapfile -t C_FILES < <(bash tests/format_files.sh c)
 mapfile -t PY_FILES < <(bash tests/format_files.sh py)
 [ "${#C_FILES[@]}" -gt 40 ] && [ "${#PY_FILES[@]}" -gt 60 ] || { echo "tests/format_files.sh listed too few files"; exit 1; }
@@ -64,6 +66,10 @@ python3 -m ruff --version
 python3 -m ruff check --no-cache "${PY_FILES[@]}"
 python3 -m ruff format --check --no-cache "${PY_FILES[@]}"
 echo "${#C_FILES[@]} C/C++ files and ${#PY_FILES[@]} Python files are formatted"
+# No sys.path edits, ruff over every Python file, no tracker numbers, no duplicated code in the
+# product (lizard and pylint; they must be there: DPC_TEST_REQUIRE_TOOLS), docs/architecture.md
+# names the tree's folders. It imports nothing of dpc, so it runs before the package is built.
+(cd /tmp && DPC_TEST_REQUIRE_TOOLS=1 python3 -m pytest -q -p no:cacheprovider "$ROOT/tests/python/test_repo_rules.py")
 
 step "the dpc package (with the Vulkan backend; every extra: all)"
 python3 -m pip install -q --disable-pip-version-check --no-build-isolation -C cmake.define.DPC_VULKAN=ON "$ROOT[all]"

@@ -1,4 +1,4 @@
-"""Issue 14 item 1, 2-D past BNOT: blue-2d measured against every goal, written to docs/reports/beyond-bnot.md.
+"""2-D past BNOT: blue-2d measured against every goal, written to docs/reports/beyond-bnot.md.
 
     python -m lab.models.beyond_bnot            # about 3 minutes on 2 cores
     python -m lab.models.beyond_bnot --model F  # another 2-D model file in blue-2d's place
@@ -60,7 +60,7 @@ def cascade_sampler(model):
 def stratify_axes(x: np.ndarray, q_max: int, steps: int = 3) -> np.ndarray:
     """A set whose 1-D projections are balanced: the output balance's Newton steps on the axis
     frequencies (q, 0) and (0, q), 0 < q <= q_max (model_cards.cancel_coefficients; q . q' = 0 across
-    the axes, so each axis is a 1-D problem of its own). The trade-off study of issue 14 item 1's
+    the axes, so each axis is a 1-D problem of its own). The trade-off study of the below-BNOT goals'
     half-plane goal, not a feature of any model."""
     q = np.arange(1, q_max + 1)
     axes = np.zeros((2 * q_max, 2), dtype=np.int64)
@@ -359,7 +359,7 @@ def main(argv=None) -> None:
     lines = [
         "# Past BNOT in 2-D",
         "",
-        f"`python -m lab.models.beyond_bnot` (model `{args.model}`): issue 14 item 1's goals, measured. "
+        f"`python -m lab.models.beyond_bnot` (model `{args.model}`): the below-BNOT goals, measured. "
         "Conventions as in [analysis.md](../analysis.md): P normalised so that white noise = 1, ν = |q|/√m, "
         "E_low(ν) = mean P over the integer frequencies with 0 < ν' < ν, δ_min = the smallest pair distance "
         "over the densest packing's, anisotropy = mean over 0.5 ≤ ν ≤ 4 of 10·log10(variance / mean²) of "

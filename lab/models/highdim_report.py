@@ -1,4 +1,4 @@
-"""Projective and high-dimensional blue noise: issue #14 items 2 and 3, measured.
+"""Projective and high-dimensional blue noise: their goals, measured.
 
     python -m lab.models.highdim_report            # writes docs/reports/high-dimensions.md (about 15 minutes)
     python -m lab.models.highdim_report --quick    # 16 sets, prints only (dart throwing in 10-D skipped)
@@ -340,7 +340,7 @@ def main() -> None:
             )
         )
 
-    table = ["| goal (issue #14) | measured | met |", "|---|---|---|"] + [
+    table = ["| goal | measured | met |", "|---|---|---|"] + [
         f"| {g} | {v} | {'yes' if ok else '**no**'} |" for g, v, ok in goals
     ]
     print("\n".join(table))
@@ -357,7 +357,8 @@ INTRO = [
     "# Projective and high-dimensional blue noise",
     "",
     "`python -m lab.models.highdim_report` (this page is its output; about 15 minutes, a quarter of it "
-    "dart throwing in 10-D): issue #14 items 2 and 3, measured with 100 sets (seeds 0 … 99) unless stated. "
+    "dart throwing in 10-D): the projective and high-dimensional goals, measured with 100 sets "
+    "(seeds 0 … 99) unless stated. "
     "E_low(ν) = mean P over the integer frequencies with 0 < |q|/m^(1/n) < ν, exact "
     "(`dpc.analysis.low_frequency_energy`; white noise = 1); δ_min = minimum toroidal distance over the "
     "densest packing's (mean over sets / worst set); peak and rel. L1 (0.25 ≤ ν ≤ 3) of the Monte Carlo "
@@ -376,7 +377,7 @@ TARGETS_AFTER = [
     "So the 5-D and 10-D targets (bnot-5d's, bnot-10d's and blue-10d's) are not 5-D or 10-D spectra: they are the "
     "authors' 2-D BNOT spectrum re-indexed in ν, bit for bit (the 5-D file is their 16-point 2-D file, the 4-D "
     "256-point and 3-D 64-point files are the same numbers again). The 4-D target is the 2-D spectrum within "
-    "0.1 %, the 3-D one within 8.5 %. Issue #14's bnot-5d goals (peak ≥ 2.0, rel. L1 ≤ 0.15) therefore ask a 5-D set "
+    "0.1 %, the 3-D one within 8.5 %. The bnot-5d goals (peak ≥ 2.0, rel. L1 ≤ 0.15) therefore ask a 5-D set "
     "for a 2-D set's radial spectrum, whose peak of 2.69 is 2-D BNOT's short-range order; no genuine 5-D BNOT "
     "spectrum ships to say what a 5-D set of that quality reaches. The cards keep these targets (they are what the "
     "models were trained and compared against) and say so.",
@@ -426,7 +427,7 @@ OUTRO = [
     "it has twice the layers, and that many neighbours turn libdpc's neighbour lists off "
     "([performance.md](../performance.md#high-dimensions)), so every layer runs the prefilter over all pairs. Raising "
     "the lists' limits (64 and 256 expected points instead of 24 and 160) saved 5% in a development run: points that "
-    "move a quarter spacing per layer force rebuilds. Issue #14's 100 ms goal is for bnot-10d, where it holds; a 10-D "
+    "move a quarter spacing per layer force rebuilds. The 100 ms goal is for bnot-10d, where it holds; a 10-D "
     "model with both this low band and that speed needs a search for about 20 neighbours in 10-D that does not rescan "
     "all pairs when points move that far.",
     "",

@@ -154,7 +154,7 @@ class Card:
     kind: str  # plane | nd | subspaces | dither | integrand | mask
     targets: dict = field(default_factory=dict)  # subspace axes -> target key
     nu_range: tuple = (0.25, 3.0)
-    scales: bool = False  # the point-count study (issue #5 item 3)
+    scales: bool = False  # the point-count study
     integrand: str = ""
     full: str = ""  # subspaces: target key of the full space, if trained
 
@@ -352,7 +352,7 @@ SCALES = [(0.25, 100), (1, 100), (4, 40), (16, 10), (64, 4)]  # (point-count fac
 
 def scale_section(name: str, model, t: Target) -> list[str]:
     """E_low, the power at the torus-scale frequencies and the radial spectrum at m/4 ... 64m
-    with the scale-aware radius (issue #5 item 3; the paper's Fig. 17 went to 2m)."""
+    with the scale-aware radius (the paper's Fig. 17 went to 2m)."""
     rows = [
         "| points | sets | E_low ν<0.5 | E_low ν<0.75 | ratio to m (ν<0.5) | mean P at the lowest frequencies |",
         "|---:|---:|---:|---:|---:|---:|",
@@ -442,7 +442,7 @@ def card_nd(name: str, card: Card, model) -> list[str]:
     ]
     curves = []
     others = [("white noise", classic_sets("white", m, n))]
-    if n <= 5:  # toroidal dart throwing: the delta_min to reach (issue #14 item 3); slow beyond 5-D
+    if n <= 5:  # toroidal dart throwing: the delta_min to reach (the high-dimensional goals); slow beyond 5-D
         others.insert(0, ("relaxed dart throwing", classic_sets("dart-throwing", m, n)))
     if round(m ** (1.0 / n)) ** n == m:  # jitter needs m = k^n strata
         others.insert(0, ("jitter", classic_sets("jitter", m, n)))

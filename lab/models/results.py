@@ -227,8 +227,8 @@ def fig9() -> None:
             "below ν = 0.75 exist; the authors ship no 10-D target at that m, so its "
             "rel. L1 and peak are against the 1,024-point target in ν and the target's "
             "E_low is given only where ν reaches its integer frequencies. "
-            '"(previous)": the file a model replaced (`models/previous/`, issue #14 '
-            "item 3), measured the same way. δ_min: minimum distance over the densest "
+            '"(previous)": the file a model replaced (`models/previous/`), '
+            "measured the same way. δ_min: minimum distance over the densest "
             "packing's (mean over the sets / worst set).",
             "",
             *rows,
@@ -287,7 +287,7 @@ def fig10() -> None:
             "each projection's target; for projective-3d, whose loss also has a 3-D term, the "
             "3-D spectrum (Monte Carlo, 128 frequencies per ring) against the 3-D "
             'target. "(previous)": the trained file that the hand-designed '
-            "projective-3d replaced (`models/previous/`, issue #14 item 2). "
+            "projective-3d replaced (`models/previous/`). "
             "`projective-4d` (six projections) is on its card in "
             "[models.md](models.md); both are compared with their previous files in "
             "[high-dimensions.md](high-dimensions.md).",

@@ -2,7 +2,6 @@
 points, has a card spec (lab/models/model_cards.py), a card in docs/reports/models.md and a row in
 models/README.md; models derived from the authors' targets ship with their licence."""
 
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -51,7 +50,7 @@ def test_card_names_the_shipped_file(name):
 
 
 def test_headline_quality_of_the_2d_blue_noise_models():
-    """README's claims, on 16 sets (the cards use 100): bnot-2d within issue #5's BNOT bounds,
+    """README's claims, on 16 sets (the cards use 100): bnot-2d within the BNOT bounds,
     bnot-2d-wide far below bnot-2d at the torus-scale frequencies."""
     from dpc import analysis
 
@@ -87,11 +86,10 @@ def test_blue_2d_is_below_bnot():
 
 
 def test_bnot_10d_keeps_no_coincident_pair():
-    """Issue 14 item 3: the seeds whose sets kept a pair about 1e-5 spacings apart before
+    """High-dimensional goals: the seeds whose sets kept a pair about 1e-5 spacings apart before
     max_attraction (docs/training.md §2; python -m lab.models.close_pairs bnot-10d counts 10,000
     seeds) keep every pair apart, and every table respects the cap of its config (0.4 d)."""
     from dpc.model_file import read_model
-
     from lab.models.close_pairs import closest_in_spacings
 
     model = dpc.load("bnot-10d")
@@ -104,7 +102,7 @@ def test_bnot_10d_keeps_no_coincident_pair():
 
 
 def test_projective_3d_is_blue_in_every_projection_and_in_3d():
-    """Issue 14 item 2 on 16 sets (docs/reports/high-dimensions.md uses 100): every 2-D projection's
+    """Projective goals on 16 sets (docs/reports/high-dimensions.md uses 100): every 2-D projection's
     E_low nu<0.5 near 0.0094 (goal 0.01) and the 3-D set's near 0.018 (goal 0.02); the trained file
     it replaced had 0.060 and 0.028."""
     from dpc.analysis.spectrum import low_frequency_energy
@@ -127,7 +125,7 @@ def test_projective_4d_is_blue_in_all_six_projections():
 
 @pytest.mark.parametrize("name, floor", [("bnot-4d", 0.74), ("bnot-5d", 0.70)])
 def test_bnot_4d_and_5d_keep_points_further_apart_than_dart_throwing(name, floor):
-    """Issue 14 item 3 on 16 sets: delta_min above relaxed dart throwing's (0.68 in 4-D, 0.69 in
+    """High-dimensional goals on 16 sets: delta_min above relaxed dart throwing's (0.68 in 4-D, 0.69 in
     5-D at m = 1,024, docs/reports/high-dimensions.md); the files they replaced had 0.43 and 0.34."""
     from dpc import analysis
 
@@ -135,7 +133,7 @@ def test_bnot_4d_and_5d_keep_points_further_apart_than_dart_throwing(name, floor
 
 
 def test_blue_10d_has_a_low_band_at_8192_points():
-    """Issue 14 item 3 on 2 sets: at m = 8,192 blue-10d's E_low nu<0.75 near 0.04 (goal 0.1;
+    """High-dimensional goals on 2 sets: at m = 8,192 blue-10d's E_low nu<0.75 near 0.04 (goal 0.1;
     bnot-10d there about 0.3) and delta_min near 0.85 (dart throwing: 0.71)."""
     from dpc import analysis
     from dpc.analysis.spectrum import low_frequency_energy
@@ -152,7 +150,6 @@ def test_hand_designed_models_only_repel_and_match_their_script(name):
     ends at 0 at the radius: no layer pulls two points together (the cause of bnot-10d's
     coincident pairs), and no layer jumps at the radius."""
     from dpc.model_file import read_model
-
     from models import make_highdim
 
     spec = make_highdim.MODELS[name]()
@@ -228,7 +225,7 @@ def test_vulkan_gives_the_same_quality_not_the_same_points():
         se = lambda a, b: 4.0 * np.hypot(a.std(ddof=1), b.std(ddof=1)) / np.sqrt(len(a))  # noqa: E731
         assert abs(elow.mean() - ref_elow.mean()) <= se(elow, ref_elow), (label, elow.mean(), ref_elow.mean())
         assert abs(dmin.mean() - ref_dmin.mean()) <= se(dmin, ref_dmin), (label, dmin.mean(), ref_dmin.mean())
-        assert elow.mean() <= 0.005, label  # issue #5's BNOT bound, as in the headline test above
+        assert elow.mean() <= 0.005, label  # the BNOT bound, as in the headline test above
 
 
 def test_stratified_input_keeps_large_sets_blue_at_the_largest_scales():
@@ -249,12 +246,12 @@ def test_stratified_input_keeps_large_sets_blue_at_the_largest_scales():
     print(f"[ info ] bnot-2d at {m} points, (P(|q|=1), E_low(0.5)): {got}")
     assert got["uniform"][0] > 0.3
     assert got["stratified"][0] < 0.05
-    assert got["stratified"][1] <= 0.005  # issue #5's BNOT bound
+    assert got["stratified"][1] <= 0.005  # the BNOT bound
 
 
 def test_bnot_2d_stratified_gets_its_input_by_default_and_stays_blue_at_every_scale():
     """The model records dpc.input = stratified, so the default input (auto) is stratified; at
-    the trained count it is within issue #5's BNOT bounds, and at 16x it keeps E_low and has
+    the trained count it is within the BNOT bounds, and at 16x it keeps E_low and has
     no torus-scale power (docs/reports/models.md card: ratio <= 1.03, power <= 0.0008)."""
     from dpc import analysis
 
