@@ -15,7 +15,7 @@ from dpc.model_file import read_model
 from dpc_train import export as EX
 from dpc_train import trainer as TR
 from dpc_train.config import config_from_dict, load_config
-from dpc_train.onnx_reference import PointFilter
+from onnx_reference import PointFilter
 
 REPO = Path(__file__).resolve().parents[3]
 TINY = REPO / "training" / "configs" / "tiny-test.toml"

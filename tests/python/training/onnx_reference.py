@@ -3,7 +3,7 @@ an independent oracle of what a dpc model file means (docs/model-format.md §3),
 with dense all-pairs distances (no torch, no neighbour search).
 
     from onnx.reference import ReferenceEvaluator
-    from dpc_train.onnx_reference import PointFilter
+    from onnx_reference import PointFilter
     sess = ReferenceEvaluator("models/bnot-2d.onnx", new_ops=[PointFilter])
     (y,) = sess.run(None, {"points": x})
 """
