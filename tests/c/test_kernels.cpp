@@ -16,6 +16,12 @@
 
 extern "C" {
 #include "cpu/cpu_kernels.h"
+
+// The AVX-512 path's 16-lane arrangement with portable primitives (cpu_kernel_packed16.c, built
+// into this test only).
+void dpc_block_packed16(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
+                        unsigned n_ranges, float *acc, float *scratch);
+void dpc_list_packed16(const dpc_sub_job *job, const float *x, const uint32_t *cand, unsigned n, float *acc);
 }
 
 namespace {

@@ -15,7 +15,6 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "api/model_handle.h"
 #include "common/error.h"
 #include "common/threads.h"
 #include "cpu/cpu_cascade.h"
@@ -23,10 +22,9 @@
 #include "model/balance.h"
 #include "model/input.h"
 #include "model/level_order.h"
+#include "model/model_handle.h"
 #include "model/plan.h"
 #include "model/relax.h"
-
-#define MAX_FLOATS_PER_SET (1ull << 28) /* n_points * dims: 1 GiB of floats */
 
 /* Where `cmake --install` puts the bundled models (CMake defines both for this file): the
  * configured absolute folder, and the same folder relative to the library's own folder. */
@@ -44,21 +42,6 @@ unsigned dpc_version_number(void) { return DPC_VERSION_NUMBER; }
 
 const char *dpc_version_string(void) {
     return STR(DPC_VERSION_MAJOR) "." STR(DPC_VERSION_MINOR) "." STR(DPC_VERSION_PATCH);
-}
-
-const char *dpc_status_string(dpc_status status) {
-    switch (status) {
-    case DPC_OK: return "DPC_OK";
-    case DPC_ERROR_INVALID_ARGUMENT: return "DPC_ERROR_INVALID_ARGUMENT";
-    case DPC_ERROR_IO: return "DPC_ERROR_IO";
-    case DPC_ERROR_FORMAT: return "DPC_ERROR_FORMAT";
-    case DPC_ERROR_UNSUPPORTED: return "DPC_ERROR_UNSUPPORTED";
-    case DPC_ERROR_OUT_OF_MEMORY: return "DPC_ERROR_OUT_OF_MEMORY";
-    case DPC_ERROR_LIMIT: return "DPC_ERROR_LIMIT";
-    case DPC_ERROR_INTERNAL: return "DPC_ERROR_INTERNAL";
-    case DPC_ERROR_CANCELLED: return "DPC_ERROR_CANCELLED";
-    }
-    return "DPC_ERROR_UNKNOWN";
 }
 
 int dpc_isa_supported(dpc_isa isa) { return dpc_cpu_isa_available(isa); }
@@ -519,36 +502,6 @@ dpc_status dpc_order_levels(float *points, size_t n_points, size_t dims, uint32_
     return st == DPC_OK ? dpc_order_level_points(points, n_points, (uint32_t)dims, base) : st;
 }
 
-static double model_max_radius(const dpc_cascade *c) {
-    double r = 0.0;
-    for (uint32_t l = 0; l < c->n_layers; l++)
-        for (uint32_t t = 0; t < c->layers[l].n_sub; t++)
-            if ((double)c->layers[l].radius[t] > r) r = (double)c->layers[l].radius[t];
-    return r;
-}
-
-/* Resolve and check the point count of a request. */
-static dpc_status check_count(const dpc_model *model, size_t *n_points) {
-    const dpc_cascade *c = &model->cascade;
-    size_t m = *n_points ? *n_points : c->n_points;
-    if (m > DPC_MAX_POINTS)
-        return dpc_fail(DPC_ERROR_LIMIT, "%zu points requested, at most %u per set", m, DPC_MAX_POINTS);
-    if ((unsigned long long)m * c->dims > MAX_FLOATS_PER_SET)
-        return dpc_fail(DPC_ERROR_LIMIT, "%zu points x %u dims exceeds 2^28 floats per set", m, c->dims);
-    if (c->grid_dims && m != c->n_points)
-        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "gridded model generates exactly %u points, %zu requested",
-                        c->n_points, m);
-    /* the work bound of dpc_load_options.max_neighbours */
-    const double asked = model->neighbours < (double)(m - 1) ? model->neighbours : (double)(m - 1);
-    if (asked > model->max_neighbours)
-        return dpc_fail(DPC_ERROR_LIMIT,
-                        "the model asks for %.4g neighbours per point at %zu points (radius %.4g spacings at most), "
-                        "beyond the load option max_neighbours = %.4g: load it with a larger bound if you trust it",
-                        asked, m, model_max_radius(c), model->max_neighbours);
-    *n_points = m;
-    return DPC_OK;
-}
-
 /* Progress of one dpc_generate_ex call (dpc_progress_fn): shared by its worker threads, the
  * callback called under the lock so that calls never overlap. */
 typedef struct progress {
@@ -577,15 +530,6 @@ static dpc_status progress_add(progress *p, uint64_t units) {
  * long layer (a poll, so that a cancel is seen within a layer), and after each layer (one unit
  * of progress). */
 static dpc_status engine_hook(void *ctx, int layer_done) { return progress_add((progress *)ctx, layer_done ? 1u : 0u); }
-
-dpc_status dpc_model_generate_cpu(const dpc_model *model, uint64_t seed, size_t m, float *out, dpc_cpu_hook hook,
-                                  void *ctx) {
-    dpc_cpu_engine one;
-    dpc_status st = dpc_cpu_engine_init(&one, model->engine.isa, 1); /* every ISA: the same bits */
-    if (st != DPC_OK) return st;
-    if ((st = check_count(model, &m)) != DPC_OK) return st;
-    return dpc_cpu_generate(&model->cascade, model->input, &one, seed, 1, m, out, hook, ctx);
-}
 
 #if defined(DPC_HAVE_VULKAN)
 /* Inputs of a Vulkan run: the model's input points (model/input.h, as on the CPU), or the
@@ -621,7 +565,7 @@ static dpc_status vk_generate(const dpc_model *model, uint64_t seed, size_t coun
 dpc_status dpc_generate_n(const dpc_model *model, uint64_t seed, size_t n_points, float *out) {
     dpc_clear_error();
     if (!model || !out) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "model or out is NULL");
-    dpc_status st = check_count(model, &n_points);
+    dpc_status st = dpc_model_check_count(model, &n_points);
     if (st != DPC_OK) return st;
 #if defined(DPC_HAVE_VULKAN)
     if (model->backend == DPC_BACKEND_VULKAN) return vk_generate(model, seed, 1, n_points, out);
@@ -653,7 +597,7 @@ dpc_status dpc_generate_size(const dpc_model *model, size_t count, size_t n_poin
     if (!model || !out_floats) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "model or out_floats is NULL");
     *out_floats = 0;
     if (count == 0) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "count must be positive");
-    dpc_status st = check_count(model, &n_points);
+    dpc_status st = dpc_model_check_count(model, &n_points);
     if (st != DPC_OK) return st;
     const size_t stride = n_points * model->cascade.dims;
     if (count > SIZE_MAX / stride) return dpc_fail(DPC_ERROR_LIMIT, "count * n_points * dims overflows");
@@ -714,7 +658,7 @@ dpc_status dpc_filter(const dpc_model *model, size_t n_points, float *points) {
     dpc_clear_error();
     if (!model || !points) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "model or points is NULL");
     if (n_points == 0) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "n_points must be positive");
-    dpc_status st = check_count(model, &n_points);
+    dpc_status st = dpc_model_check_count(model, &n_points);
     if (st != DPC_OK) return st;
     if ((st = check_unit_points(points, n_points, model->cascade.dims)) != DPC_OK) return st;
 #if defined(DPC_HAVE_VULKAN)
@@ -765,7 +709,7 @@ static dpc_status check_layer_call(const dpc_layer_desc *layer, const double *ke
     if (count == 0 || n_points == 0) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "count and n_points must be positive");
     if (n_points > DPC_MAX_POINTS)
         return dpc_fail(DPC_ERROR_LIMIT, "%zu points per set, at most %u", n_points, DPC_MAX_POINTS);
-    if ((unsigned long long)n_points * n > MAX_FLOATS_PER_SET)
+    if ((unsigned long long)n_points * n > DPC_MAX_FLOATS_PER_SET)
         return dpc_fail(DPC_ERROR_LIMIT, "%zu points x %u dims exceeds 2^28 values per set", n_points, n);
     if (count > SIZE_MAX / sizeof(double) / (n_points * n))
         return dpc_fail(DPC_ERROR_LIMIT, "count * n_points * dims overflows");

@@ -3,8 +3,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "api/model_handle.h"
 #include "common/error.h"
+#include "model/model_handle.h"
 #include "sampler/sampler.h"
 
 #define MAX_TABLE_POINTS (1ull << 24) /* D * spp: 128 MiB of tables */

@@ -17,3 +17,19 @@ dpc_status dpc_fail(dpc_status status, const char *fmt, ...) {
 void dpc_clear_error(void) { g_message[0] = '\0'; }
 
 const char *dpc_last_error(void) { return g_message; }
+
+/* The statuses' names live here, beside the message, so every layer can name a status. */
+const char *dpc_status_string(dpc_status status) {
+    switch (status) {
+    case DPC_OK: return "DPC_OK";
+    case DPC_ERROR_INVALID_ARGUMENT: return "DPC_ERROR_INVALID_ARGUMENT";
+    case DPC_ERROR_IO: return "DPC_ERROR_IO";
+    case DPC_ERROR_FORMAT: return "DPC_ERROR_FORMAT";
+    case DPC_ERROR_UNSUPPORTED: return "DPC_ERROR_UNSUPPORTED";
+    case DPC_ERROR_OUT_OF_MEMORY: return "DPC_ERROR_OUT_OF_MEMORY";
+    case DPC_ERROR_LIMIT: return "DPC_ERROR_LIMIT";
+    case DPC_ERROR_INTERNAL: return "DPC_ERROR_INTERNAL";
+    case DPC_ERROR_CANCELLED: return "DPC_ERROR_CANCELLED";
+    }
+    return "DPC_ERROR_UNKNOWN";
+}

@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "common/error.h"
+#include "common/rng.h"
 #include "common/threads.h"
 #include "cpu/cpu_grid.h"
 #include "cpu/cpu_lists.h"
@@ -486,7 +487,7 @@ static dpc_status generate_one(const dpc_cascade *c, dpc_input input, const dpc_
         const dpc_status st = dpc_cpu_filter_hooked(c, e, m, out, hook, ctx);
         return st == DPC_OK ? balance_prefix(c, out, m, 0) : st;
     }
-    /* Progressive: level j >= 1 adds its input points, of seed + j * 0x9E3779B97F4A7C15, to the
+    /* Progressive: level j >= 1 adds its input points, of seed + j * DPC_STREAM_LEVEL, to the
      * n points so far and filters them past those, which stay where they are. */
     size_t n = dpc_first_level(m, c->progressive_base);
     dpc_input_fill(c, input, seed, n, out);
@@ -494,7 +495,7 @@ static dpc_status generate_one(const dpc_cascade *c, dpc_input input, const dpc_
     if (st == DPC_OK) st = balance_prefix(c, out, n, 0);
     for (uint64_t level = 1; st == DPC_OK && n < m; level++) {
         const size_t add = dpc_level_size(n, m);
-        dpc_input_fill(c, input, seed + level * 0x9E3779B97F4A7C15ull, add, out + n * c->dims);
+        dpc_input_fill(c, input, seed + level * DPC_STREAM_LEVEL, add, out + n * c->dims);
         st = dpc_cpu_filter_frozen(c, e, n + add, n, out, hook, ctx);
         if (st == DPC_OK) /* the level's new points balance the whole prefix; the held ones stay */
             st = balance_prefix(c, out, n + add, n);

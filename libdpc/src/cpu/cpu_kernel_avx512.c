@@ -2,8 +2,8 @@
  * query points over the same 8 candidates; tables of up to 32 bins looked up in registers
  * (vpermt2ps), gathers beyond. Compiled with -mavx512f for this file only; called only when
  * cpuid reports AVX-512F (cpu_dispatch.c). The same code with generic primitives is compiled
- * for every CPU as dpc_block_packed16 (cpu_kernel_packed16.c), which the kernel tests compare
- * with the scalar path on machines without AVX-512. */
+ * for every CPU as dpc_block_packed16 (tests/c/cpu_kernel_packed16.c, in the kernel tests
+ * only), which they compare with the scalar path on machines without AVX-512. */
 #include <immintrin.h>
 
 #include "cpu/cpu_kernels.h"

@@ -1,7 +1,7 @@
 /* The canonical kernel (cpu_kernel_body.h) on VW-lane GCC vectors with portable primitives:
  * FMAs and table lookups lane by lane. The including file defines VW (lanes) and KERNEL (the
- * function's name): cpu_kernel_scalar.c (8 lanes, the scalar path) and cpu_kernel_packed16.c
- * (16 lanes, AVX-512's arrangement). */
+ * function's name): cpu_kernel_scalar.c (8 lanes, the scalar path) and the kernel tests'
+ * tests/c/cpu_kernel_packed16.c (16 lanes, AVX-512's arrangement). */
 #include <math.h>
 
 #include "cpu/cpu_kernels.h"

@@ -45,9 +45,6 @@ typedef void (*dpc_block_fn)(const dpc_sub_job *job, const float *xs, unsigned c
 
 void dpc_block_scalar(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
                       unsigned n_ranges, float *acc, float *scratch);
-/* The AVX-512 path's 16-lane arrangement with portable primitives: for the kernel tests only. */
-void dpc_block_packed16(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
-                        unsigned n_ranges, float *acc, float *scratch);
 /* Sums for one query point x (k floats) over an explicit candidate list: cand[0 .. n), ascending
  * indices without repeats, holding every point in the window eps < d < r (the neighbour lists of
  * cpu_lists.h), read from job->row. Each candidate's term is computed with the block kernel's
@@ -57,7 +54,6 @@ void dpc_block_packed16(const dpc_sub_job *job, const float *xs, unsigned count,
  * changes no bit either). */
 typedef void (*dpc_list_fn)(const dpc_sub_job *job, const float *x, const uint32_t *cand, unsigned n, float *acc);
 void dpc_list_scalar(const dpc_sub_job *job, const float *x, const uint32_t *cand, unsigned n, float *acc);
-void dpc_list_packed16(const dpc_sub_job *job, const float *x, const uint32_t *cand, unsigned n, float *acc);
 #if defined(DPC_HAVE_AVX2)
 void dpc_list_scalar_fma(const dpc_sub_job *job, const float *x, const uint32_t *cand, unsigned n, float *acc);
 void dpc_list_avx2(const dpc_sub_job *job, const float *x, const uint32_t *cand, unsigned n, float *acc);

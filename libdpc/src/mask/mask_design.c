@@ -51,7 +51,7 @@ typedef struct splitmix {
 } splitmix;
 
 static uint64_t next_u64(splitmix *r) {
-    r->s += 0x9E3779B97F4A7C15ull;
+    r->s += DPC_GOLDEN;
     return dpc_mix64(r->s);
 }
 static double next_uniform(splitmix *r) { return (double)(next_u64(r) >> 11) * 0x1.0p-53; }
@@ -132,7 +132,7 @@ static dpc_status void_and_cluster(uint32_t size, uint64_t seed, int32_t *ranks,
     if (ones < 1) ones = 1;
     if (ones > s / 2) ones = s / 2;
     /* initial pattern: the first `ones` pixels of a partial Fisher-Yates shuffle */
-    splitmix rng = {seed * 0x9E3779B97F4A7C15ull + 0x5EED0000ull};
+    splitmix rng = {seed * DPC_STREAM_MASK_START + DPC_STREAM_MASK_START_ADD};
     for (int p = 0; p < s; p++) order[p] = p;
     for (int i = 0; i < ones; i++) {
         const int j = i + next_below(&rng, s - i), t = order[i];
@@ -628,7 +628,7 @@ static dpc_status anneal(annealer *a, uint64_t steps, uint64_t seed, const dpc_m
         for (int p = 0; p < S; p++) a->pixel_of_rank[(size_t)f * S + a->rank[(size_t)f * S + p]] = p;
     dpc_status st = rebuild(a, poll);
     if (st != DPC_OK) return st;
-    splitmix rng = {seed * 0x2545F4914F6CDD1Dull + 0x1234567ull};
+    splitmix rng = {seed * DPC_STREAM_MASK_ANNEAL + DPC_STREAM_MASK_ANNEAL_ADD};
     stats->energy_start = energy(a);
     stats->accepted = 0;
     double scale = 1.0, sum = 0;

@@ -13,7 +13,7 @@ void dpc_input_uniform(uint64_t seed, size_t count, float *out) {
 
 static uint32_t below(uint64_t state1, uint64_t *counter, uint32_t bound) {
     /* an integer in [0, bound): the high 32 bits of the next stream value, scaled */
-    uint64_t z = dpc_mix64(state1 + (++*counter) * 0x9E3779B97F4A7C15ull);
+    uint64_t z = dpc_mix64(state1 + (++*counter) * DPC_GOLDEN);
     return (uint32_t)(((z >> 32) * (uint64_t)bound) >> 32);
 }
 
@@ -46,7 +46,7 @@ void dpc_input_stratified(uint64_t seed, size_t m, size_t n, float *out) {
     uint64_t cells = 1;
     for (size_t a = 0; a < n; a++) cells *= g;
     const size_t base = m / (size_t)cells, extra = m % (size_t)cells;
-    const uint64_t state1 = dpc_mix64(seed ^ 0x5354524154494649ull); /* a stream of its own */
+    const uint64_t state1 = dpc_mix64(seed ^ DPC_STREAM_STRATIFIED);
     uint64_t counter = 0;
     /* every cell `base` times, then `extra` distinct cells (a partial Fisher-Yates shuffle of all
      * cells; extra > 0 implies n >= 2, since g = m in 1-D, so words m .. m + cells are free) */

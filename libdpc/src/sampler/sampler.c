@@ -3,13 +3,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "api/model_handle.h"
 #include "common/error.h"
 #include "common/threads.h"
+#include "model/model_handle.h"
 #include "sampler/sampler.h"
 
 /* Seed of the s-th set a sampler generates. */
-static uint64_t set_seed(uint64_t base, uint64_t s) { return dpc_mix64(base + (s + 1) * 0xD1B54A32D192ED03ull); }
+static uint64_t set_seed(uint64_t base, uint64_t s) { return dpc_stream_at(base, DPC_STREAM_SAMPLER_SET, s); }
 
 typedef struct ranked {
     float v;
@@ -196,7 +196,7 @@ static dpc_status build(dpc_sampler *s, const dpc_sampler_options *o, build_prog
     for (t = 0; t < s->net_slots; t++) {
         uint32_t *cells = s->nets + (size_t)t * n;
         if (progress && progress_add(progress, 0) != DPC_OK) goto cancelled;
-        const uint64_t net_seed = dpc_mix64(s->base ^ dpc_mix64(t + 0x243F6A8885A308D3ull));
+        const uint64_t net_seed = dpc_child_seed(s->base, DPC_STREAM_SAMPLER_NET, t);
         if ((st = dpc_sampler_make_net(log_n, net_seed, cells)) != DPC_OK) goto done;
         /* Every net after the first in a seeded random order (Fisher-Yates): two nets in Sobol'
          * order, rotated against each other, pair their points in a lattice-like pattern (a
@@ -210,7 +210,7 @@ static dpc_status build(dpc_sampler *s, const dpc_sampler_options *o, build_prog
                 uint32_t low = 0; /* the first index of i's octave, or 0 for the whole net */
                 if (!s->rotate)
                     for (low = 1; low <= i >> 1;) low <<= 1;
-                const uint64_t r = dpc_mix64(net_seed + (uint64_t)i * 0xD1342543DE82EF95ull);
+                const uint64_t r = dpc_stream_at(net_seed, DPC_STREAM_NET_SHUFFLE, (uint64_t)i - 1);
                 const uint32_t j = low + (uint32_t)(((r >> 32) * (i - low + 1)) >> 32), c = cells[i];
                 cells[i] = cells[j];
                 cells[j] = c;

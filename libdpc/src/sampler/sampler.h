@@ -61,7 +61,7 @@ struct dpc_sampler {
 /* Key of (dimension d, pass r): everything a lookup derives for that dimension and block of
  * spp sample indices comes from it. */
 static inline uint64_t dpc_sampler_key(uint64_t base, uint32_t dim, uint32_t pass) {
-    return dpc_mix64(base ^ dpc_mix64(((uint64_t)pass << 32 | dim) + 0x9E3779B97F4A7C15ull));
+    return dpc_child_seed(base, DPC_STREAM_SAMPLER_KEY, (uint64_t)pass << 32 | dim);
 }
 
 /* 24 bits of a key as a float in [0, 1), exact. */

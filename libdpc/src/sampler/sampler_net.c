@@ -68,7 +68,7 @@ dpc_status dpc_sampler_make_net(uint32_t m, uint64_t seed, uint32_t *cells) {
         for (uint32_t i = 0; i < n; i++) p[i * 2 + c] = base[i * 2 + c];
         for (uint32_t j = 1; j < m; j++)
             for (uint32_t pre = 0; pre < (1u << j); pre++, f++) {
-                if (!(dpc_mix64(seed + (f + 1) * 0x9E3779B97F4A7C15ull) >> 63)) continue;
+                if (!(dpc_stream_at(seed, DPC_STREAM_NET_FLIP, f) >> 63)) continue;
                 const uint32_t width = n >> j, bit = 1u << (m - 1 - j);
                 for (uint32_t v = pre * width; v < (pre + 1) * width; v++) p[order[v * 2 + c] * 2 + c] ^= bit;
             }
