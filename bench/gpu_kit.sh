@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
-# Prepares, on this machine, what bench/gpu_run.sh needs on a GPU machine lent through the device
-# tool (which has no Vulkan headers, GoogleTest or package registry):
+# Prepares, on a machine with the build tools, what bench/gpu_run.sh needs on a GPU machine that
+# has no Vulkan headers, GoogleTest or package registry:
 #   .gpu/  a Release build with the Vulkan backend: libdpc.so.0, dpc_bench_vulkan, dpc_test_vulkan;
 #   .gl/   the Vulkan loader (libvulkan1) and GLVND (libglvnd0 and its GL/EGL front ends, which the
 #          NVIDIA driver's Vulkan library links against) as Debian packages, unpacked there by
 #          gpu_run.sh.
-# Both folders are git-ignored. Then, with the device tool:
-#   run(command="bash bench/gpu_run.sh", carry=[".gpu", ".gl"], timeout_s=600)
+# Both folders are git-ignored. Copy the checkout with .gpu/ and .gl/ to the GPU machine and run
+# `bash bench/gpu_run.sh` there (as root: it unpacks .gl/ into /).
 # Needs what tests/run_all.sh installs (GoogleTest, libvulkan-dev).
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
-# Runs on a GPU machine lent through the device tool, after bench/gpu_kit.sh here:
-#   run(command="bash bench/gpu_run.sh", carry=[".gpu", ".gl"], timeout_s=600)
+# Runs on a GPU machine (NVIDIA driver, as root), in a copy of the checkout with the .gpu/ and
+# .gl/ folders that bench/gpu_kit.sh made: bash bench/gpu_run.sh
 # 1. the Vulkan C tests (parity with the CPU on every test model, errors, threads) on the GPU;
 # 2. bench/bench_vulkan.py with the prebuilt benchmark, which judges the Vulkan backend's goals;
-# 3. lab/gpu/vulkan_quality.py dump: every bundled model's sets on both backends (compare them here).
-# DPC_BENCH_ARGS=--quick skips the 1,048,576-point cases. Logs, the test report and the updated docs/performance.md come back in $OUT.
+# 3. python3 -m lab.gpu.vulkan_quality dump: every bundled model's sets on both backends (compare
+#    them where the package is installed: python -m lab.gpu.vulkan_quality compare).
+# DPC_BENCH_ARGS=--quick skips the 1,048,576-point cases. Logs, the test report, the sets and the
+# updated docs/performance.md go to $OUT (default build/gpu-out).
 set -uo pipefail
 cd "$(dirname "$0")/.."
-out=${OUT:-build/gpu-out}  # $OUT: the device tool's folder that comes back
+out=${OUT:-build/gpu-out}
 mkdir -p "$out"
 for f in .gl/*.deb; do dpkg -x "$f" /; done
 ldconfig
