@@ -35,6 +35,15 @@ CACHE = ROOT / "build" / "bench-rendering"
 REF_SPP = 8192
 
 
+def report_header(command: str) -> list[str]:
+    """The lines under a report page's title: what made it, on which machine."""
+    return [
+        f"> Measurements, not the manual: made by `{command}` on {cpu_name()}. "
+        "The manual is [docs/](../architecture.md).",
+        "",
+    ]
+
+
 def scene_dict(mi, name: str, width: int) -> dict:
     film = {"type": "hdrfilm", "width": width, "height": width, "rfilter": {"type": "box"}}
     if name in ("cornell-direct", "cornell-path"):

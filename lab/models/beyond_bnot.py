@@ -28,7 +28,7 @@ import numpy as np  # noqa: E402
 
 import dpc  # noqa: E402
 from dpc import analysis, baselines  # noqa: E402
-from lab.common import REPORTS, cpu_name  # noqa: E402
+from lab.common import REPORTS, cpu_name, report_header  # noqa: E402
 from lab.models import model_cards as MC  # noqa: E402  (the cards' metrics and targets)
 
 PAGE = REPORTS / "beyond-bnot.md"
@@ -359,6 +359,7 @@ def main(argv=None) -> None:
     lines = [
         "# Past BNOT in 2-D",
         "",
+        *report_header("python -m lab.models.beyond_bnot"),
         f"`python -m lab.models.beyond_bnot` (model `{args.model}`): the below-BNOT goals, measured. "
         "Conventions as in [analysis.md](../analysis.md): P normalised so that white noise = 1, ν = |q|/√m, "
         "E_low(ν) = mean P over the integer frequencies with 0 < ν' < ν, δ_min = the smallest pair distance "

@@ -25,7 +25,7 @@ import numpy as np
 from dpc import analysis, baselines
 from dpc.analysis.reference import reference_copied_from, reference_radial_spectrum
 from dpc.analysis.spectrum import low_frequency_energy
-from lab.common import REPORTS
+from lab.common import REPORTS, report_header
 from lab.models import model_cards as MC  # targets and rel. L1, as on the cards
 
 PAGE = REPORTS / "high-dimensions.md"
@@ -356,6 +356,7 @@ def main() -> None:
 INTRO = [
     "# Projective and high-dimensional blue noise",
     "",
+    *report_header("python -m lab.models.highdim_report"),
     "`python -m lab.models.highdim_report` (this page is its output; about 15 minutes, a quarter of it "
     "dart throwing in 10-D): the projective and high-dimensional goals, measured with 100 sets "
     "(seeds 0 … 99) unless stated. "

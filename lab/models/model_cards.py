@@ -32,7 +32,7 @@ import numpy as np  # noqa: E402
 import dpc  # noqa: E402
 from dpc import analysis, baselines  # noqa: E402
 from dpc.analysis import plots  # noqa: E402
-from lab.common import REPORTS, ROOT  # noqa: E402
+from lab.common import REPORTS, ROOT, report_header  # noqa: E402
 
 FIGURES = REPORTS / "figures" / "models"
 PAGE = REPORTS / "models.md"
@@ -740,6 +740,7 @@ KINDS = {
 INTRO = [
     "# Bundled models",
     "",
+    *report_header("python -m lab.models.model_cards"),
     "Made by `python -m lab.models.model_cards` (this page and `docs/reports/figures/models/` are its "
     "output; `python -m lab.models.model_cards NAME` redoes one card). "
     "Conventions: P = |Σ_k e^{2πi⟨q,x_k⟩}|²/m at integer q, white noise = 1; rings "

@@ -23,7 +23,7 @@ import numpy as np  # noqa: E402
 
 import dpc  # noqa: E402
 from dpc import analysis, baselines  # noqa: E402
-from lab.common import REPORTS  # noqa: E402
+from lab.common import REPORTS, report_header  # noqa: E402
 from lab.models import model_cards as MC  # noqa: E402  (targets and metrics shared with the model cards)
 
 FIG = REPORTS / "figures" / "results"
@@ -33,6 +33,7 @@ SETS = 100
 HEAD = [
     "# Results: the paper's figures redone with dpc",
     "",
+    *report_header("python -m lab.models.results all"),
     "Every section is made by the command in its first line (`python -m lab.models.results all` "
     "makes them all); numbers are measured on the bundled models "
     "([models.md](models.md) has their cards). Conventions as in [analysis.md](../analysis.md): "
