@@ -44,24 +44,16 @@ class PatternConfig:
     description: str = ""
 
 
-@dataclass
-class ModelConfig:
-    layers: int = 32
-    unique_kernels: int = 8
-    bins: int = 32
-    subspaces: list = field(default_factory=lambda: ["xy"])
-    radius: list = field(default_factory=lambda: [4.0])
-    eps: float = 1e-4
-    init: str = "zero"
-    init_sigma: float = 0.85
-    init_amplitude: float = 0.05
-    init_model: str = ""  # init = "model": start from this model's kernels (a bundled name or a file)
-    input: str = "uniform"
-    order: str = "set"  # "progressive": generated level by level, every prefix a set (format §6)
-    progressive_base: int = 16
-    continuous: bool = False  # kernel tables end at 0 at the radius (CascadeSpec.continuous)
-    max_attraction: float = 0.0  # > 0: table values at most this times d (CascadeSpec.max_attraction)
-    balance: int = 0  # > 0: the generator's output balance radius (CascadeSpec.balance)
+# [model]: CascadeSpec's fields and defaults (stated there, once), but for those [pattern] gives
+# (dims, points, grid_axes, grid_shape)
+ModelConfig = dataclasses.make_dataclass(
+    "ModelConfig",
+    [
+        (f.name, f.type, field(default=f.default, default_factory=f.default_factory))
+        for f in dataclasses.fields(CascadeSpec)
+        if f.name not in ("dims", "n_points", "grid_axes", "grid_shape")
+    ],
+)
 
 
 @dataclass
@@ -98,28 +90,12 @@ class Config:
     source_path: str = ""
 
     def cascade_spec(self) -> CascadeSpec:
-        p, m = self.pattern, self.model
+        p = self.pattern
+        m = dataclasses.asdict(self.model)  # CascadeSpec's own fields (ModelConfig is made from them)
+        m["radius"] = [float(r) for r in m["radius"]]
+        m["max_attraction"] = float(m["max_attraction"])
         return CascadeSpec(
-            dims=p.dims,
-            n_points=p.points,
-            layers=m.layers,
-            unique_kernels=m.unique_kernels,
-            bins=m.bins,
-            subspaces=list(m.subspaces),
-            radius=[float(r) for r in m.radius],
-            eps=m.eps,
-            grid_axes=list(p.grid_axes),
-            grid_shape=list(p.grid_shape),
-            init=m.init,
-            init_sigma=m.init_sigma,
-            init_amplitude=m.init_amplitude,
-            init_model=m.init_model,
-            input=m.input,
-            order=m.order,
-            progressive_base=m.progressive_base,
-            continuous=m.continuous,
-            max_attraction=float(m.max_attraction),
-            balance=m.balance,
+            dims=p.dims, n_points=p.points, grid_axes=list(p.grid_axes), grid_shape=list(p.grid_shape), **m
         )
 
     def to_dict(self) -> dict:
