@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import math
-import numbers
 import os
 import re
 from pathlib import Path
 
 import numpy as np
 
-from . import _core
+from . import _args, _core
 from .errors import InvalidArgumentError, LimitError, ModelIOError, ModelNotFoundError
 
 #: dpc_isa, dpc_backend, dpc_input of dpc.h, as the binding exports them (the Python API names
@@ -65,9 +64,7 @@ def _max_bytes(max_bytes) -> float:
             return float(parse_size(env))
         except InvalidArgumentError as e:
             raise InvalidArgumentError(f"DPC_MAX_OUTPUT_BYTES: {e}") from None
-    if isinstance(max_bytes, bool) or not isinstance(max_bytes, numbers.Real) or not max_bytes > 0:
-        raise InvalidArgumentError(f"max_bytes must be a positive number, got {max_bytes!r}")
-    return float(max_bytes)
+    return _args.positive_real(max_bytes, "max_bytes")
 
 
 def parse_size(text) -> int:
@@ -82,25 +79,6 @@ def parse_size(text) -> int:
     if not (math.isfinite(v) and v > 0):
         raise InvalidArgumentError(f"a size must be positive: {text!r}")
     return int(v)
-
-
-def _integer(value, name: str, low: int, high: int | None = None, *, limit: bool = False) -> int:
-    """An int in [low, high]: bools, floats (integral or not), strings are refused with
-    InvalidArgumentError; beyond ``high`` a LimitError (a subclass) when ``limit``."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise InvalidArgumentError(f"{name} must be an integer, got {value!r}")
-    v = int(value)
-    if v < low:
-        raise InvalidArgumentError(f"{name} must be >= {low}, got {v}")
-    if high is not None and v > high:
-        cls = LimitError if limit else InvalidArgumentError
-        raise cls(f"{name} must be at most {high}, got {v}")
-    return v
-
-
-def _seed(seed) -> int:
-    """A seed: an integer in 0 .. 2^64 - 1 (negative seeds are refused, as in the CLI)."""
-    return _integer(seed, "seed", 0, (1 << 64) - 1)
 
 
 def _check_path(path) -> str:
@@ -188,13 +166,13 @@ def uniform(seed: int, m: int, n: int) -> np.ndarray:
     """The input points libdpc filters for ``seed``: (m, n) float32, bit-exact with C's
     ``dpc_uniform`` (docs/model-format.md, "Input points")."""
     m, n, limit = _input_size(m, n, MAX_POINTS * 64)
-    return _core.uniform(_seed(seed), m, n, limit)
+    return _core.uniform(_args.seed(seed), m, n, limit)
 
 
 def _input_size(m, n, most: int) -> tuple[int, int, float]:
     """Checked (m, n) of an input-point request and the byte limit (LimitError beyond it)."""
-    m = _integer(m, "m", 1, most, limit=True)
-    n = _integer(n, "n", 1, most, limit=True)
+    m = _args.integer(m, "m", 1, most, limit=True)
+    n = _args.integer(n, "n", 1, most, limit=True)
     limit = _max_bytes(None)
     if m * n * 4 > limit:
         raise LimitError(
@@ -208,9 +186,9 @@ def stratified(seed: int, m: int, n: int) -> np.ndarray:
     """The stratified input points for ``seed`` (``input="stratified"``): the same uniform numbers
     placed one point per cell of a g^n grid, g^n <= m, in random order; (m, n) float32, bit-exact
     with C's ``dpc_stratified`` (docs/model-format.md, "Input points")."""
-    _integer(m, "m", 1, MAX_POINTS, limit=True)
+    _args.integer(m, "m", 1, MAX_POINTS, limit=True)
     m, n, limit = _input_size(m, n, MAX_POINTS)
-    return _core.stratified(_seed(seed), m, n, limit)
+    return _core.stratified(_args.seed(seed), m, n, limit)
 
 
 def balance(points, radius: int = 3) -> np.ndarray:
@@ -223,7 +201,7 @@ def balance(points, radius: int = 3) -> np.ndarray:
     x = np.asarray(points)
     if x.ndim != 2 or x.shape[0] < 1 or x.shape[1] < 1:
         raise InvalidArgumentError(f"points must be a non-empty (m, n) array, got shape {x.shape}")
-    radius = _integer(radius, "radius", 0, 32)
+    radius = _args.integer(radius, "radius", 0, 32)
     return _core.balance(np.ascontiguousarray(x, dtype=np.float32), radius)
 
 
@@ -243,11 +221,10 @@ class Model:
         isa = _choice(isa, Isa, _ISA, "isa")
         backend = _choice(backend, Backend, _BACKEND, "backend")
         input = _choice(input, Input, _INPUT, "input")  # noqa: A001
-        threads = _integer(threads, "threads", 0, 0xFFFFFFFF)
+        threads = _args.threads(threads)
         if max_neighbours is None:
             max_neighbours = DEFAULT_MAX_NEIGHBOURS
-        if isinstance(max_neighbours, bool) or not isinstance(max_neighbours, numbers.Real) or not max_neighbours > 0:
-            raise InvalidArgumentError(f"max_neighbours must be > 0 (math.inf: no bound), got {max_neighbours!r}")
+        _args.positive_real(max_neighbours, "max_neighbours", " (math.inf: no bound)")
         self.path = Path(_check_path(path))
         self._h = _core.Model(os.fspath(self.path), isa, threads, backend, input, float(max_neighbours))
         info = self._h.info()
@@ -289,7 +266,7 @@ class Model:
     def _count(n_points) -> int:
         if n_points is None:
             return 0
-        return _integer(n_points, "n_points", 1, MAX_POINTS, limit=True)
+        return _args.integer(n_points, "n_points", 1, MAX_POINTS, limit=True)
 
     def generate(
         self, seed: int = 0, n_points: int | None = None, *, max_bytes: float | None = None, progress=None
@@ -303,7 +280,7 @@ class Model:
         ``progress(done, total)``: called on this thread while libdpc works (units: layers of
         sets). A large request runs off the calling thread, so Ctrl-C stops it with
         KeyboardInterrupt and no partial result."""
-        return self._h.generate(_seed(seed), 1, self._count(n_points), False, _max_bytes(max_bytes), progress)
+        return self._h.generate(_args.seed(seed), 1, self._count(n_points), False, _max_bytes(max_bytes), progress)
 
     def generate_batch(
         self, count: int, seed: int = 0, n_points: int | None = None, *, max_bytes: float | None = None, progress=None
@@ -311,8 +288,8 @@ class Model:
         """``count`` sets, set c from seed ``(seed + c) mod 2^64``: (count, m, dims) float32.
         The total, count x m x dims floats, is checked against ``max_bytes`` before allocation
         (see :meth:`generate`)."""
-        count = _integer(count, "count", 1, (1 << 63) - 1, limit=True)
-        return self._h.generate(_seed(seed), count, self._count(n_points), True, _max_bytes(max_bytes), progress)
+        count = _args.integer(count, "count", 1, (1 << 63) - 1, limit=True)
+        return self._h.generate(_args.seed(seed), count, self._count(n_points), True, _max_bytes(max_bytes), progress)
 
     def filter(self, points) -> np.ndarray:
         """Run the cascade on your own (m, dims) points; returns a new float32 array."""

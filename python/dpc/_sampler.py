@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import math
-import numbers
 import os
 
 import numpy as np
 
-from . import _core
+from . import _args, _core
 from ._model import Model, _max_bytes, load
 from .errors import InvalidArgumentError, LimitError
 
@@ -21,16 +20,6 @@ AUTO_NETS_SPP = int(_core.SAMPLER_AUTO_NETS_SPP)  # DPC_SAMPLER_AUTO_NETS_SPP
 #: Lookups are evaluated this many at a time: beyond the output, a lookup holds O(chunk) memory
 #: whatever the broadcast shape of its arguments.
 LOOKUP_CHUNK = 1 << 16
-
-
-def _integer(value, name: str, low: int, high: int) -> int:
-    """An int in [low, high] (bools and floats are refused, integral or not)."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise InvalidArgumentError(f"{name} must be an integer, got {value!r}")
-    v = int(value)
-    if not low <= v <= high:
-        raise InvalidArgumentError(f"{name} must be in {low} .. {high}, got {v}")
-    return v
 
 
 def _uint32_array(value, name: str, *, wrap: bool) -> np.ndarray:
@@ -102,16 +91,16 @@ class Sampler:
         if not models:
             raise InvalidArgumentError("models must name at least one model")
         self.models: list[Model] = [m if isinstance(m, Model) else load(m) for m in models]
-        self.samples_per_pixel = _integer(samples_per_pixel, "samples_per_pixel", 1, MAX_SPP)
-        self.dimensions = _integer(dimensions, "dimensions", 1, MAX_DIMENSIONS)
-        self.seed = _integer(seed, "seed", 0, (1 << 64) - 1)
-        self.fold_from = None if fold_from is None else _integer(fold_from, "fold_from", 0, NO_FOLD - 1)
+        self.samples_per_pixel = _args.integer(samples_per_pixel, "samples_per_pixel", 1, MAX_SPP)
+        self.dimensions = _args.integer(dimensions, "dimensions", 1, MAX_DIMENSIONS)
+        self.seed = _args.seed(seed)
+        self.fold_from = None if fold_from is None else _args.integer(fold_from, "fold_from", 0, NO_FOLD - 1)
         if isinstance(net_dims, str) and net_dims == "auto":
             self.net_dims = "auto"
         elif isinstance(net_dims, str):
             raise InvalidArgumentError(f'net_dims must be an integer or "auto", got {net_dims!r}')
         else:
-            self.net_dims = _integer(net_dims, "net_dims", 0, NET_DIMS_AUTO - 1)
+            self.net_dims = _args.integer(net_dims, "net_dims", 0, NET_DIMS_AUTO - 1)
         self._h = _core.Sampler(
             [m._h for m in self.models],
             self.samples_per_pixel,
@@ -191,7 +180,7 @@ class Sampler:
 
     def table(self, t: int) -> np.ndarray:
         """The (samples_per_pixel, 2) point set of table ``t`` (0 <= t < dimensions)."""
-        return self._h.table(_integer(t, "t", 0, self.dimensions - 1))
+        return self._h.table(_args.integer(t, "t", 0, self.dimensions - 1))
 
     @staticmethod
     def mask() -> np.ndarray:

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import functools
 import math
-import numbers
 import os
 import re
 import warnings
@@ -33,15 +32,12 @@ from typing import Callable
 
 import numpy as np
 
+from . import _args
 from .errors import InvalidArgumentError, LimitError
 
 
 def _rng(seed: int) -> np.random.Generator:
     return np.random.default_rng(int(seed))
-
-
-def _check_seed(seed) -> int:
-    return _check_mask_size(seed, "seed", 0)
 
 
 def _qmc_engine(name: str, dims: int, rng: np.random.Generator, **kw):
@@ -360,10 +356,10 @@ class Baseline:
         request raises LimitError before anything is allocated."""
         if n_points is None:
             raise InvalidArgumentError(f"{self.name} needs a number of points")
-        m = _check_mask_size(n_points, "the number of points", 1)
-        n = _check_mask_size(2 if dims is None else dims, "dims", 1)
-        c = _check_mask_size(count, "count", 1)
-        s = _check_seed(seed)
+        m = _args.size(n_points, "the number of points", 1)
+        n = _args.size(2 if dims is None else dims, "dims", 1)
+        c = _args.size(count, "count", 1)
+        s = _args.numpy_seed(seed)
         check_output_size(c, m, n, max_bytes)
         out = np.empty((c, m, n))
         for i in range(c):
@@ -454,7 +450,7 @@ class ReferenceBaseline:
     ) -> np.ndarray:
         """``count`` distinct published sets, set c being number (seed + c) mod sets.
         ``n_points``/``dims`` may be omitted where only one collection fits."""
-        s = _check_seed(seed)
+        s = _args.numpy_seed(seed)
         fits = [
             (m, d, k)
             for m, d, k in self.available()
@@ -521,18 +517,6 @@ def generate(name: str, n_points: int | None, dims: int | None = 2, count: int =
 # Every mask here is toroidal (it tiles without a seam): the energies below wrap around.
 
 
-def _check_mask_size(n, what: str = "size", minimum: int = 2) -> int:
-    if isinstance(n, (bool, np.bool_)) or not isinstance(n, (numbers.Integral, numbers.Real)):
-        raise InvalidArgumentError(f"{what} must be an integer >= {minimum}, got {n!r}")
-    try:
-        v = int(n)
-    except (TypeError, ValueError, OverflowError):
-        raise InvalidArgumentError(f"{what} must be an integer >= {minimum}, got {n!r}") from None
-    if v != n or v < minimum:
-        raise InvalidArgumentError(f"{what} must be an integer >= {minimum}, got {n!r}")
-    return v
-
-
 # Limits checked before any work (LimitError names the limit and how to raise it). Every mask
 # or image function takes ``max_pixels=``: None means the environment variable, else the default.
 #: Largest mask or image, in pixels (frames x size^2 x channels): 8192 x 8192, 512 MiB as
@@ -553,12 +537,12 @@ def pixel_limit(max_pixels=None, design: bool = False) -> int:
         if not text:
             return DEFAULT_MAX_DESIGN_PIXELS if design else DEFAULT_MAX_PIXELS
         try:
-            return _check_mask_size(float(text), env, 1)
+            return _args.size(float(text), env, 1)
         except ValueError:
             raise InvalidArgumentError(f"{env} must be a pixel count >= 1, got {text!r}") from None
     if max_pixels == math.inf:
         return max_pixels  # no limit
-    return _check_mask_size(max_pixels, "max_pixels", 1)
+    return _args.size(max_pixels, "max_pixels", 1)
 
 
 def check_pixels(pixels: int, what: str, max_pixels=None, design: bool = False) -> None:
@@ -641,8 +625,8 @@ def void_and_cluster(
     128 × 128 a few seconds, 256 × 256 about a minute on one core). ``max_pixels``: the
     largest size² allowed (default DEFAULT_MAX_DESIGN_PIXELS or $DPC_MAX_DESIGN_PIXELS); a larger
     mask raises LimitError before any work."""
-    n = _check_mask_size(size)
-    s = _check_seed(seed)
+    n = _args.size(size)
+    s = _args.numpy_seed(seed)
     check_pixels(n * n, f"void-and-cluster {n} x {n}", max_pixels, design=True)
     if not (np.isfinite(sigma) and sigma > 0):
         raise InvalidArgumentError(f"sigma must be positive, got {sigma}")
@@ -685,11 +669,11 @@ def white_mask(shape, seed: int = 0, max_pixels: int | None = None) -> np.ndarra
     before allocating)."""
     if isinstance(shape, (str, bytes)) or not np.iterable(shape):
         raise InvalidArgumentError(f"white_mask shape must be (N, N) or (N, N, C), got {shape!r}")
-    shp = tuple(_check_mask_size(k, "shape entry", 1) for k in shape)
+    shp = tuple(_args.size(k, "shape entry", 1) for k in shape)
     if len(shp) not in (2, 3):
         raise InvalidArgumentError(f"white_mask shape must be (N, N) or (N, N, C), got {shape}")
     check_pixels(math.prod(shp), f"white mask {' x '.join(map(str, shp))}", max_pixels)
-    rng = _rng(_check_seed(seed))
+    rng = _rng(_args.numpy_seed(seed))
     return _rank_per_channel(rng.random(shp), vector=len(shp) == 3)
 
 
@@ -706,7 +690,7 @@ def bayer_mask(size: int, max_pixels: int | None = None) -> np.ndarray:
     ``max_pixels``: as for :func:`white_mask`."""
     from .analysis.dither import bayer
 
-    n = _check_mask_size(size, minimum=1)
+    n = _args.size(size, low=1)
     check_pixels(n * n, f"Bayer mask {n} x {n}", max_pixels)
     return bayer(n)
 
@@ -715,8 +699,8 @@ def vector_void_and_cluster(size: int, seed: int = 0, sigma: float = 1.5, max_pi
     """A 2-value (size, size, 2) mask from two independent void-and-cluster masks (seeds
     ``seed`` and ``seed + 1_000_003``): blue in each value, but not jointly — the pixels whose
     value pair falls in a box of the unit square need not form a blue-noise pattern."""
-    n = _check_mask_size(size)
-    s = _check_seed(seed)
+    n = _args.size(size)
+    s = _args.numpy_seed(seed)
     check_pixels(2 * n * n, f"vector void-and-cluster {n} x {n} x 2", max_pixels, design=True)
     big = math.inf  # checked above for both masks
     return np.stack(
@@ -754,9 +738,9 @@ def stbn_scalar(
     Cost: O(frames · size²) per step, O((frames · size²)²) in all (64 × 64 × 16: about a
     minute on one core). ``max_pixels``: the largest frames·size² allowed (as for
     :func:`void_and_cluster`; LimitError before any work)."""
-    n = _check_mask_size(size)
-    t = _check_mask_size(frames, "frames", 1)
-    s = _check_seed(seed)
+    n = _args.size(size)
+    t = _args.size(frames, "frames", 1)
+    s = _args.numpy_seed(seed)
     check_pixels(t * n * n, f"stbn {n} x {n} x {t} frames", max_pixels, design=True)
     for name, v in (("sigma_space", sigma_space), ("sigma_time", sigma_time)):
         if not (np.isfinite(v) and v > 0):

@@ -45,7 +45,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import _core
+from . import _args, _core
 from . import baselines as _bl
 from .errors import InvalidArgumentError, LimitError
 
@@ -88,17 +88,15 @@ def anneal_mask(
     next progress poll). ``max_pixels``: the largest frames × size² × channels (default 65,536
     or $DPC_MAX_DESIGN_PIXELS, see :func:`dpc.masks.mask`), and ``steps_per_pixel`` at most
     :data:`MAX_STEPS_PER_PIXEL`; both checked before any work (LimitError)."""
-    n = _bl._check_mask_size(size, "size", 8)
-    t = 1 if frames is None else _bl._check_mask_size(frames, "frames", 1)
-    s = _bl._check_seed(seed)
-    if s >= 1 << 64:
-        raise InvalidArgumentError(f"seed must be an integer in 0 .. 2^64-1, got {seed!r}")
+    n = _args.size(size, "size", 8)
+    t = 1 if frames is None else _args.size(frames, "frames", 1)
+    s = _args.integer(seed, "seed", 0, _args.SEED_MAX, whole_floats=True)  # libdpc's uint64
     if channels not in (None, 1, 2):
         raise InvalidArgumentError(f"channels must be 1 or 2, got {channels!r}")
     c = 2 if channels == 2 else 1
     if c == 2 and frames is not None:
         raise InvalidArgumentError("give channels or frames, not both")
-    steps = _bl._check_mask_size(steps_per_pixel, "steps_per_pixel", 0) if steps_per_pixel else 0
+    steps = _args.size(steps_per_pixel, "steps_per_pixel", 0) if steps_per_pixel else 0
     if steps > MAX_STEPS_PER_PIXEL:
         raise LimitError(f"steps_per_pixel must be at most {MAX_STEPS_PER_PIXEL:,}, got {steps:,}")
     what = f"annealed {n} x {n}" + (f", {t} frames" if frames is not None else "") + (", 2 channels" if c > 1 else "")

@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import _atomic, pointio
+from . import _args, _atomic, pointio
 from . import baselines as _bl
 from .errors import DpcError, InvalidArgumentError, ModelNotFoundError
 
@@ -96,9 +96,9 @@ def _model_mask(model, size: int | None, frames: int | None, seed: int, max_pixe
     shape = tuple(model.grid_shape)
     if shape[0] != shape[1]:
         raise InvalidArgumentError(f"the model's pixel grid is not square: {shape[:2]}")
-    n = shape[0] if size is None else _bl._check_mask_size(size, "size", 4)
+    n = shape[0] if size is None else _args.size(size, "size", 4)
     if kind == "spatiotemporal":
-        t = shape[2] if frames is None else _bl._check_mask_size(frames, "frames", 2)
+        t = shape[2] if frames is None else _args.size(frames, "frames", 2)
         want = (n, n, t)
     else:
         if frames is not None:
@@ -158,9 +158,9 @@ def _filter_at_any_size(model, pts: np.ndarray) -> np.ndarray:
 def _baseline_mask(name: str, size, frames, channels, seed: int, max_pixels=None) -> np.ndarray:
     if size is None:
         raise InvalidArgumentError(f"mask {name!r} needs a size")
-    n = _bl._check_mask_size(size, "size", 2)
-    c = 1 if channels is None else _bl._check_mask_size(channels, "channels", 1)
-    t = None if frames is None else _bl._check_mask_size(frames, "frames", 1)
+    n = _args.size(size, "size", 2)
+    c = 1 if channels is None else _args.size(channels, "channels", 1)
+    t = None if frames is None else _args.size(frames, "frames", 1)
     what = f"{name} {n} x {n}" + (f", {t} frames" if t is not None else "") + (f", {c} channels" if c > 1 else "")
     design = name in ("void-and-cluster", "stbn")
     _bl.check_pixels(n * n * (t or 1) * c, what, max_pixels, design)
@@ -196,8 +196,8 @@ def _annealed_mask(size, frames, channels, seed: int, progress=None, max_pixels=
 
     # frames and channels are checked by mask_design (a combination it has no bundle for
     # reaches anneal_mask, which refuses it)
-    n = 64 if size is None else _bl._check_mask_size(size, "size", 8)
-    t = None if frames is None else _bl._check_mask_size(frames, "frames", 1)
+    n = 64 if size is None else _args.size(size, "size", 8)
+    t = None if frames is None else _args.size(frames, "frames", 1)
     return mask_design.mask(n, t, seed, channels, progress=progress, max_pixels=max_pixels)
 
 
@@ -241,7 +241,7 @@ def mask(
     time grows with the square of the pixels (void-and-cluster, stbn, annealed made on the
     spot), else 2^26 (8192 × 8192, ``DEFAULT_MAX_PIXELS``, or $DPC_MAX_PIXELS); ``math.inf``
     lifts it. Ctrl-C stops every source promptly (KeyboardInterrupt)."""
-    s = _bl._check_seed(seed)
+    s = _args.numpy_seed(seed)
     _bl.pixel_limit(max_pixels)  # a bad max_pixels is said whatever the source
     if not isinstance(name, (str, Path)):
         raise InvalidArgumentError(f"mask name must be a string, got {type(name).__name__}")

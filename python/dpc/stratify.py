@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _core
+from . import _args, _core
 from .baselines import _free_strata, _mark, _pmj02_steps
 from .errors import InvalidArgumentError
 
@@ -76,9 +76,7 @@ def stratify_02(points, up_to: int | None = None) -> np.ndarray:
         raise InvalidArgumentError(f"points must be (m, 2) with m >= 1, got shape {x.shape}")
     if not np.all((x >= 0) & (x < 1)):
         raise InvalidArgumentError("points must lie in [0, 1)")
-    if up_to is not None and (isinstance(up_to, bool) or not isinstance(up_to, int) or up_to < 1):
-        raise InvalidArgumentError(f"up_to must be a positive integer, got {up_to!r}")
-    m = len(x) if up_to is None else min(len(x), up_to)
+    m = len(x) if up_to is None else min(len(x), _args.integer(up_to, "up_to", 1))
     y = x.copy()
     for n, _, level, width, squares, occ in _pmj02_steps(y, m):
         # the new points to the subquadrants this step opens: nearest centres, one each
@@ -107,17 +105,14 @@ def relax_prefixes(points, steps: int = 1600, base: int = 16, *, threads: int = 
     the relaxed set of n (it depends on m). ``threads`` (0: one per CPU) share the work from
     2,048 points on, with the same bits for any count."""
     x = np.asarray(points)
-    if isinstance(base, bool) or not isinstance(base, int) or base < 2:
-        raise InvalidArgumentError(f"base must be an integer >= 2, got {base!r}")
+    base = _args.integer(base, "base", 2, _args.UINT32_MAX)
     if x.ndim != 2 or x.shape[1] != 2 or len(x) < base:
         raise InvalidArgumentError(f"points must be (m, 2) with m >= base = {base}, got shape {x.shape}")
-    if isinstance(steps, bool) or not isinstance(steps, int) or not 0 <= steps <= RELAX_MAX_STEPS:
-        raise InvalidArgumentError(f"steps must be an integer in 0..{RELAX_MAX_STEPS}, got {steps!r}")
+    steps = _args.integer(steps, "steps", 0, RELAX_MAX_STEPS)
     y = np.ascontiguousarray(x, dtype=np.float32)
     if not np.all((y >= 0) & (y < 1)):
         raise InvalidArgumentError("points must lie in [0, 1) (as float32)")
-    if isinstance(threads, bool) or not isinstance(threads, int) or not 0 <= threads <= 0xFFFFFFFF:
-        raise InvalidArgumentError(f"threads must be an integer >= 0, got {threads!r}")
+    threads = _args.threads(threads)
     return _core.relax_prefixes(y, base, steps, threads)
 
 
@@ -134,8 +129,7 @@ def order_levels(points, base: int = 16) -> np.ndarray:
     progressive model does last. Each level keeps its set of points, and the order is the same on
     every machine."""
     x = np.asarray(points)
-    if isinstance(base, bool) or not isinstance(base, int) or not 1 <= base <= 0xFFFFFFFF:
-        raise InvalidArgumentError(f"base must be an integer >= 1, got {base!r}")
+    base = _args.integer(base, "base", 1, _args.UINT32_MAX)
     if x.ndim != 2 or x.shape[0] == 0 or x.shape[1] == 0:
         raise InvalidArgumentError(f"points must be (m, d) with m, d >= 1, got shape {x.shape}")
     y = np.ascontiguousarray(x, dtype=np.float32)

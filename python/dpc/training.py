@@ -22,8 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _core
-from ._model import _ISA, DEFAULT_THREADS, Isa, _choice, _integer
+from . import _args, _core
+from ._model import _ISA, DEFAULT_THREADS, Isa, _choice
 from .errors import InvalidArgumentError
 
 __all__ = ["layer_forward", "layer_backward"]
@@ -53,7 +53,7 @@ def _layer_args(x, kernels, subspaces, radius, eps, fixed) -> tuple:
 
 
 def _run_args(threads, isa) -> tuple:
-    return _integer(threads, "threads", 0, 0xFFFFFFFF), _isa(isa)
+    return _args.threads(threads), _isa(isa)
 
 
 def layer_forward(
