@@ -11,7 +11,7 @@ over a 64 x 64 screen, the error image's low-frequency energy (mean power at
 0 < |q| <= 3/16 cycles per pixel over the mean at all q != 0, white noise = 1: bench_rendering's
 measure) and the per-pixel MSE, for:
 - the shipped mask at n = 1, 2, 4, 8, 16 spp (bnot-2d-stratified tables, stratified projections);
-- a mask optimised for 4 spp by the same swap optimiser (libdpc/src/sampler/make_sampler_mask.py)
+- a mask optimised for 4 spp by the same swap optimiser (lab/rendering/make_sampler_mask.py)
   with the test errors of 4-point tables drawn from the model;
 - 2 x 2 blocks of a 64 x 64 mask optimised for 1 spp: pixel p's 4 samples are the 4 values of its
   block (no table), the screen-space ordering of Ahmed and Wonka 2020 in its simplest form;
@@ -40,8 +40,8 @@ from scipy.stats import qmc
 
 import dpc
 from lab.common import REPORTS, replace_section
+from lab.rendering import make_sampler_mask as M  # the shipped mask's optimiser
 from lab.rendering.bench_rendering import low_band_energy  # the renderer bench's measure, the same band
-from libdpc.src.sampler import make_sampler_mask as M  # the shipped mask's optimiser
 
 DOC = REPORTS / "rendering-studies.md"
 
