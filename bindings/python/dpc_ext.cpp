@@ -357,6 +357,21 @@ class Sampler {
         return out;
     }
 
+    // dpc_sampler_get_info: the options as created, net_dims resolved by libdpc.
+    py::dict info() const {
+        dpc_sampler_info i{};
+        i.struct_size = sizeof i;
+        call([&] { return dpc_sampler_get_info(sampler_, &i); });
+        py::dict d;
+        d["samples_per_pixel"] = i.samples_per_pixel;
+        d["dimensions"] = i.dimensions;
+        d["fold_from"] = i.fold_from;
+        d["net_slots"] = i.net_slots;
+        d["progressive"] = static_cast<bool>(i.progressive);
+        d["seed"] = i.seed;
+        return d;
+    }
+
   private:
     dpc_sampler *sampler_ = nullptr;
     uint32_t spp_ = 0, dims_ = 0;
@@ -615,7 +630,8 @@ PYBIND11_MODULE(_core, mod) {
              py::arg("models"), py::arg("spp"), py::arg("dims"), py::arg("seed"), py::arg("fold_from"),
              py::arg("net_dims"), py::arg("progress") = py::none())
         .def("get", &Sampler::get, py::arg("x"), py::arg("y"), py::arg("index"), py::arg("dim"), py::arg("width"))
-        .def("table", &Sampler::table, py::arg("t"));
+        .def("table", &Sampler::table, py::arg("t"))
+        .def("info", &Sampler::info);
     mod.def("sampler_mask", &sampler_mask);
     mod.def(
         "find_model",

@@ -169,14 +169,9 @@ class Sampler:
 
     @property
     def net_slots(self) -> int:
-        """How many slots (the first ones) hold nets: ``net_dims`` resolved as libdpc does."""
-        n, d = self.samples_per_pixel, self.dimensions
-        if n < 2 or n & (n - 1):
-            return 0
-        if self.net_dims == "auto":
-            progressive = self.models[0].order == "progressive"
-            return d if n >= AUTO_NETS_SPP and not progressive else 1
-        return min(self.net_dims, d)
+        """How many slots (the first ones) hold nets: ``net_dims`` resolved by libdpc
+        (``dpc_sampler_get_info``)."""
+        return int(self._h.info()["net_slots"])
 
     def table(self, t: int) -> np.ndarray:
         """The (samples_per_pixel, 2) point set of table ``t`` (0 <= t < dimensions)."""

@@ -1,9 +1,19 @@
-# The shared library exports exactly the functions dpc.h declares DPC_API: nothing more (every
-# dynamic symbol it defines is one of them, so only the dpc_ prefix leaves the library), and
-# nothing less (a declared function the library lacks is a link error waiting for a user).
-#   cmake -DLIB=libdpc.so -DHEADER=dpc/dpc.h -P check_exports.cmake
+# The shared library exports exactly the functions the public headers (every *.h of HEADER_DIR:
+# dpc.h and the product headers it includes) declare DPC_API: nothing more (every dynamic symbol
+# it defines is one of them, so only the dpc_ prefix leaves the library), and nothing less (a
+# declared function the library lacks is a link error waiting for a user).
+#   cmake -DLIB=libdpc.so -DHEADER_DIR=libdpc/include/dpc -P check_exports.cmake
 find_program(NM NAMES nm llvm-nm REQUIRED)
-file(READ "${HEADER}" header)
+file(GLOB headers "${HEADER_DIR}/*.h")
+list(LENGTH headers n_headers)
+if(n_headers LESS 4)
+  message(FATAL_ERROR "found ${n_headers} headers in ${HEADER_DIR}, expected dpc.h and its product headers")
+endif()
+set(header "")
+foreach(h IN LISTS headers)
+  file(READ "${h}" text)
+  string(APPEND header "${text}\n")
+endforeach()
 # Declarations: "DPC_API <return type> <name>(", the return type possibly a pointer.
 string(REGEX MATCHALL "DPC_API[ \t\r\n]+[A-Za-z_][A-Za-z0-9_ \t\r\n*]*[ \t\r\n*]([A-Za-z_][A-Za-z0-9_]*)[ \t\r\n]*\\(" decls "${header}")
 set(declared "")
@@ -15,7 +25,7 @@ list(REMOVE_DUPLICATES declared)
 list(SORT declared)
 list(LENGTH declared n_declared)
 if(n_declared LESS 10)
-  message(FATAL_ERROR "found only ${n_declared} DPC_API declarations in ${HEADER}: ${declared}")
+  message(FATAL_ERROR "found only ${n_declared} DPC_API declarations in ${HEADER_DIR}: ${declared}")
 endif()
 
 execute_process(COMMAND ${NM} -D --defined-only ${LIB} OUTPUT_VARIABLE out RESULT_VARIABLE rc)
@@ -38,10 +48,10 @@ list(REMOVE_ITEM extra ${declared})
 set(missing ${declared})
 list(REMOVE_ITEM missing ${exported})
 if(extra)
-  message(FATAL_ERROR "libdpc exports symbols dpc.h does not declare DPC_API: ${extra}")
+  message(FATAL_ERROR "libdpc exports symbols no public header declares DPC_API: ${extra}")
 endif()
 if(missing)
-  message(FATAL_ERROR "dpc.h declares DPC_API functions the library does not export: ${missing}")
+  message(FATAL_ERROR "the public headers declare DPC_API functions the library does not export: ${missing}")
 endif()
 list(LENGTH exported n)
-message(STATUS "${n} exported symbols, exactly the ${n_declared} DPC_API functions of dpc.h")
+message(STATUS "${n} exported symbols, exactly the ${n_declared} DPC_API functions of the ${n_headers} public headers")

@@ -1,5 +1,6 @@
-/* Its only job: prove dpc.h is C99 + -pedantic -Werror clean and usable from C, in the forms
- * the header documents (the sampler's models array, the model search's buffer). */
+/* Its only job: prove dpc.h (with the product headers it includes) is C99 + -pedantic -Werror
+ * clean and usable from C, in the forms the headers document (the sampler's models array and
+ * info query, the model search's buffer). Each header alone: the alone_*.c files CMake writes. */
 #include "dpc/dpc.h"
 
 int dpc_header_c99_sampler(dpc_model *model, dpc_sampler **out);
@@ -14,6 +15,14 @@ int dpc_header_c99_sampler(dpc_model *model, dpc_sampler **out) {
     o.user = NULL;
     if (dpc_model_find("bnot-2d", path, sizeof path) != DPC_OK) return -1;
     return (int)dpc_sampler_create(&o, out);
+}
+
+int dpc_header_c99_sampler_info(const dpc_sampler *sampler);
+int dpc_header_c99_sampler_info(const dpc_sampler *sampler) {
+    dpc_sampler_info info;
+    info.struct_size = sizeof info; /* the caller's size, as the header asks */
+    if (dpc_sampler_get_info(sampler, &info) != DPC_OK) return -1;
+    return (int)info.net_slots;
 }
 
 int dpc_header_c99_check(void);

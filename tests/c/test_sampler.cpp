@@ -359,6 +359,45 @@ TEST(SamplerStructure, DefaultNetsEverySlotFrom32Spp) {
     }
 }
 
+// dpc_sampler_get_info reports the options as created, net_dims resolved: the default is every
+// slot from DPC_SAMPLER_AUTO_NETS_SPP on for set models and 1 otherwise (and for progressive
+// models), at most D, none when spp is not a power of two >= 2. Bad calls are statuses.
+TEST(SamplerInfo, ReportsTheOptionsAndTheResolvedNetSlots) {
+    ModelPtr m = load(model_path("model_2d")), prog = load(model_path("model_2d_progressive"));
+    struct Case {
+        const dpc_model *model;
+        uint32_t spp, dims, net_dims, want;
+    };
+    const uint32_t AUTO = DPC_SAMPLER_NET_DIMS_AUTO;
+    for (const Case &c : {Case{m.get(), 16, 5, AUTO, 1}, Case{m.get(), 32, 5, AUTO, 5}, Case{m.get(), 64, 3, AUTO, 3},
+                          Case{m.get(), 12, 5, AUTO, 0}, Case{m.get(), 1, 5, AUTO, 0}, Case{m.get(), 64, 8, 3, 3},
+                          Case{m.get(), 64, 4, 9, 4}, Case{m.get(), 64, 4, 0, 0}, Case{prog.get(), 64, 4, AUTO, 1},
+                          Case{prog.get(), 32, 4, 2, 2}}) {
+        SamplerPtr s = make({c.model}, c.spp, c.dims, 99, 2, c.net_dims);
+        dpc_sampler_info info;
+        std::memset(&info, 0xAB, sizeof info);
+        info.struct_size = sizeof info;
+        ASSERT_EQ(dpc_sampler_get_info(s.get(), &info), DPC_OK) << dpc_last_error();
+        EXPECT_EQ(info.struct_size, sizeof info);
+        EXPECT_EQ(info.samples_per_pixel, c.spp);
+        EXPECT_EQ(info.dimensions, c.dims);
+        EXPECT_EQ(info.fold_from, 2u);
+        EXPECT_EQ(info.net_slots, c.want) << c.spp << " " << c.dims << " " << c.net_dims;
+        EXPECT_EQ(info.progressive, c.model == prog.get() ? 1u : 0u);
+        EXPECT_EQ(info.seed, 99u);
+    }
+    SamplerPtr s = make({m.get()}, 16, 2, 0);
+    dpc_sampler_info info;
+    info.struct_size = sizeof info - 8;
+    EXPECT_EQ(dpc_sampler_get_info(s.get(), &info), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(dpc_last_error()).find("struct_size"), std::string::npos) << dpc_last_error();
+    info.struct_size = sizeof info;
+    EXPECT_EQ(dpc_sampler_get_info(nullptr, &info), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(dpc_sampler_get_info(s.get(), nullptr), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(dpc_sampler_get_info(s.get(), &info), DPC_OK);
+    EXPECT_STREQ(dpc_last_error(), "");
+}
+
 // Dimensions >= fold_from give the baker's transform of the unfolded value, on every path (the
 // precomputed first 64 dimensions, later passes, dimensions past them), in [0, 1).
 TEST(SamplerStructure, FoldedDimensionsAreTheBakerTransformOfTheUnfolded) {

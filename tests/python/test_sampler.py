@@ -158,6 +158,14 @@ def test_default_nets_every_slot_from_32_spp_for_set_models():
     assert all(is_02_net(dpc.Sampler(samples_per_pixel=32).table(t).astype(np.float64)) for t in range(16))
 
 
+def test_net_slots_come_from_libdpc_for_explicit_counts():
+    """An explicit net_dims is capped at the dimensions, and no slot is a net unless spp is a power
+    of two >= 2 (libdpc resolves it: dpc_sampler_get_info)."""
+    for n, net_dims, want in [(64, 9, 4), (64, 0, 0), (64, 3, 3), (12, 3, 0), (1, 2, 0), (2, 1, 1)]:
+        s = dpc.Sampler(BNOT, samples_per_pixel=n, dimensions=4, seed=1, net_dims=net_dims)
+        assert s.net_slots == want, (n, net_dims, s.net_slots)
+
+
 def test_net_slots_integrate_nearly_axis_aligned_edges_better():
     """Straight edges 0.05-0.2 rad off the pixel axes, 64 spp, one edge per pixel of 64 x 64:
     the net slot's MSE is below 0.85x the shifted set's (measured: about 0.7x)."""

@@ -109,6 +109,24 @@ dpc_status dpc_sampler_get_2d(const dpc_sampler *sampler, uint32_t x, uint32_t y
     return dpc_sampler_lookup_2d(sampler, x, y, index, dimension, out);
 }
 
+dpc_status dpc_sampler_get_info(const dpc_sampler *sampler, dpc_sampler_info *out_info) {
+    dpc_clear_error();
+    if (!sampler || !out_info) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "sampler or out_info is NULL");
+    if (out_info->struct_size != sizeof *out_info)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
+                        "out_info->struct_size is %u, expected %u: set it to sizeof(dpc_sampler_info)",
+                        out_info->struct_size, (unsigned)sizeof *out_info);
+    memset(out_info, 0, sizeof *out_info);
+    out_info->struct_size = (uint32_t)sizeof *out_info;
+    out_info->samples_per_pixel = sampler->spp;
+    out_info->dimensions = sampler->slots;
+    out_info->fold_from = sampler->fold_from;
+    out_info->net_slots = sampler->net_slots;
+    out_info->progressive = sampler->rotate == 0;
+    out_info->seed = sampler->seed;
+    return DPC_OK;
+}
+
 dpc_status dpc_sampler_table(const dpc_sampler *sampler, uint32_t t, const float **out_table) {
     dpc_clear_error();
     if (!sampler || !out_table) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "sampler or out_table is NULL");

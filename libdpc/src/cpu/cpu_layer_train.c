@@ -1,6 +1,18 @@
 /* Training kernels: one PointFilter layer (docs/model-format.md §3) in float64, forward and
  * backward (paper Appendix A, adapted to the scale-aware radius and the normalised subspace sum;
- * the formulas are in dpc.h, "Training support").
+ * the contract: dpc/dpc_layer.h).
+ *
+ * Backward, per set, with G = dL/dy (m x n). The wrap y - floor(y) is treated as the identity.
+ * For subspace t with dimension set D_t and an ordered pair (i, j) with e_t < d < r_t:
+ *   delta = x_j (-) x_i over D_t (toroidal), d = |delta|, nh = delta / d,
+ *   u = d (b-1) / r_t, q = min(floor(u), b-2), f = u - q, g = w[q] + f (w[q+1] - w[q]),
+ *   g' = (w[q+1] - w[q]) (b-1) / r_t, and v_i[k] = h_t G_i[k] / c_k for moving k in D_t, 0 for
+ *   fixed k. Then
+ *   dL/dx_i   = G_i + sum_t sum_j J(delta_ij) (v_j - v_i),
+ *               J(delta) = g' nh nh^T + (g / d) (I - nh nh^T)    (the Jacobian of g(d) delta/d)
+ *   dL/dw_t[q]   += (1 - f) (nh . v_i),   dL/dw_t[q+1] += f (nh . v_i)
+ * summed over every ordered pair of every set. J is even in delta, so each point only gathers
+ * from its own neighbours.
  *
  * Work runs per set and per subspace: the set's points are counting-sorted into a toroidal cell
  * grid over the subspace's dims (or kept in order for all pairs), the subspace's coordinates
