@@ -21,7 +21,7 @@
 
 /* The screen-space mask: DPC_SAMPLER_TILE^2 pixels, row-major (y * 32 + x), three values each in
  * [0, 1): a 2-D shift (channels 0, 1) and a 1-D offset (channel 2) (sampler_mask.c, made by
- * make_sampler_mask.py). */
+ * lab/rendering/make_sampler_mask.py). */
 #define DPC_SAMPLER_MASK_CHANNELS 3u
 extern const float dpc_sampler_mask_data[DPC_SAMPLER_TILE * DPC_SAMPLER_TILE * DPC_SAMPLER_MASK_CHANNELS];
 
