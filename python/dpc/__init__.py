@@ -9,8 +9,7 @@ Arrays follow scipy.stats.qmc: C-contiguous ``(m, n)`` points in [0, 1), batches
 """
 
 from . import (
-    mask_design,  # annealed masks: the mask designer, docs/masks.md
-    masks,  # blue-noise threshold masks, docs/masks.md
+    masks,  # blue-noise threshold masks (and their designer, dpc.masks.design), docs/masks.md
     stratify,  # progressive sequences: (0,2)-stratification, joint relaxation; docs/progressive.md
     training,  # the float64 layer ops (dpc_layer_forward / _backward)
 )
@@ -45,6 +44,7 @@ from .errors import (
     OutOfMemoryError,
     UnsupportedError,
 )
+from .masks import design as mask_design  # the annealed masks' designer, by its earlier name
 from .masks import mask
 
 __all__ = [

@@ -137,7 +137,7 @@ def read_image(path, max_pixels=None) -> np.ndarray:
     import matplotlib.image as mpimg
     from PIL import Image, UnidentifiedImageError
 
-    from ..baselines import check_pixels, pixel_limit
+    from ..masks.baselines import check_pixels, pixel_limit
     from ..pointio import open_regular
 
     pixel_limit(max_pixels)  # a bad max_pixels or DPC_MAX_PIXELS: said before the file is opened

@@ -1,9 +1,9 @@
 """Threshold masks designed by simulated annealing of their spectra (docs/masks.md, "Annealed masks").
 
-    >>> from dpc import mask_design
-    >>> m = mask_design.anneal_mask(64, seed=0)               # (64, 64), about 11 s on one core
-    >>> st = mask_design.anneal_mask(32, frames=16, seed=0)   # (16, 32, 32), blue in space and time
-    >>> v = mask_design.anneal_mask(64, seed=0, channels=2)   # (64, 64, 2), blue per channel and jointly
+    >>> from dpc.masks import design
+    >>> m = design.anneal_mask(64, seed=0)               # (64, 64), about 11 s on one core
+    >>> st = design.anneal_mask(32, frames=16, seed=0)   # (16, 32, 32), blue in space and time
+    >>> v = design.anneal_mask(64, seed=0, channels=2)   # (64, 64, 2), blue per channel and jointly
 
 The paper's cascades are "not the best fit" for masks, and it expects specialised optimisers to
 do better (Leimkühler et al. 2019, Sec. 7); dpc's gridded mask models indeed stay far above
@@ -45,9 +45,9 @@ from pathlib import Path
 
 import numpy as np
 
-from . import _args, _core
-from . import baselines as _bl
-from .errors import InvalidArgumentError, LimitError
+from .. import _args, _core
+from ..errors import InvalidArgumentError, LimitError
+from .baselines import check_pixels, pixel_limit
 
 STEPS_PER_PIXEL = _core.MASK_STEPS_PER_PIXEL  # libdpc's default (dpc_mask_options_init): 600
 #: Largest steps_per_pixel anneal_mask takes (100 times the default: hours at 64 x 64).
@@ -60,7 +60,7 @@ BUNDLED = {
     (64, 16, None): range(2),
     (64, None, 2): range(8),
 }
-DATA_DIR = Path(__file__).resolve().parent / "data" / "masks"
+DATA_DIR = Path(__file__).resolve().parents[1] / "data" / "masks"
 
 
 def bundled_path(size: int, frames: int | None, seed: int, channels: int | None = None) -> Path:
@@ -100,7 +100,7 @@ def anneal_mask(
     if steps > MAX_STEPS_PER_PIXEL:
         raise LimitError(f"steps_per_pixel must be at most {MAX_STEPS_PER_PIXEL:,}, got {steps:,}")
     what = f"annealed {n} x {n}" + (f", {t} frames" if frames is not None else "") + (", 2 channels" if c > 1 else "")
-    _bl.check_pixels(t * n * n * c, what, max_pixels, design=True)
+    check_pixels(t * n * n * c, what, max_pixels, design=True)
     ranks, _stats = _run_cancellable(lambda poll: _core.mask_design(n, t, c, steps, s, poll), progress)
     values = (ranks.astype(np.float64) + 0.5) / (n * n)  # ranks: (frames, n, n, channels) uint32
     if c == 2:
@@ -168,7 +168,7 @@ def mask(
     """The bundled design for (size, frames, seed, channels) when there is one, else
     :func:`anneal_mask` (``progress``, ``max_pixels`` as there)."""
     channels = None if channels == 1 else channels
-    _bl.pixel_limit(max_pixels, design=True)  # a bad max_pixels is said even for a bundled mask
+    pixel_limit(max_pixels, design=True)  # a bad max_pixels is said even for a bundled mask
     try:
         bundled = seed in BUNDLED.get((size, frames, channels), ())
     except TypeError:  # an unhashable argument: anneal_mask says what is wrong with it
