@@ -80,9 +80,15 @@ def spectrum2d_radial(name: str, m: int, nu_max: float = 4.0) -> torch.Tensor:
     """Radial mean of a 2-D spectrum file (`{name}-powspec-d2-n{m}.npy`) with radspec's binning
     (floor(|q|), DC = 0): an isotropic target from the authors' measured 2-D spectra (green and
     pink noise ship only as 2-D spectra)."""
+    return _radial_mean(lambda R: spectrum2d_target(name, m, R), m, nu_max)
+
+
+def _radial_mean(spectrum, m: int, nu_max: float) -> torch.Tensor:
+    """Radial mean of the 2-D spectrum ``spectrum(R)`` (frequencies -R..R per axis) with radspec's
+    binning: ring b holds floor(|q|) = b, DC = 0."""
     nb = radial_bins(m, 2, nu_max)
     R = nb - 1
-    P = spectrum2d_target(name, m, R)
+    P = spectrum(R)
     q = torch.arange(-R, R + 1, dtype=torch.float64)
     idx = torch.floor(torch.sqrt(q[:, None] ** 2 + q[None, :] ** 2) + 1e-9).long().reshape(-1)
     ok = idx <= R
@@ -145,16 +151,7 @@ def jitter_spectrum(m: int, K: int) -> torch.Tensor:
 
 def jitter_radial(m: int, nu_max: float = 4.0) -> torch.Tensor:
     """Radial mean of jitter_spectrum with the binning of radspec (exact, no sampling)."""
-    nb = radial_bins(m, 2, nu_max)
-    R = nb - 1
-    P = jitter_spectrum(m, R)
-    q = torch.arange(-R, R + 1, dtype=torch.float64)
-    idx = torch.floor(torch.sqrt(q[:, None] ** 2 + q[None, :] ** 2) + 1e-9).long().reshape(-1)
-    ok = idx <= R
-    sums = torch.zeros(nb, dtype=torch.float64).index_add(0, idx[ok], P.reshape(-1)[ok])
-    out = sums / torch.bincount(idx[ok], minlength=nb).double()
-    out[0] = 0
-    return out
+    return _radial_mean(lambda R: jitter_spectrum(m, R), m, nu_max)
 
 
 def load_point_sets(folder: str | Path) -> torch.Tensor:
