@@ -1,5 +1,5 @@
 """One PointFilter layer in float64, forward and backward: libdpc's training kernels
-(``dpc_layer_forward_ex`` / ``dpc_layer_backward_ex``, the "Training support" section of dpc.h).
+(``dpc_layer_forward_ex`` / ``dpc_layer_backward_ex``, declared in dpc/dpc_layer.h).
 
 The public home of the layer ops a training framework needs (the ``dpc_train`` package's
 ``impl="c"`` filter and ``dpc.masks`` use them):

@@ -26,7 +26,7 @@ quiet cmake -S "$ROOT" -B "$WORK/build" "${GEN[@]}" -DCMAKE_BUILD_TYPE=Release -
 quiet cmake --build "$WORK/build" -j "$(nproc)"
 quiet cmake --install "$WORK/build"
 LIBDIR=$(ls -d "$WORK/prefix"/lib*/ | head -1); LIBDIR=${LIBDIR%/}
-for f in include/dpc/dpc.h share/dpc/models/bnot-2d.onnx share/dpc/models/bnot-2d-stratified.onnx; do
+for f in include/dpc/dpc.h include/dpc/dpc_sampler.h include/dpc/dpc_mask.h include/dpc/dpc_layer.h share/dpc/models/bnot-2d.onnx share/dpc/models/bnot-2d-stratified.onnx; do
   [ -f "$WORK/prefix/$f" ] || { echo "missing $f"; exit 1; }
 done
 for f in libdpc.so libdpc.a pkgconfig/dpc.pc cmake/dpc/dpcConfig.cmake cmake/dpc/dpcConfigVersion.cmake \

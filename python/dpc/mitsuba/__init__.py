@@ -76,14 +76,15 @@ def _source() -> Path:
 
 def plugin_folder() -> Path:
     """The folder to put on Mitsuba's search path: it holds ``plugins/dpc.so`` once built.
-    One per (Mitsuba version, dpc version, plugin source, dpc.h)."""
+    One per (Mitsuba version, dpc version, plugin source, the dpc headers)."""
     mi = _mitsuba()
     pkg = _package_dir()
     h = hashlib.sha256()
     for part in (mi.__version__, _dpc_version, sys.version, str(pkg)):
         h.update(part.encode())
     h.update(_source().read_bytes())
-    h.update((pkg / "include" / "dpc" / "dpc.h").read_bytes())
+    for header in sorted((pkg / "include" / "dpc").glob("*.h")):
+        h.update(header.read_bytes())
     return cache_root() / f"mitsuba-{mi.__version__}-dpc-{_dpc_version}-{h.hexdigest()[:12]}"
 
 
