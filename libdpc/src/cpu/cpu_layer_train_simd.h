@@ -55,19 +55,36 @@ ALWAYS_INLINE uint32_t filter_range(const dpc_train_pass *ps, size_t s, uint32_t
     return j < je ? j : je;
 }
 
+/* What both pair passes broadcast before their loops: the subspace's constants and point s's
+ * coordinates (and, backward, its incoming gradient). */
+typedef struct pair_consts {
+    vd r, e, scale, one, umax, qmax;
+    vd xi[DPC_MAX_DIMS], vi[DPC_MAX_DIMS];
+} pair_consts;
+
+ALWAYS_INLINE void pair_consts_init(pair_consts *c, const dpc_train_pass *ps, size_t s, const unsigned K,
+                                    const int BACKWARD) {
+    const dpc_train_sub *sp = ps->sp;
+    const size_t st = ps->p->stride;
+    const double *P = ps->ws->P, *V = ps->ws->V;
+    c->r = V_SET1(sp->r), c->e = V_SET1(sp->e), c->scale = V_SET1(sp->scale), c->one = V_SET1(1.0);
+    c->umax = V_SET1((double)(ps->p->b - 1)), c->qmax = V_SET1((double)(ps->p->b - 2));
+    for (unsigned q = 0; q < K; q++) {
+        c->xi[q] = V_SET1(P[q * st + s]);
+        c->vi[q] = BACKWARD ? V_SET1(V[q * st + s]) : V_ZERO();
+    }
+}
+
 /* Pair math for list[0, len) of point s (see the file comment); acc[q] are the lane sums. */
 ALWAYS_INLINE void pair_sums(const dpc_train_pass *ps, size_t s, uint32_t *list, unsigned len, vd *acc, double *part,
                              const unsigned K, const int BACKWARD) {
     const dpc_train_sub *sp = ps->sp;
     const size_t st = ps->p->stride;
     const double *P = ps->ws->P, *V = ps->ws->V, *w = sp->w;
-    const vd r = V_SET1(sp->r), e = V_SET1(sp->e), scale = V_SET1(sp->scale), one = V_SET1(1.0);
-    const vd umax = V_SET1((double)(ps->p->b - 1)), qmax = V_SET1((double)(ps->p->b - 2));
-    vd xi[DPC_MAX_DIMS], vi[DPC_MAX_DIMS];
-    for (unsigned q = 0; q < K; q++) {
-        xi[q] = V_SET1(P[q * st + s]);
-        vi[q] = BACKWARD ? V_SET1(V[q * st + s]) : V_ZERO();
-    }
+    pair_consts pc;
+    pair_consts_init(&pc, ps, s, K, BACKWARD);
+    const vd r = pc.r, e = pc.e, scale = pc.scale, one = pc.one, umax = pc.umax, qmax = pc.qmax;
+    const vd *xi = pc.xi, *vi = pc.vi;
     /* Padding lanes are the point itself: d = 0 fails d > e >= 0. */
     for (unsigned z = 0; z < W; z++) list[len + z] = (uint32_t)s;
     for (unsigned z = 0; z < len; z += W) {
@@ -176,13 +193,10 @@ ALWAYS_INLINE void sym_pairs(const dpc_train_pass *ps, size_t s, uint32_t *list,
     const size_t st = ps->p->stride;
     const double *P = ps->ws->P, *V = ps->ws->V, *w = sp->w;
     double *A = ps->ws->A;
-    const vd r = V_SET1(sp->r), e = V_SET1(sp->e), scale = V_SET1(sp->scale), one = V_SET1(1.0);
-    const vd umax = V_SET1((double)(ps->p->b - 1)), qmax = V_SET1((double)(ps->p->b - 2));
-    vd xi[DPC_MAX_DIMS], vi[DPC_MAX_DIMS];
-    for (unsigned q = 0; q < K; q++) {
-        xi[q] = V_SET1(P[q * st + s]);
-        vi[q] = BACKWARD ? V_SET1(V[q * st + s]) : V_ZERO();
-    }
+    pair_consts pc;
+    pair_consts_init(&pc, ps, s, K, BACKWARD);
+    const vd r = pc.r, e = pc.e, scale = pc.scale, one = pc.one, umax = pc.umax, qmax = pc.qmax;
+    const vd *xi = pc.xi, *vi = pc.vi;
     for (unsigned z = 0; z < W; z++) list[len + z] = (uint32_t)s; /* d = 0: never a pair */
     for (unsigned z = 0; z < len; z += W) {
         const vx idx = I_LOADU(list + z);
