@@ -72,3 +72,18 @@ def positive_real(value, name: str, note: str = "") -> float:
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real) or not value > 0:
         raise InvalidArgumentError(f"{name} must be > 0{note}, got {value!r}")
     return float(value)
+
+
+def point_array(points, error: type[Exception] = InvalidArgumentError) -> np.ndarray:
+    """``points`` as an array (sets, m, n): (m,) is m 1-D points, (m, n) one set; numbers only
+    (``error``, a subclass of InvalidArgumentError, otherwise)."""
+    a = np.asarray(points)
+    if a.dtype.kind not in "fiu":
+        raise error(f"points must be numeric, got dtype {a.dtype}")
+    if a.ndim == 1:
+        return a[None, :, None]
+    if a.ndim == 2:
+        return a[None]
+    if a.ndim != 3:
+        raise error(f"points must have shape (m,), (m, n) or (sets, m, n), got {a.shape}")
+    return a

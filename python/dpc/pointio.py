@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import _atomic
+from . import _args, _atomic
 from .errors import InvalidArgumentError
 
 FORMATS = ("npy", "dat", "csv", "bin")
@@ -105,15 +105,7 @@ def resolve_format(path, fmt: str | None = None) -> str:
 
 
 def _as_3d(points) -> np.ndarray:
-    a = np.asarray(points)
-    if a.dtype.kind not in "fiu":
-        raise PointFileError(f"points must be numeric, got dtype {a.dtype}")
-    if a.ndim == 1:
-        a = a[None, :, None]
-    elif a.ndim == 2:
-        a = a[None]
-    elif a.ndim != 3:
-        raise PointFileError(f"points must have shape (m,), (m, n) or (sets, m, n), got {a.shape}")
+    a = _args.point_array(points, PointFileError)
     if 0 in a.shape:
         raise PointFileError(f"no points to write (shape {a.shape})")
     return a

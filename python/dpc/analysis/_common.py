@@ -10,6 +10,7 @@ from contextlib import contextmanager
 import numpy as np
 from tqdm import tqdm
 
+from .. import _args
 from ..errors import InvalidArgumentError
 
 # Best known centre densities delta_n of sphere packings in n dimensions (Conway & Sloane,
@@ -55,15 +56,7 @@ def as_sets(points, *, min_points: int = 1) -> np.ndarray:
 
     Accepts (m,) [1-D points], (m, n) or (sets, m, n). Values must be finite and in [0, 1];
     1.0 is the same torus point as 0.0 and is wrapped."""
-    a = np.asarray(points)
-    if a.dtype.kind not in "fiu":
-        raise InvalidArgumentError(f"points must be numeric, got dtype {a.dtype}")
-    if a.ndim == 1:
-        a = a[None, :, None]
-    elif a.ndim == 2:
-        a = a[None]
-    elif a.ndim != 3:
-        raise InvalidArgumentError(f"points must have shape (m,), (m, n) or (sets, m, n), got {a.shape}")
+    a = _args.point_array(points)
     if a.shape[0] < 1 or a.shape[1] < min_points or a.shape[2] < 1:
         raise InvalidArgumentError(
             f"need at least 1 set of {min_points} point(s) with 1 dimension, got shape {a.shape}"

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import _args
 from ..errors import InvalidArgumentError
 from ._common import as_sets
 
@@ -96,8 +97,7 @@ class RandomPhaseFamily:
 
 
 def random_phase_family(name: str, count: int = 20, seed: int = 0, K: int = 63) -> RandomPhaseFamily:
-    if int(count) < 1:
-        raise InvalidArgumentError(f"count must be >= 1, got {count}")
+    count = _args.integer(count, "count", 1, whole_floats=True)
     F = integrand_spectrum(name, K)
     rng = np.random.default_rng(seed)
     phase = rng.uniform(0.0, 2.0 * np.pi, (int(count),) + F.shape)

@@ -27,6 +27,7 @@ from typing import Callable
 
 import numpy as np
 
+from .. import _args
 from ..errors import InvalidArgumentError
 from ._common import check_dims, progress
 
@@ -94,9 +95,8 @@ def integrands(family: str, count: int = 10, *, dims: int = 2, seed: int = 0) ->
     """A seeded family of ``count`` random integrands (see the module notes)."""
     if family not in FAMILIES:
         raise InvalidArgumentError(f"unknown integrand family {family!r}; choose from {FAMILIES}")
-    if int(count) < 1 or int(dims) < 1:
-        raise InvalidArgumentError(f"count and dims must be >= 1, got {count}, {dims}")
-    n, c = int(dims), int(count)
+    c = _args.integer(count, "count", 1, whole_floats=True)
+    n = _args.integer(dims, "dims", 1, whole_floats=True)
     rng = np.random.default_rng(seed)
     if family == "gaussian":
         params = {"mu": rng.uniform(0.3, 0.7, (c, n)), "sigma": rng.uniform(0.05, 0.25, c)}
@@ -171,11 +171,10 @@ def integration_study(
     """Relative variance of every sampler at every point count on every family. Each sampler is
     called once per point count for ``realisations`` sets (seeded with ``seed``); the integrands
     live in the subspace ``dims`` of the samples (default the first two axes)."""
-    counts = tuple(int(c) for c in point_counts)
-    if not counts or min(counts) < 1:
-        raise InvalidArgumentError(f"point counts must be positive, got {point_counts}")
-    if int(realisations) < 2:
-        raise InvalidArgumentError("realisations must be >= 2")
+    counts = tuple(_args.integer(c, "a point count", 1, whole_floats=True) for c in point_counts)
+    if not counts:
+        raise InvalidArgumentError("point_counts must hold at least one point count")
+    realisations = _args.integer(realisations, "realisations", 2, whole_floats=True)
     fams = {
         f: integrands(f, integrands_per_family, dims=len(tuple(dims)), seed=seed + i) for i, f in enumerate(families)
     }

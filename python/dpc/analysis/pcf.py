@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .. import _args
 from ..errors import InvalidArgumentError
 from ._common import as_sets, map_sets, max_packing_distance
 
@@ -61,8 +62,7 @@ def pair_statistics(
     is almost always closer than r_max d_max; where not, a k-NN query finds it)."""
     sets = as_sets(points, min_points=2)
     s_count, m, n = sets.shape
-    if int(bins) < 1:
-        raise InvalidArgumentError(f"bins must be >= 1, got {bins}")
+    bins = _args.integer(bins, "bins", 1, whole_floats=True)
     d_max = max_packing_distance(m, n)
     top = float(r_max) * d_max
     if not 0.0 < top <= 0.5:

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import _args
 from ..errors import InvalidArgumentError, LimitError
 from ._common import as_sets, check_dims, map_sets
 
@@ -195,13 +196,11 @@ def power_spectrum_2d(
     sets = as_sets(points)
     s_count, m, n = sets.shape
     d = check_dims(dims, n, 2)
-    if not nu_max > 0:
-        raise InvalidArgumentError(f"nu_max must be positive, got {nu_max}")
+    nu_max = _args.positive_real(nu_max, "nu_max")
     if stride is None:
         stride = grid_stride(m, nu_max, max_size)
-    elif int(stride) < 1:
-        raise InvalidArgumentError(f"stride must be >= 1, got {stride}")
-    stride = int(stride)
+    else:
+        stride = _args.integer(stride, "stride", 1, whole_floats=True)
     # +1: the last complete ring (radius k - 1 strides) must reach nu_max.
     k = math.ceil(nu_max * math.sqrt(m) / stride) + 1
     q = stride * np.arange(k + 1)
@@ -312,15 +311,12 @@ def power_spectrum_1d(
     sets = as_sets(points)
     s_count, m, n = sets.shape
     (dim,) = check_dims((dim,), n, 1)
-    if not nu_max > 0:
-        raise InvalidArgumentError(f"nu_max must be positive, got {nu_max}")
-    if int(max_freqs) < 2:
-        raise InvalidArgumentError(f"max_freqs must be >= 2, got {max_freqs}")
+    nu_max = _args.positive_real(nu_max, "nu_max")
+    max_freqs = _args.integer(max_freqs, "max_freqs", 2, whole_floats=True)
     reach = math.ceil(nu_max * m)
     if stride is not None:
-        if int(stride) < 1:
-            raise InvalidArgumentError(f"stride must be >= 1, got {stride}")
-        parts = [(int(stride), int(stride), -(-reach // int(stride)))]
+        stride = _args.integer(stride, "stride", 1, whole_floats=True)
+        parts = [(stride, stride, -(-reach // stride))]
     elif reach <= int(max_freqs):
         parts = [(1, 1, reach)]
     else:
@@ -378,10 +374,8 @@ def radial_spectrum_mc(
     d = tuple(range(n)) if dims is None else check_dims(dims, n, len(tuple(dims)))
     sub = np.ascontiguousarray(sets[:, :, d])
     nd = len(d)
-    if int(directions) < 1:
-        raise InvalidArgumentError(f"directions must be >= 1, got {directions}")
-    if not nu_max > 0:
-        raise InvalidArgumentError(f"nu_max must be positive, got {nu_max}")
+    directions = _args.integer(directions, "directions", 1, whole_floats=True)
+    nu_max = _args.positive_real(nu_max, "nu_max")
     h = m ** (1.0 / nd)
     ring = np.arange(1, math.floor(nu_max * h + 1e-9) + 1, dtype=np.float64)
     rng = np.random.default_rng(seed)
@@ -431,8 +425,7 @@ def frequencies_below(n_points: int, dims: int, nu_max: float) -> np.ndarray:
     one of each pair q, -q (the first nonzero coordinate positive; both have the same power):
     shape (count, dims), ordered lexicographically. LimitError where the ball is too large to
     list (more than 5e7 candidates)."""
-    if not nu_max > 0:
-        raise InvalidArgumentError(f"nu_max must be positive, got {nu_max}")
+    nu_max = _args.positive_real(nu_max, "nu_max")
     # |q|^2 < r2, strictly: a frequency exactly at nu_max (|q|^2 = 8 for nu 0.5 at m = 1,024 in
     # 4-D) is outside whatever the rounding of m^(1/n) does
     r2 = (nu_max * n_points ** (1.0 / dims)) ** 2 * (1.0 - 1e-12)
