@@ -105,7 +105,7 @@ def test_poisson_disk_keeps_its_radius_away_from_the_boundary():
 def test_dart_throwing_is_a_hard_core_set_on_the_torus(dims):
     """Relaxed dart throwing keeps every toroidal pair apart by a large share of the packing
     bound, across the cube's faces too (what scipy's non-periodic PoissonDisk does not); the
-    issue #14 comparison quotes delta_min of about 0.7 at m = 1,024."""
+    n-D model cards quote delta_min of about 0.7 at m = 1,024."""
     from dpc import analysis
 
     x = baselines.generate("dart-throwing", 256, dims=dims, count=2, seed=3)

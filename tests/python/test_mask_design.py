@@ -1,4 +1,4 @@
-"""Annealed masks (dpc.mask_design, issue 13): libdpc's annealer (dpc_mask_design) against a
+"""Annealed masks (dpc.masks.design, also dpc.mask_design): libdpc's annealer (dpc_mask_design) against a
 direct evaluation of its energy, the designs' quality against void-and-cluster and STBN, the bundled
 files, and the mask sources that serve them."""
 

@@ -1,4 +1,4 @@
-"""Blue-noise threshold masks (issue 13): the baselines (void-and-cluster, STBN, white, Bayer),
+"""Blue-noise threshold masks: the baselines (void-and-cluster, STBN, white, Bayer),
 the quality measures of dpc.analysis.masks, dpc.masks.mask for models and baselines, the file
 formats, and the `dpc mask` / `dpc dither` commands."""
 
@@ -27,7 +27,7 @@ def _exact_levels(a: np.ndarray) -> bool:
 
 # ---------------------------------------------------------------- void-and-cluster
 def test_void_and_cluster_reproduces_ulichney_quality():
-    # 32 x 32, sigma 1.5: the issue measured mask E_low 0.0019 and thresholded-pattern mean 0.050
+    # 32 x 32, sigma 1.5: Ulichney's construction measured mask E_low 0.0019 and thresholded-pattern mean 0.050
     # over 8 masks; white noise scores 1.
     ms = np.stack([B.void_and_cluster(32, seed=s) for s in range(4)])
     q = mask_quality(ms)
@@ -211,7 +211,7 @@ def test_dither_command_with_a_baseline_mask(tmp_path, capsys):
     assert rc == 0
 
 
-# ---------------------------------------------------------------- atomic writes (issue 16)
+# ---------------------------------------------------------------- atomic writes
 def _snapshot(folder):
     return {p.name: p.read_bytes() for p in sorted(folder.iterdir())}
 
@@ -310,7 +310,7 @@ def test_mask_64_is_a_tileable_rank_normalised_blue_noise_mask():
 
 @pytest.mark.xfail(
     strict=True,
-    reason="issue 13's goal is not reached: mask-64 at 64 x 64 has "
+    reason="the mask models' goal is not reached: mask-64 at 64 x 64 has "
     "mask / thresholded low-band energies ~0.07 / 0.07 against void-and-cluster's "
     "0.00015 / 0.025 (docs/masks.md). Strict: remove this marker when a model meets it.",
 )
@@ -348,7 +348,7 @@ def test_mask_st_32x16_frames_are_rank_normalised_and_blue():
 
 @pytest.mark.xfail(
     strict=True,
-    reason="issue 13's goal is not reached: mask-st-32x16's frames "
+    reason="the mask models' goal is not reached: mask-st-32x16's frames "
     "(0.37 / 0.36) and accumulated 16-frame error (0.103, white noise 0.105) are far "
     "from STBN's (0.022 / 0.146, 0.039; docs/masks.md). Strict: remove when met.",
 )

@@ -1,4 +1,4 @@
-"""One source of truth (issue 15): the version (dpc.h, CMake, pyproject, Python), the enums
+"""One source of truth: the version (dpc.h, CMake, pyproject, Python), the enums
 (exported by the binding from dpc.h), the default thread count (C, Python, CLI, TOML)."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Issue 16: no dead ends in the researcher's workflow, no bad input that loses data or hangs.
+"""Robustness: no dead ends in the researcher's workflow, no bad input that loses data or hangs.
 
 * every command that takes a model takes a bundled name, a name in $DPC_MODEL_PATH or a .onnx
   path; analyze/compare overlay the model's target and write PNG + PDF/SVG; dpc list prints

@@ -17,7 +17,7 @@ import dpc
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 MODELS = ["model_2d", "model_3d_proj", "model_3d_mixed", "model_grid_3to1", "model_10d"]
-TOL = 1e-4  # issue 6: Vulkan vs CPU, float32 on both sides
+TOL = 1e-4  # Vulkan vs CPU, float32 on both sides
 
 
 def _torus_diff(a: np.ndarray, b: np.ndarray) -> float:

@@ -1,4 +1,4 @@
-"""Trainer robustness (issue 16): hyper-parameters are validated, divergence without NaN (a loss
+"""Trainer robustness: hyper-parameters are validated, divergence without NaN (a loss
 that jumps and stays, collapsed points, an overflow inside torch) stops the run with the last
 good checkpoint intact and named, and stale temporary files go on resume."""
 
