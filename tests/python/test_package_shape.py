@@ -7,6 +7,7 @@ from __future__ import annotations
 import ast
 import dataclasses
 import math
+import pickle
 from importlib import resources
 from pathlib import Path
 
@@ -80,6 +81,7 @@ def test_model_config_takes_cascade_spec_defaults():
     spec, model = defaults(CascadeSpec), defaults(ModelConfig)
     assert model and all(spec[k] == v for k, v in model.items())
     assert set(spec) - set(model) == {"grid_axes", "grid_shape"}  # [pattern] states those
+    assert pickle.loads(pickle.dumps(ModelConfig())) == ModelConfig()  # a class of dpc_train.config
 
 
 def test_test_only_code_does_not_ship():

@@ -54,6 +54,7 @@ ModelConfig = dataclasses.make_dataclass(
         if f.name not in ("dims", "n_points", "grid_axes", "grid_shape")
     ],
 )
+ModelConfig.__module__ = __name__  # a class of this module (pickle, repr), not of dataclasses
 
 
 @dataclass
