@@ -69,7 +69,7 @@ def test_same_seed_same_bits_and_seeds_differ():
     m = dpc.load(M2D)
     assert np.array_equal(m.generate(9), m.generate(9))
     assert not np.array_equal(m.generate(9), m.generate(10))
-    # seeds are 0 .. 2^64 - 1, as in the CLI: nothing wraps silently (issue 16)
+    # seeds are 0 .. 2^64 - 1, as in the CLI: nothing wraps silently
     assert not np.array_equal(m.generate(2**64 - 1), m.generate(0))
     for bad in (-1, 2**64, 2**64 + 3):
         with pytest.raises(dpc.InvalidArgumentError):
