@@ -1,5 +1,8 @@
 /*
- * dpc.h: the one public header of libdpc, the Deep Point Correlation runtime.
+ * dpc.h: the public header of libdpc, the Deep Point Correlation runtime: the one include a
+ * user needs. It declares models and generation and includes, at its end, dpc_sampler.h (the
+ * renderer sampler), dpc_mask.h (designed threshold masks) and dpc_layer.h (one layer's
+ * forward and backward, for training).
  *
  * libdpc loads a trained point-pattern model (an ONNX file, see docs/model-format.md) and
  * generates point sets with it: uniform random points from a counter-based generator are pushed
