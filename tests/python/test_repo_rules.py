@@ -195,36 +195,12 @@ def pylint_duplicates(files: list[str]) -> list[str]:
     return ["\n".join(chunk.splitlines()[:3]) for chunk in out.split("R0801: ")[1:]]
 
 
-# Known duplication not yet removed, by file, with what it is. Blocks whose every copy lies in such
-# a file are reported as open work instead of failing; test_open_duplicates_are_still_there keeps
-# the list honest (an entry whose duplication is gone must be removed).
-OPEN_DUPLICATES = {
-    "libdpc/src/cpu/cpu_layer_train_simd.h": "the one-sided and the symmetric pair passes of the "
-    "training kernels repeat their lane loop (gather, distance, bin); one loop for both is open work",
-}
-
-
-def open_work(block: list[tuple[str, int, int]]) -> bool:
-    return all(name in OPEN_DUPLICATES for name, _, _ in block) and len({n for n, _, _ in block}) == 1
-
-
-def test_open_duplicates_are_still_there():
-    tool("lizard")
-    blocks = lizard_duplicates(product_files(r"\.(c|h|cpp|hpp|py)$"))
-    for name in OPEN_DUPLICATES:
-        assert any(open_work(b) and b[0][0] == name for b in blocks), f"{name} has no duplicate left: remove it"
-
-
 def test_no_duplicate_code_in_the_product():
-    """No pair of copied code in libdpc/, python/dpc/, bindings/, training/ (generated files,
-    pybind11 registration lists and the open work above aside): a rule written twice drifts."""
+    """No pair of copied code in libdpc/, python/dpc/, bindings/, training/ (generated files and
+    pybind11 registration lists aside): a rule written twice drifts."""
     tool("lizard")
     tool("pylint")
-    blocks = [
-        b
-        for b in lizard_duplicates(product_files(r"\.(c|h|cpp|hpp|py)$"))
-        if not binding_boilerplate(b) and not open_work(b)
-    ]
+    blocks = [b for b in lizard_duplicates(product_files(r"\.(c|h|cpp|hpp|py)$")) if not binding_boilerplate(b)]
     found = [" = ".join(f"{n}:{a}-{b}" for n, a, b in block) for block in blocks]
     found += pylint_duplicates(product_files(r"\.py$"))
     assert not found, f"{len(found)} duplicated blocks:\n" + "\n".join(found)
