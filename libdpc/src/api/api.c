@@ -502,34 +502,15 @@ dpc_status dpc_order_levels(float *points, size_t n_points, size_t dims, uint32_
     return st == DPC_OK ? dpc_order_level_points(points, n_points, (uint32_t)dims, base) : st;
 }
 
-/* Progress of one dpc_generate_ex call (dpc_progress_fn): shared by its worker threads, the
- * callback called under the lock so that calls never overlap. */
-typedef struct progress {
-    dpc_progress_fn fn;
-    void *user;
-    uint64_t done, total;
-    int cancelled;
-    pthread_mutex_t lock;
-} progress;
-
-/* Count `units` more as done (0: a poll inside long work) and tell the callback;
- * DPC_ERROR_CANCELLED once it asked to stop. */
-static dpc_status progress_add(progress *p, uint64_t units) {
-    if (!p || !p->fn) return DPC_OK;
-    pthread_mutex_lock(&p->lock);
-    if (!p->cancelled) {
-        p->done += units;
-        if (p->fn(p->user, p->done, p->total) != 0) p->cancelled = 1;
-    }
-    const int cancelled = p->cancelled;
-    pthread_mutex_unlock(&p->lock);
-    return cancelled ? DPC_ERROR_CANCELLED : DPC_OK;
-}
+/* Progress of one dpc_generate_ex call, shared by its worker threads (common/threads.h). */
+typedef dpc_progress_state progress;
 
 /* The CPU engine's hook (cpu_cascade.h): before each set and between chunks of points inside a
  * long layer (a poll, so that a cancel is seen within a layer), and after each layer (one unit
  * of progress). */
-static dpc_status engine_hook(void *ctx, int layer_done) { return progress_add((progress *)ctx, layer_done ? 1u : 0u); }
+static dpc_status engine_hook(void *ctx, int layer_done) {
+    return dpc_progress_add((progress *)ctx, layer_done ? 1u : 0u);
+}
 
 #if defined(DPC_HAVE_VULKAN)
 /* Inputs of a Vulkan run: the model's input points (model/input.h, as on the CPU), or the
@@ -615,9 +596,10 @@ static dpc_status generate_batch(const dpc_model *model, uint64_t seed, size_t c
     if (p) p->total = (uint64_t)count * model->cascade.n_layers * dpc_cpu_filter_runs(&model->cascade, n_points);
 #if defined(DPC_HAVE_VULKAN)
     if (model->backend == DPC_BACKEND_VULKAN) { /* many sets per dispatch: progress once, at the end */
-        if (progress_add(p, 0) != DPC_OK) return dpc_fail(DPC_ERROR_CANCELLED, "cancelled by the progress callback");
+        if (dpc_progress_add(p, 0) != DPC_OK)
+            return dpc_fail(DPC_ERROR_CANCELLED, "cancelled by the progress callback");
         if ((st = vk_generate(model, seed, count, n_points, out)) != DPC_OK) return st;
-        if (progress_add(p, p ? p->total : 0) != DPC_OK)
+        if (dpc_progress_add(p, p ? p->total : 0) != DPC_OK)
             return dpc_fail(DPC_ERROR_CANCELLED, "cancelled by the progress callback");
         return DPC_OK;
     }
@@ -645,12 +627,10 @@ dpc_status dpc_generate_ex(const dpc_model *model, uint64_t seed, size_t count, 
     }
     if (!opts.progress) return generate_batch(model, seed, count, n_points, NULL, out);
     progress p;
-    memset(&p, 0, sizeof p);
-    p.fn = opts.progress;
-    p.user = opts.user;
-    if (pthread_mutex_init(&p.lock, NULL) != 0) return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "cannot create a mutex");
+    const dpc_status begun = dpc_progress_begin(&p, opts.progress, opts.user);
+    if (begun != DPC_OK) return begun;
     const dpc_status st = generate_batch(model, seed, count, n_points, &p, out);
-    pthread_mutex_destroy(&p.lock);
+    dpc_progress_end(&p);
     return st;
 }
 

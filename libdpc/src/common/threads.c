@@ -13,10 +13,13 @@
  * written. After fork() the child starts with an empty pool. */
 #include "common/threads.h"
 
+#include "common/error.h"
+
 #include <pthread.h>
 #include <sched.h>
 #include <stdatomic.h>
 #include <stdint.h>
+#include <string.h>
 #include <unistd.h>
 
 unsigned dpc_threads_resolve(unsigned threads) {
@@ -190,4 +193,26 @@ void dpc_parallel_ranges(unsigned T, size_t n, dpc_range_fn fn, void *ctx) {
     }
     ranges r = {fn, ctx, T, n};
     dpc_run_workers(T, range_slot, &r);
+}
+
+dpc_status dpc_progress_begin(dpc_progress_state *p, dpc_progress_fn fn, void *user) {
+    memset(p, 0, sizeof *p);
+    p->fn = fn;
+    p->user = user;
+    if (pthread_mutex_init(&p->lock, NULL) != 0) return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "cannot create a mutex");
+    return DPC_OK;
+}
+
+void dpc_progress_end(dpc_progress_state *p) { pthread_mutex_destroy(&p->lock); }
+
+dpc_status dpc_progress_add(dpc_progress_state *p, uint64_t units) {
+    if (!p || !p->fn) return DPC_OK;
+    pthread_mutex_lock(&p->lock);
+    if (!p->cancelled) {
+        p->done += units;
+        if (p->fn(p->user, p->done, p->total) != 0) p->cancelled = 1;
+    }
+    const int cancelled = p->cancelled;
+    pthread_mutex_unlock(&p->lock);
+    return cancelled ? DPC_ERROR_CANCELLED : DPC_OK;
 }

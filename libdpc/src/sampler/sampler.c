@@ -37,31 +37,11 @@ static void stratify_projections(float *table, uint32_t n, ranked *scratch) {
 
 /* options.progress: one unit per set made, polled inside each set's generation (between the
  * cascade's chunks and layers, before every relaxation step); calls serialised, from any worker. */
-typedef struct build_progress {
-    dpc_progress_fn fn;
-    void *user;
-    uint64_t done, total;
-    int cancelled;
-    pthread_mutex_t lock;
-} build_progress;
-
-/* Count `units` more sets as made (0: a poll) and tell the callback; DPC_ERROR_CANCELLED once it
- * asked to stop. */
-static dpc_status progress_add(build_progress *p, uint64_t units) {
-    if (!p->fn) return DPC_OK;
-    pthread_mutex_lock(&p->lock);
-    if (!p->cancelled) {
-        p->done += units;
-        if (p->fn(p->user, p->done, p->total) != 0) p->cancelled = 1;
-    }
-    const int cancelled = p->cancelled;
-    pthread_mutex_unlock(&p->lock);
-    return cancelled ? DPC_ERROR_CANCELLED : DPC_OK;
-}
+typedef dpc_progress_state build_progress;
 
 static dpc_status set_hook(void *ctx, int layer_done) {
     (void)layer_done;
-    return progress_add((build_progress *)ctx, 0);
+    return dpc_progress_add((build_progress *)ctx, 0);
 }
 
 /* Sets made at once for a sampler's tables: set j (the k[j]-th set, seed set_seed(base, k[j]))
@@ -154,7 +134,7 @@ static dpc_status build(dpc_sampler *s, const dpc_sampler_options *o, build_prog
     uint32_t t = 0;
     set_job job = {.o = o, .base = s->base, .n = n, .widest = widest, .sets = set, .progress = progress};
     if (progress) progress->total = sets_to_make(o, s->net_slots);
-    if (progress && progress_add(progress, 0) != DPC_OK) goto cancelled;
+    if (progress && dpc_progress_add(progress, 0) != DPC_OK) goto cancelled;
     for (uint64_t k = 0; t < D || job.count; k++) {
         if (t < D) {
             const uint32_t dims = o->models[k % o->n_models]->cascade.dims;
@@ -188,14 +168,14 @@ static dpc_status build(dpc_sampler *s, const dpc_sampler_options *o, build_prog
                 stratify_projections(table, n, scratch);
             }
         }
-        if (progress && progress_add(progress, job.count) != DPC_OK) goto cancelled;
+        if (progress && dpc_progress_add(progress, job.count) != DPC_OK) goto cancelled;
         job.count = 0;
     }
     /* Net slots: the net's cells, as cell centres (what dpc_sampler_table shows; the lookups
      * read the cells). */
     for (t = 0; t < s->net_slots; t++) {
         uint32_t *cells = s->nets + (size_t)t * n;
-        if (progress && progress_add(progress, 0) != DPC_OK) goto cancelled;
+        if (progress && dpc_progress_add(progress, 0) != DPC_OK) goto cancelled;
         const uint64_t net_seed = dpc_child_seed(s->base, DPC_STREAM_SAMPLER_NET, t);
         if ((st = dpc_sampler_make_net(log_n, net_seed, cells)) != DPC_OK) goto done;
         /* Every net after the first in a seeded random order (Fisher-Yates): two nets in Sobol'
@@ -234,12 +214,10 @@ cancelled:
 dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
     if (!o->progress) return build(s, o, NULL);
     build_progress p;
-    memset(&p, 0, sizeof p);
-    p.fn = o->progress;
-    p.user = o->user;
-    if (pthread_mutex_init(&p.lock, NULL) != 0) return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "cannot create a mutex");
+    const dpc_status begun = dpc_progress_begin(&p, o->progress, o->user);
+    if (begun != DPC_OK) return begun;
     const dpc_status st = build(s, o, &p);
-    pthread_mutex_destroy(&p.lock);
+    dpc_progress_end(&p);
     return st;
 }
 

@@ -8,29 +8,16 @@ import click
 import numpy as np
 
 from .. import _atomic
-from .options import OldNamesOption, check_output, max_pixels_option
+from .options import check_output, mask_options, max_pixels_option
 
 
 @click.command("dither")
 @click.argument("image", type=click.Path(exists=True, dir_okay=False))
-@click.option(
-    "-m",
-    "--model",
-    "--mask",
+@mask_options(
     "model",
-    cls=OldNamesOption,
-    old_names=("--mask",),
-    default="annealed",
-    show_default=True,
-    help="Mask: annealed (dpc's designed masks), a gridded mask model (bundled name or .onnx) or "
+    "Mask: annealed (dpc's designed masks), a gridded mask model (bundled name or .onnx) or "
     "a baseline (void-and-cluster, stbn, white, bayer; see 'dpc mask --list').",
-)
-@click.option(
-    "-n",
-    "--size",
-    type=click.IntRange(min=2),
-    default=None,
-    help="Mask pixels per side (default: the model's grid; baselines need it).",
+    "Mask pixels per side (default: the model's grid; baselines need it).",
 )
 @click.option(
     "--channel", type=click.IntRange(min=0), default=0, show_default=True, help="Value channel of a vector mask."

@@ -7,28 +7,15 @@ from pathlib import Path
 
 import click
 
-from .options import OldNamesOption, max_pixels_option
+from .options import mask_options, max_pixels_option
 
 
 @click.command("mask")
-@click.option(
-    "-m",
-    "--model",
-    "--mask",
+@mask_options(
     "name",
-    cls=OldNamesOption,
-    old_names=("--mask",),
-    default="annealed",
-    show_default=True,
-    help="annealed (dpc's designed masks, the best here), a gridded mask model (bundled name or "
+    "annealed (dpc's designed masks, the best here), a gridded mask model (bundled name or "
     ".onnx) or a baseline: void-and-cluster, stbn, white, bayer (see 'dpc mask --list').",
-)
-@click.option(
-    "-n",
-    "--size",
-    type=click.IntRange(min=2),
-    default=None,
-    help="Pixels per side (default: a model's trained grid; baselines need it).",
+    "Pixels per side (default: a model's trained grid; baselines need it).",
 )
 @click.option(
     "--frames",

@@ -56,6 +56,27 @@ def max_pixels_option(what: str):
     )
 
 
+def mask_options(dest: str, model_help: str, size_help: str):
+    """-m/--model (the mask source; --mask still accepted) and -n/--size, as dpc mask and dpc
+    dither name them."""
+
+    def decorate(f):
+        f = click.option("-n", "--size", type=click.IntRange(min=2), default=None, help=size_help)(f)
+        return click.option(
+            "-m",
+            "--model",
+            "--mask",
+            dest,
+            cls=OldNamesOption,
+            old_names=("--mask",),
+            default="annealed",
+            show_default=True,
+            help=model_help,
+        )(f)
+
+    return decorate
+
+
 def check_output(path) -> None:
     """A missing or unwritable output folder, reported before the work (dpc._atomic)."""
     if path is not None:
