@@ -66,7 +66,7 @@ python3 -m ruff --version
 python3 -m ruff check --no-cache "${PY_FILES[@]}"
 python3 -m ruff format --check --no-cache "${PY_FILES[@]}"
 echo "${#C_FILES[@]} C/C++ files and ${#PY_FILES[@]} Python files are formatted"
-# No sys.path edits, ruff over every Python file, no tracker numbers, no duplicated code in the
+# No import-path edits, ruff over every Python file, no tracker numbers, no duplicated code in the
 # product (lizard and pylint; they must be there: DPC_TEST_REQUIRE_TOOLS), docs/architecture.md
 # names the tree's folders. It imports nothing of dpc, so it runs before the package is built.
 (cd /tmp && DPC_TEST_REQUIRE_TOOLS=1 python3 -m pytest -q -p no:cacheprovider "$ROOT/tests/python/test_repo_rules.py")
