@@ -32,7 +32,7 @@ import numpy as np  # noqa: E402
 import dpc  # noqa: E402
 from dpc import analysis, baselines  # noqa: E402
 from dpc.analysis import plots  # noqa: E402
-from lab.common import REPORTS, ROOT, report_header  # noqa: E402
+from lab.common import REPORTS, ROOT  # noqa: E402
 
 FIGURES = REPORTS / "figures" / "models"
 PAGE = REPORTS / "models.md"
@@ -740,9 +740,11 @@ KINDS = {
 INTRO = [
     "# Bundled models",
     "",
-    *report_header("python -m lab.models.model_cards"),
-    "Made by `python -m lab.models.model_cards` (this page and `docs/reports/figures/models/` are its "
-    "output; `python -m lab.models.model_cards NAME` redoes one card). "
+    "> Measurements, not the manual: made by `python -m lab.models.model_cards` (`... NAME` redoes "
+    "one card); machine: not recorded on this page (each card's training line records its training "
+    "run). The manual is [docs/](../architecture.md).",
+    "",
+    "This page and `docs/reports/figures/models/` are its output. "
     "Conventions: P = |Σ_k e^{2πi⟨q,x_k⟩}|²/m at integer q, white noise = 1; rings "
     "b ≤ |q| < b + 1; ν = |q|/m^(1/n); E_low(ν) = mean P over 0 < ν' < ν; anisotropy = mean "
     "over 0.5 ≤ ν ≤ 4 in dB (the isotropic floor of 100 sets is about −20 dB); δ_min = "
@@ -785,7 +787,7 @@ def main(argv=None) -> None:
         card = CARDS[name]
         print(f"== {name}")
         body = model_header(name, model) + KINDS[card.kind](name, card, model)
-        cards[name] = "\n".join(body) + "\n"
+        cards[name] = "\n".join(body).rstrip() + "\n"  # as a kept card: one blank line between cards
     order = [n for n in CARDS if n in cards]
     PAGE.write_text("\n".join(INTRO) + "\n" + "\n".join(cards[n] for n in order) + "\n" + "\n".join(OUTRO))
     print(f"wrote {PAGE}")
