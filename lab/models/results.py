@@ -23,7 +23,7 @@ import numpy as np  # noqa: E402
 
 import dpc  # noqa: E402
 from dpc import analysis, baselines  # noqa: E402
-from lab.common import REPORTS, report_header  # noqa: E402
+from lab.common import REPORTS  # noqa: E402
 from lab.models import model_cards as MC  # noqa: E402  (targets and metrics shared with the model cards)
 
 FIG = REPORTS / "figures" / "results"
@@ -33,9 +33,10 @@ SETS = 100
 HEAD = [
     "# Results: the paper's figures redone with dpc",
     "",
-    *report_header("python -m lab.models.results all"),
-    "Every section is made by the command in its first line (`python -m lab.models.results all` "
-    "makes them all); numbers are measured on the bundled models "
+    "> Measurements, not the manual: made by `python -m lab.models.results all` (`... figN` one "
+    "section); machine: not recorded on this page. The manual is [docs/](../architecture.md).",
+    "",
+    "Every section is made by the command in its first line; numbers are measured on the bundled models "
     "([models.md](models.md) has their cards). Conventions as in [analysis.md](../analysis.md): "
     "P normalised so that white noise = 1, ν = |q|/m^(1/n), E_low(ν) = mean P over "
     "0 < ν' < ν, rel. L1 = Σ|P − T| / Σ T over the target's rings.",
@@ -228,7 +229,8 @@ def fig9() -> None:
             "below ν = 0.75 exist; the authors ship no 10-D target at that m, so its "
             "rel. L1 and peak are against the 1,024-point target in ν and the target's "
             "E_low is given only where ν reaches its integer frequencies. "
-            '"(previous)": the file a model replaced (`models/previous/`), '
+            '"(previous)": the file a model replaced (`models/previous/`, the trained files the '
+            "hand-designed projective models replaced), "
             "measured the same way. δ_min: minimum distance over the densest "
             "packing's (mean over the sets / worst set).",
             "",
