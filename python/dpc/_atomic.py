@@ -129,7 +129,11 @@ def temp_path(path) -> Path:
     folder = p.parent
     if not folder.is_dir():
         check_output(p)  # names the missing folder, not the temporary
-    remove_stale(folder)
+    tr = _CURRENT.get()
+    if tr is None or folder not in tr.cleaned:  # a command writing many files scans each folder once
+        remove_stale(folder)
+        if tr is not None:
+            tr.cleaned.add(folder)
     return p.with_name(f".{p.name}.{os.getpid()}.{secrets.token_hex(4)}.part{p.suffix}")
 
 
@@ -164,6 +168,7 @@ class _Transaction:
     def __init__(self) -> None:
         self.files: list[tuple[Path, Path]] = []  # (temporary, target)
         self.dirs: list[Path] = []  # folders created, outermost first
+        self.cleaned: set[Path] = set()  # folders whose stale temporaries are already removed
 
     def commit(self) -> None:
         done = []
