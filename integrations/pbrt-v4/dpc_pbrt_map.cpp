@@ -1,0 +1,177 @@
+// dpc_pbrt_map.cpp: see dpc_pbrt_map.h.
+#include "dpc_pbrt_map.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <system_error>
+#include <vector>
+
+namespace dpc_pbrt {
+
+namespace {
+
+std::vector<std::string> split(const std::string &s, char sep) {
+    std::vector<std::string> out;
+    size_t start = 0;
+    while (start <= s.size()) {
+        size_t end = s.find(sep, start);
+        if (end == std::string::npos) end = s.size();
+        if (end > start) out.push_back(s.substr(start, end - start));
+        start = end + 1;
+    }
+    return out;
+}
+
+// The names the model search finds in the installed models folder (dpc_model_dir()), for the
+// message about an unknown name.
+std::string bundled() {
+    std::vector<std::string> names;
+    const std::string dir = dpc_model_dir();
+    std::error_code ec;
+    if (!dir.empty())
+        for (const auto &entry : std::filesystem::directory_iterator(dir, ec)) {
+            const std::string file = entry.path().filename().string();
+            if (file.size() > 5 && file[0] != '.' && file.compare(file.size() - 5, 5, ".onnx") == 0 &&
+                entry.is_regular_file(ec))
+                names.push_back(file.substr(0, file.size() - 5));
+        }
+    std::sort(names.begin(), names.end());
+    std::string out;
+    for (const std::string &n : names) out += (out.empty() ? "" : ", ") + n;
+    return out.empty() ? "(none)" : out;
+}
+
+// One model: a path as it is, a name through dpc_model_find. Null and a message on failure.
+dpc_model *load(const std::string &spec, const dpc_load_options &options, std::string &error) {
+    dpc_model *model = nullptr;
+    const bool path =
+        spec.find('/') != std::string::npos || (spec.size() > 5 && spec.compare(spec.size() - 5, 5, ".onnx") == 0);
+    if (path) {
+        if (dpc_model_load_file(spec.c_str(), &options, &model) != DPC_OK) error = dpc_last_error();
+        return model;
+    }
+    std::vector<char> found(DPC_PATH_MAX);
+    if (dpc_model_find(spec.c_str(), found.data(), found.size()) != DPC_OK) {
+        error = std::string(dpc_last_error()) + "; bundled: " + bundled();
+        return nullptr;
+    }
+    if (dpc_model_load_file(found.data(), &options, &model) != DPC_OK) error = dpc_last_error();
+    return model;
+}
+
+// A lookup on a created sampler cannot fail (dpc_sampler.h: any pixel, index and dimension); a
+// failure here is a broken invariant, so it stops the renderer loudly rather than shade with 0.
+void check(dpc_status status) {
+    if (status == DPC_OK) return;
+    std::fprintf(stderr, "dpc sampler: lookup failed: %s\n", dpc_last_error());
+    std::abort();
+}
+
+} // namespace
+
+std::string describe(const Config &c) {
+    return "model \"" + c.model + "\" pixelsamples " + std::to_string(c.samples_per_pixel) + " dimensions " +
+           std::to_string(c.dimensions) + " fold_from " + std::to_string(c.fold_from) + " net_dims " +
+           std::to_string(c.net_dims) + " seed " + std::to_string(c.seed);
+}
+
+SharedSampler make_sampler(const Config &config, std::string &error) {
+    error.clear();
+    if (config.samples_per_pixel < 1 || config.samples_per_pixel > (int)DPC_SAMPLER_MAX_SPP) {
+        error = "\"integer pixelsamples\" is " + std::to_string(config.samples_per_pixel) + ", must be 1 .. " +
+                std::to_string(DPC_SAMPLER_MAX_SPP);
+        return nullptr;
+    }
+    if (config.dimensions < 1 || config.dimensions > (int)DPC_SAMPLER_MAX_DIMENSIONS) {
+        error = "\"integer dimensions\" is " + std::to_string(config.dimensions) + ", must be 1 .. " +
+                std::to_string(DPC_SAMPLER_MAX_DIMENSIONS);
+        return nullptr;
+    }
+    if (config.fold_from < -1) {
+        error = "\"integer fold_from\" is " + std::to_string(config.fold_from) + ": a slot (>= 0), or -1 to fold none";
+        return nullptr;
+    }
+    if (config.net_dims < -1) {
+        error = "\"integer net_dims\" is " + std::to_string(config.net_dims) +
+                ": a slot count (>= 0), or -1 for libdpc's default";
+        return nullptr;
+    }
+    if (config.model.find('\0') != std::string::npos) {
+        error = "\"string model\" contains a NUL character";
+        return nullptr;
+    }
+    const std::vector<std::string> specs = split(config.model, ',');
+    if (specs.empty()) {
+        error = "\"string model\" names no model";
+        return nullptr;
+    }
+
+    dpc_load_options load_options;
+    dpc_load_options_init(&load_options);
+    load_options.threads = config.threads;
+    std::vector<dpc_model *> models;
+    for (const std::string &spec : specs) {
+        std::string why;
+        dpc_model *model = load(spec, load_options, why);
+        if (!model) {
+            error = "model \"" + spec + "\": " + why;
+            break;
+        }
+        models.push_back(model);
+    }
+    dpc_sampler *sampler = nullptr;
+    if (error.empty()) {
+        dpc_sampler_options o;
+        dpc_sampler_options_init(&o);
+        std::vector<const dpc_model *> handles(models.begin(), models.end());
+        o.models = handles.data();
+        o.n_models = (uint32_t)handles.size();
+        o.samples_per_pixel = (uint32_t)config.samples_per_pixel;
+        o.dimensions = (uint32_t)config.dimensions;
+        o.fold_from = config.fold_from < 0 ? DPC_SAMPLER_NO_FOLD : (uint32_t)config.fold_from;
+        o.net_dims = config.net_dims < 0 ? DPC_SAMPLER_NET_DIMS_AUTO : (uint32_t)config.net_dims;
+        o.seed = (uint64_t)config.seed;
+        if (dpc_sampler_create(&o, &sampler) != DPC_OK)
+            error = std::string(dpc_last_error()) + " (" + describe(config) + ")";
+    }
+    // the sampler keeps no reference to its models (dpc_sampler.h, "Threads")
+    for (dpc_model *model : models) dpc_model_free(model);
+    if (!sampler) return nullptr;
+    return SharedSampler(sampler, [](const dpc_sampler *s) { dpc_sampler_free(const_cast<dpc_sampler *>(s)); });
+}
+
+PixelSampler::PixelSampler(SharedSampler sampler) : sampler_(std::move(sampler)) {
+    dpc_sampler_info info;
+    info.struct_size = sizeof info;
+    check(dpc_sampler_get_info(sampler_.get(), &info));
+    spp_ = info.samples_per_pixel;
+}
+
+void PixelSampler::start_pixel_sample(int32_t x, int32_t y, int32_t sample_index, int32_t dimension) {
+    x_ = (uint32_t)x; // negative coordinates wrap modulo 2^32 (dpc_sampler.h allows it)
+    y_ = (uint32_t)y;
+    index_ = (uint32_t)sample_index;
+    slot_ = 1u + (uint32_t)dimension; // slot 0 is the film position, read by get_pixel_2d
+}
+
+float PixelSampler::get_1d() {
+    float v = 0.f;
+    check(dpc_sampler_get_1d(sampler_.get(), x_, y_, index_, slot_++, &v));
+    return v;
+}
+
+Value2 PixelSampler::get_2d() {
+    float v[2] = {0.f, 0.f};
+    check(dpc_sampler_get_2d(sampler_.get(), x_, y_, index_, slot_++, v));
+    return {v[0], v[1]};
+}
+
+Value2 PixelSampler::get_pixel_2d() const {
+    float v[2] = {0.f, 0.f};
+    check(dpc_sampler_get_2d(sampler_.get(), x_, y_, index_, 0u, v));
+    return {v[0], v[1]};
+}
+
+} // namespace dpc_pbrt
