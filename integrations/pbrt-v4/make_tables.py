@@ -95,23 +95,37 @@ def parse_points(text: str) -> np.ndarray:
 
 
 def to_fixed(points: np.ndarray) -> np.ndarray:
-    """[0,1) doubles to pbrt's uint32 fixed point (value * 2^-32 reads them back); floor keeps strata."""
+    """[0,1) doubles to pbrt's uint32 fixed point (pbrt reads value * 2^-32 into a float).
+
+    Each value is floored to 24 significant bits (a multiple of 2^8), so that the float pbrt makes
+    of it is exact: a value within float rounding below a stratum's upper edge would otherwise
+    round up into the next stratum, and PMJ02BNSampler's pixel-sample sorting, which counts the
+    points per pixel tile in float, fails its check (it did for pmj-cpp's raw doubles). Flooring
+    keeps every point in its elementary intervals (the finest are 2^-16 wide).
+    """
     if points.min() < 0.0 or points.max() >= 1.0:
         raise ValueError("points outside [0, 1)")
-    return np.minimum(np.floor(points * 2.0**32), 2.0**32 - 1).astype(np.uint32)
+    return (np.floor(points * 2.0**24).astype(np.uint32)) << np.uint32(8)
+
+
+def as_pbrt_reads(fixed: np.ndarray) -> np.ndarray:
+    """The coordinates as GetPMJ02BNSample returns them on the CPU: value * 0x1p-32 in double, then float."""
+    return (fixed.astype(np.float64) * 2.0**-32).astype(np.float32)
 
 
 def check_pmj02(fixed: np.ndarray) -> None:
-    """Every power-of-4 prefix stratifies every square grid it can (pbrt's pixel-sample sorting needs it)."""
+    """As pbrt reads the points (float): every power-of-4 prefix of 4^k points has one point in
+    each square of the 2^k x 2^k grid, and the whole set one in each of the 256 x 256 grid, so
+    PMJ02BNSampler finds spp points in every pixel tile for every power-of-4 spp."""
+    x = as_pbrt_reads(fixed)
     for k in range(0, 9):
-        n = 4**k
-        cells = 2**k
-        p = fixed[:n].astype(np.uint64)
-        cx = p[:, 0] >> np.uint64(32 - k) if k else np.zeros(n, np.uint64)
-        cy = p[:, 1] >> np.uint64(32 - k) if k else np.zeros(n, np.uint64)
-        counts = np.bincount((cy * np.uint64(cells) + cx).astype(np.int64), minlength=cells * cells)
+        n, cells = 4**k, 2**k
+        c = np.floor(x[:n].astype(np.float64) * cells).astype(np.int64)
+        if c.min() < 0 or c.max() >= cells:
+            raise SystemExit("pmj02bn point outside [0, 1) as pbrt reads it")
+        counts = np.bincount(c[:, 1] * cells + c[:, 0], minlength=cells * cells)
         if not np.all(counts == 1):
-            raise SystemExit(f"pmj02bn set is not stratified for the first {n} points")
+            raise SystemExit(f"pmj02bn set is not stratified for the first {n} points as pbrt reads them")
 
 
 def pmj_sets(exe: Path, workdir: Path) -> np.ndarray:
@@ -172,7 +186,10 @@ def header(command: str, what: str) -> str:
 
 def write_pmj(path: Path, sets: np.ndarray, command: str) -> None:
     lines = [
-        header(command, "pmj02bnSamples: 5 pmj02bn sets of 65536 points, uint32 fixed point (x * 2^32)."),
+        header(
+            command,
+            "pmj02bnSamples: 5 pmj02bn sets of 65536 points, uint32 fixed point (x * 2^32, floored to 24 bits).",
+        ),
         f"// pmj-cpp seeds (PMJ_SEED): {PMJ_SEEDS}\n",
         MIT_NOTICE,
         "#include <pbrt/util/pmj02tables.h>\n\nnamespace pbrt {\n",
