@@ -3,7 +3,7 @@
     python3 integrations/pbrt-v4/check_smoke.py SMOKE_DIR
 
 SMOKE_DIR holds the renders as PFM (pbrt's imgtool convert): dpc.pfm (16 spp), independent-0.pfm
-and independent-1.pfm (16 spp, two seeds) and reference.pfm (independent, 256 spp). The two
+and independent-1.pfm (16 spp, two seeds) and reference.pfm (independent, 1024 spp). The two
 16-spp independent images give the per-pixel noise, hence the standard error of a 16-spp image's
 mean; dpc's mean must lie within 4 standard errors of the reference's (independent's expected
 value), and so must an independent image's. Prints the numbers; exits 1 if a check fails.
@@ -16,6 +16,8 @@ import sys
 from pathlib import Path
 
 import numpy as np
+
+SPP, REFERENCE_SPP = 16, 1024  # as run.sh renders them
 
 
 def read_pfm(path: Path) -> np.ndarray:
@@ -45,11 +47,11 @@ def main() -> int:
     # per pixel and channel, var(ind0 - ind1) = 2 sigma^2 at 16 spp; the mean's error over the pixels
     sigma2 = ((ind0 - ind1) ** 2).mean() / 2
     se16 = np.sqrt(sigma2 / pixels)
-    se_ref = se16 / 4  # 256 spp: 16 times the samples
+    se_ref = se16 / np.sqrt(REFERENCE_SPP / SPP)
     bound = 4 * np.sqrt(se16**2 + se_ref**2)
     ok = True
     print(f"image {dpc.shape[1]} x {dpc.shape[0]}, {dpc.shape[2]} channels")
-    print(f"reference mean (independent, 256 spp) {ref.mean():.6f}")
+    print(f"reference mean (independent, {REFERENCE_SPP} spp) {ref.mean():.6f}")
     print(f"standard error of a 16-spp image's mean {se16:.6f}; bound (4 standard errors) {bound:.6f}")
     print("MSE: per pixel and channel, to the reference")
     for name, image in (("dpc", dpc), ("independent seed 0", ind0), ("independent seed 1", ind1)):

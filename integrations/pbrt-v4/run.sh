@@ -5,9 +5,10 @@
 # BUILD_DIR (default PBRT_SRC-dpc): dpc-build/ and dpc-prefix/ (libdpc built and installed),
 # build/ (pbrt with -DPBRT_DPC=ON: pbrt, imgtool, pbrt_test) and smoke/ (the renders).
 # Steps: libdpc; apply.py; configure and build pbrt; the smoke scene (scenes/) with "dpc" at
-# --nthreads 1 and 2 (the same pixels, byte for byte) and with "independent" (check_smoke.py: dpc's
-# mean within noise of a 256-spp reference); pbrt_test's sampler tests and its analytic-scene
-# tests of dpc. Any failure exits nonzero. JOBS (default 2) sets the build's parallelism.
+# --nthreads 1 and 2, also with --wavefront (each pair the same pixels, byte for byte), and with
+# "independent" (check_smoke.py: dpc's mean within noise of a 1024-spp reference); an unknown
+# model (pbrt's error, libdpc's message); pbrt_test's sampler tests and its analytic-scene tests
+# of dpc. Any failure exits nonzero. JOBS (default 2) sets the build's parallelism.
 set -euo pipefail
 HERE=$(cd "$(dirname "$0")" && pwd)
 ROOT=$(cd "$HERE/../.." && pwd)
@@ -45,7 +46,7 @@ $NICE cmake --build "$BUILD_DIR/build" -j "$JOBS" --target pbrt_exe imgtool pbrt
 PBRT=$BUILD_DIR/build/pbrt
 IMGTOOL=$BUILD_DIR/build/imgtool
 
-step "smoke scene: dpc (1 and 2 threads), independent (two seeds), reference (independent, 256 spp)"
+step "smoke scene: dpc (1 and 2 threads, also --wavefront), independent (two seeds), reference (independent, 1024 spp)"
 OUT=$BUILD_DIR/smoke
 mkdir -p "$OUT"
 render() { # name, then pbrt's arguments
@@ -57,15 +58,19 @@ render() { # name, then pbrt's arguments
 }
 render dpc --nthreads 2 "$HERE/scenes/smoke-dpc.pbrt"
 render dpc-1thread --nthreads 1 "$HERE/scenes/smoke-dpc.pbrt"
+render dpc-wavefront --wavefront --nthreads 2 "$HERE/scenes/smoke-dpc.pbrt"
+render dpc-wavefront-1thread --wavefront --nthreads 1 "$HERE/scenes/smoke-dpc.pbrt"
 render independent-0 --nthreads 2 --seed 0 "$HERE/scenes/smoke-independent.pbrt"
 render independent-1 --nthreads 2 --seed 1 "$HERE/scenes/smoke-independent.pbrt"
-render reference --nthreads 2 --seed 2 --spp 256 "$HERE/scenes/smoke-independent.pbrt"
+render reference --nthreads 2 --seed 2 --spp 1024 "$HERE/scenes/smoke-independent.pbrt"
 # the EXR's header holds the render time, so the pixels are compared (PFM: nothing but pixels)
-if cmp "$OUT/dpc.pfm" "$OUT/dpc-1thread.pfm"; then
-  echo "dpc, --nthreads 1 and --nthreads 2: the same pixels ($(stat -c %s "$OUT/dpc.pfm") bytes of PFM)"
-else
-  echo "dpc's image differs between --nthreads 1 and --nthreads 2"; exit 1
-fi
+for mode in dpc dpc-wavefront; do
+  if cmp "$OUT/$mode.pfm" "$OUT/$mode-1thread.pfm"; then
+    echo "$mode, --nthreads 1 and --nthreads 2: the same pixels ($(stat -c %s "$OUT/$mode.pfm") bytes of PFM)"
+  else
+    echo "$mode: the image differs between --nthreads 1 and --nthreads 2"; exit 1
+  fi
+done
 python3 "$HERE/check_smoke.py" "$OUT"
 # a bad model is pbrt's ErrorExit with libdpc's message
 sed -e 's/"bnot-2d-stratified"/"no-such-model"/' -e "s#Include \"smoke.pbrt\"#Include \"$HERE/scenes/smoke.pbrt\"#" \
@@ -77,17 +82,17 @@ grep 'dpc sampler: model "no-such-model"' "$OUT/bad.log"
 
 step "pbrt_test: the sampler tests (dpc in Sampler.ConsistentValues, DPCSampler.ElementaryIntervals)"
 cd "$BUILD_DIR/build"
-./pbrt_test --gtest_filter='Sampler.*:*ElementaryIntervals*' 2>&1 | tee "$BUILD_DIR/pbrt_test-samplers.log" | tail -5
+./pbrt_test --test-filter='Sampler.*:*ElementaryIntervals*' 2>&1 | tee "$BUILD_DIR/pbrt_test-samplers.log" | tail -5
 grep -q '^\[  PASSED  \] [1-9]' "$BUILD_DIR/pbrt_test-samplers.log" && ! grep -q FAILED "$BUILD_DIR/pbrt_test-samplers.log" \
   || { echo "pbrt_test's sampler tests failed"; exit 1; }
 grep -q '^\[       OK \] DPCSampler.ElementaryIntervals' "$BUILD_DIR/pbrt_test-samplers.log" \
   || { echo "DPCSampler.ElementaryIntervals did not run"; exit 1; }
 
 step "pbrt_test: the analytic scenes rendered with dpc (AnalyticTestScenes, the dpc entries)"
-DPC_CASES=$(./pbrt_test --gtest_list_tests --gtest_filter='AnalyticTestScenes/*' \
+DPC_CASES=$(./pbrt_test --list-tests --test-filter='AnalyticTestScenes/*' \
   | awk '/RadianceMatches\/[0-9]+ .*, dpc, / {print "AnalyticTestScenes/RenderTest." $1}' | paste -sd: -)
 [ -n "$DPC_CASES" ] || { echo "no analytic-scene test uses dpc"; exit 1; }
-$NICE ./pbrt_test --gtest_filter="$DPC_CASES" 2>&1 | tee "$BUILD_DIR/pbrt_test-analytic.log" | tail -5
+$NICE ./pbrt_test --nthreads "$JOBS" --test-filter="$DPC_CASES" 2>&1 | tee "$BUILD_DIR/pbrt_test-analytic.log" | tail -5
 grep -q '^\[  PASSED  \] [1-9]' "$BUILD_DIR/pbrt_test-analytic.log" && ! grep -q FAILED "$BUILD_DIR/pbrt_test-analytic.log" \
   || { echo "pbrt_test's analytic scenes with dpc failed"; exit 1; }
 
