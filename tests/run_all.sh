@@ -112,7 +112,7 @@ step "C thread tests, TSan"
 cmake -S . -B build/test-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DDPC_BUILD_TESTS=ON -DDPC_SANITIZE=thread >/dev/null
 # Only the test programs that hold thread tests (the ctest filter below): TSan builds are slow.
 cmake --build build/test-tsan -j "$JOBS" --target dpc_test_api dpc_test_generate dpc_test_input dpc_test_layer_train \
-      dpc_test_sampler dpc_test_plan dpc_test_mask
+      dpc_test_sampler dpc_test_plan dpc_test_mask dpc_test_pbrt_map
 # setarch -R: TSan's shadow memory needs a fixed layout on kernels with large mmap randomisation.
 TSAN_OPTIONS=halt_on_error=1 setarch "$(uname -m)" -R bash -c "cd build/test-tsan && ctest --output-on-failure -R '[Tt]hread' 2>&1" | tee build/tsan.log
 grep -Eq '^100% tests passed(, 0 tests failed)? out of [1-9]' build/tsan.log || { echo "TSan thread tests failed or ran none"; exit 1; }
