@@ -542,8 +542,8 @@ def ratio_section(res: dict) -> list[str]:
         if any(w.startswith("pmj02bn") and " 4 spp" in w for w in worse):
             L.append(
                 "PMJ02BN at 4 spp, likely: its Get1D returns (index + delta)/spp with one blue-noise delta per "
-                "pixel and dimension, so a pixel's 4 wavelength samples lie 1/4 apart, the period of pbrt's "
-                "wavelength sampling (" + WAVELENGTH_NOTE.split(", so ")[0] + "): all four see the same "
+                "pixel and dimension, so a pixel's 4 wavelength samples lie exactly 1/4 apart, and pbrt "
+                "draws its four wavelengths at u, u + 1/4, u + 1/2, u + 3/4: all four samples see the same "
                 "wavelengths. Any table would do this (the regenerated ones give delta its values)."
             )
     else:
@@ -580,9 +580,24 @@ def page(res: dict, checks, figs, command: str) -> str:
         if not ok:
             causes.setdefault(cause, []).append(g.replace(": dpc", ":"))
     if causes:
-        L += ["Likely causes of the misses (not tested one by one here; nothing was tuned to pass):", ""]
+        L += [
+            "Likely causes of the misses (the diagnostics section tests the fold; the others are not tested "
+            "one by one here; nothing was tuned to pass):",
+            "",
+        ]
         L += [f"- {cause[0].upper() + cause[1:]}. Misses: {'; '.join(gs)}." for cause, gs in causes.items()]
         L.append("")
+    times = {
+        name: [s["rows"][name][256]["time"] / s["rows"]["independent"][256]["time"] for s in res["scenes"].values()]
+        for name in samplers
+    }
+    L += [
+        "Render time at 256 spp over independent's (pbrt process wall clock, median over seeds; range over "
+        "the scenes): "
+        + "; ".join(f"{n} x{min(t):.2f}-{max(t):.2f}" for n, t in times.items() if n != "independent")
+        + ".",
+        "",
+    ]
     L += ratio_section(res)
     L += variant_section(res)
     L += [
