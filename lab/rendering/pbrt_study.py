@@ -129,6 +129,12 @@ def parse_function_mse(text: str) -> dict[int, float]:
     return out
 
 
+def miss_percent(r: float) -> str:
+    """How far a ratio above 1 misses, in percent (one decimal below 10%)."""
+    m = 100 * (r - 1)
+    return f"{m:.1f}%" if m < 10 else f"{m:.0f}%"
+
+
 def verdict(r: float, se: float) -> str:
     """A ratio's words: for one above 1, whether it is more than two standard errors above."""
     if r <= 1:
@@ -434,7 +440,7 @@ def goals(scenes: dict) -> list[tuple[str, bool, str, str]]:
                 text = f"{d['mse']:.3e} vs {b['mse']:.3e} ({verdict(r, se)})"
                 cause = ""
                 if r > 1:
-                    text += f"; miss by {100 * (r - 1):.0f}%"
+                    text += f"; miss by {miss_percent(r)}"
                     cause = mse_cause(scene, spp, other)
                 out.append((f"{scene}, {spp} spp: dpc MSE <= {other}'s", r <= 1, text, cause))
         for spp in ELOW_GOAL_SPP:
@@ -443,7 +449,7 @@ def goals(scenes: dict) -> list[tuple[str, bool, str, str]]:
             text = f"{d['elow']:.3f} vs {b['elow']:.3f} ({verdict(r, se)})"
             cause = ""
             if r > 1:
-                text += f"; miss by {100 * (r - 1):.0f}%"
+                text += f"; miss by {miss_percent(r)}"
                 cause = elow_cause(spp)
             out.append((f"{scene}, {spp} spp: dpc E_low <= zsobol's", r <= 1, text, cause))
     return out
