@@ -135,8 +135,25 @@ TEST(ModelFind, SkipsEverythingButRegularFilesWithoutOpeningThem) {
     EXPECT_STREQ(path, "");
     EXPECT_NE(std::string(dpc_last_error()).find("no regular file model_2d.onnx"), std::string::npos)
         << dpc_last_error();
+    { // the message lists the models the search could find: the FIFO, the folder and the dangling link are none
+        const std::string msg = dpc_last_error(), marker = "; models there: ";
+        const size_t at = msg.find(marker);
+        ASSERT_NE(at, std::string::npos) << msg;
+        const std::string listed = msg.substr(at + marker.size());
+        for (const char *skipped : {"model_2d", "model_3d_proj", "model_10d"})
+            EXPECT_EQ(listed.find(skipped), std::string::npos) << skipped << " in " << msg;
+    }
     EXPECT_EQ(dpc_model_find("no-such-model", path, sizeof path), DPC_ERROR_IO);
     EXPECT_STREQ(path, "");
+    setenv("DPC_MODEL_PATH", (dir + ":" + data).c_str(), 1); // the test models listed, sorted, each once
+    EXPECT_EQ(dpc_model_find("no-such-model", path, sizeof path), DPC_ERROR_IO);
+    {
+        const std::string msg = dpc_last_error();
+        const size_t a = msg.find("model_10d, "), b = msg.find("model_2d, "), c = msg.find("model_3d_proj");
+        EXPECT_TRUE(a != std::string::npos && b != std::string::npos && c != std::string::npos && a < b && b < c)
+            << msg;
+        EXPECT_EQ(msg.find("model_2d, ", b + 1), std::string::npos) << msg; // once, though two folders were read
+    }
 
     setenv("DPC_MODEL_PATH", data.c_str(), 1);
     char small[8] = "x";

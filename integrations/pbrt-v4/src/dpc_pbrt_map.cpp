@@ -24,25 +24,6 @@ std::vector<std::string> split(const std::string &s, char sep) {
     return out;
 }
 
-// The names the model search finds in the installed models folder (dpc_model_dir()), for the
-// message about an unknown name.
-std::string bundled() {
-    std::vector<std::string> names;
-    const std::string dir = dpc_model_dir();
-    std::error_code ec;
-    if (!dir.empty())
-        for (const auto &entry : std::filesystem::directory_iterator(dir, ec)) {
-            const std::string file = entry.path().filename().string();
-            if (file.size() > 5 && file[0] != '.' && file.compare(file.size() - 5, 5, ".onnx") == 0 &&
-                entry.is_regular_file(ec))
-                names.push_back(file.substr(0, file.size() - 5));
-        }
-    std::sort(names.begin(), names.end());
-    std::string out;
-    for (const std::string &n : names) out += (out.empty() ? "" : ", ") + n;
-    return out.empty() ? "(none)" : out;
-}
-
 // One model: a path as it is, a name through dpc_model_find. Null and a message on failure.
 dpc_model *load(const std::string &spec, const dpc_load_options &options, std::string &error) {
     dpc_model *model = nullptr;
@@ -54,7 +35,7 @@ dpc_model *load(const std::string &spec, const dpc_load_options &options, std::s
     }
     std::vector<char> found(DPC_PATH_MAX);
     if (dpc_model_find(spec.c_str(), found.data(), found.size()) != DPC_OK) {
-        error = std::string(dpc_last_error()) + "; bundled: " + bundled();
+        error = dpc_last_error(); // names the folders searched and the models there
         return nullptr;
     }
     if (dpc_model_load_file(found.data(), &options, &model) != DPC_OK) error = dpc_last_error();

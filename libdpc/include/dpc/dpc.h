@@ -195,7 +195,8 @@ DPC_API dpc_status dpc_model_load_named(const char *name, const dpc_load_options
  * characters of [A-Za-z0-9._-], not starting with '.' (so it never names a path), else
  * DPC_ERROR_INVALID_ARGUMENT. On success out_path holds the file's path (capacity bytes, the
  * terminating NUL included: DPC_PATH_MAX always suffices; less than the path needs gives
- * DPC_ERROR_LIMIT); DPC_ERROR_IO with the folders searched when there is no such file.
+ * DPC_ERROR_LIMIT); DPC_ERROR_IO when there is no such file, its message naming the folders
+ * searched and the models they hold (the names this search finds, sorted; the first 256 read).
  * out_path is "" on failure. The Python package (dpc.load) and its Mitsuba plugin use this
  * search. */
 DPC_API dpc_status dpc_model_find(const char *name, char *out_path, size_t capacity);

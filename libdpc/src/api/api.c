@@ -2,6 +2,7 @@
  * status with a message, and hands valid requests to the model layer (model/: the reader, the
  * input points, the plan) and to the backend the handle was loaded for (cpu/, vulkan/). */
 #define _GNU_SOURCE /* dladdr: where this library lies, for dpc_model_dir() */
+#include <dirent.h>
 #include <dlfcn.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -273,21 +274,93 @@ static int named_file(const char *dir, size_t dir_len, const char *name, char *b
     return stat(buf, &info) == 0 && S_ISREG(info.st_mode);
 }
 
+/* The index of name's first character outside [A-Za-z0-9._-], or len when there is none. */
+static size_t bad_character(const char *name, size_t len) {
+    for (size_t i = 0; i < len; i++) {
+        const char ch = name[i];
+        if (!((ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') || (ch >= '0' && ch <= '9') || ch == '-' ||
+              ch == '_' || ch == '.'))
+            return i;
+    }
+    return len;
+}
+
+/* Whether the len bytes at name are a model name: 1 .. 255 characters of [A-Za-z0-9._-], not
+ * starting with '.'. */
+static int valid_name(const char *name, size_t len) {
+    return len > 0 && len <= 255 && name[0] != '.' && bad_character(name, len) == len;
+}
+
+#define LISTED_NAMES_MAX 256 /* names a failed search lists; a folder may hold any number of files */
+
+static int compare_names(const void *a, const void *b) {
+    return strcmp(*(const char *const *)a, *(const char *const *)b);
+}
+
+/* The names of the regular files NAME.onnx in one folder (dir_len bytes of dir), added to names. */
+static void collect_names(const char *dir, size_t dir_len, char **names, size_t *count) {
+    char path[DPC_PATH_MAX];
+    if (dir_len == 0 || dir_len >= sizeof path) return;
+    memcpy(path, dir, dir_len);
+    path[dir_len] = '\0';
+    DIR *d = opendir(path);
+    if (!d) return;
+    for (const struct dirent *e; *count < LISTED_NAMES_MAX && (e = readdir(d));) {
+        const size_t len = strlen(e->d_name);
+        if (len <= 5 || strcmp(e->d_name + len - 5, ".onnx") != 0 || !valid_name(e->d_name, len - 5)) continue;
+        char name[256];
+        memcpy(name, e->d_name, len - 5);
+        name[len - 5] = '\0';
+        if (!named_file(dir, dir_len, name, path, sizeof path)) continue; /* a FIFO, a folder, ...: skipped */
+        char *copy = (char *)malloc(len - 4);
+        if (!copy) break;
+        memcpy(copy, name, len - 4);
+        names[(*count)++] = copy;
+    }
+    closedir(d);
+}
+
+/* The names the search could find (every folder it reads), sorted, each once, joined by ", " into
+ * out; "(none)" when there are none. For the message of a failed search: every client (dpc.load,
+ * the Mitsuba and pbrt-v4 samplers) then shows the same list. */
+static void list_names(const char *env, const char *dir, char *out, size_t cap) {
+    char *names[LISTED_NAMES_MAX];
+    size_t count = 0;
+    for (const char *p = env; p;) {
+        const char *end = strchr(p, ':');
+        collect_names(p, end ? (size_t)(end - p) : strlen(p), names, &count);
+        p = end ? end + 1 : NULL;
+    }
+    collect_names(dir, strlen(dir), names, &count);
+    qsort(names, count, sizeof names[0], compare_names);
+    size_t used = 0;
+    out[0] = '\0';
+    for (size_t i = 0; i < count; i++) {
+        if (i > 0 && strcmp(names[i], names[i - 1]) == 0) continue;
+        const int n = snprintf(out + used, cap - used, "%s%s", used ? ", " : "", names[i]);
+        if (n < 0 || (size_t)n >= cap - used) {
+            out[used] = '\0';
+            if (used + 5 < cap) snprintf(out + used, cap - used, ", ...");
+            break;
+        }
+        used += (size_t)n;
+    }
+    if (!out[0]) snprintf(out, cap, "(none)");
+    for (size_t i = 0; i < count; i++) free(names[i]);
+}
+
 /* A model name: 1 .. 255 characters of [A-Za-z0-9._-], not starting with '.'. */
 static dpc_status check_name(const char *name) {
     const size_t len = strlen(name);
     if (len == 0 || len > 255 || name[0] == '.')
         return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
                         "model name '%.300s' must be 1 .. 255 characters, not starting with '.'", name);
-    for (size_t i = 0; i < len; i++) {
-        const char ch = name[i];
-        if (!((ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') || (ch >= '0' && ch <= '9') || ch == '-' ||
-              ch == '_' || ch == '.'))
-            return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
-                            "model name '%.300s' has character %zu outside [A-Za-z0-9._-] (give a path to "
-                            "dpc_model_load_file instead)",
-                            name, i);
-    }
+    const size_t i = bad_character(name, len);
+    if (i < len)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
+                        "model name '%.300s' has character %zu outside [A-Za-z0-9._-] (give a path to "
+                        "dpc_model_load_file instead)",
+                        name, i);
     return DPC_OK;
 }
 
@@ -309,10 +382,14 @@ dpc_status dpc_model_find(const char *name, char *out_path, size_t capacity) {
     }
     const char *dir = dpc_model_dir();
     if (!found) found = named_file(dir, strlen(dir), name, path, sizeof path);
-    if (!found)
+    if (!found) {
+        char names[2048];
+        list_names(env, dir, names, sizeof names);
         return dpc_fail(DPC_ERROR_IO,
-                        "no model named '%s': no regular file %s.onnx in DPC_MODEL_PATH (%.1000s) or in %s", name, name,
-                        env ? env : "unset", dir[0] ? dir : "(this build installs no models)");
+                        "no model named '%s': no regular file %s.onnx in DPC_MODEL_PATH (%.1000s) or in %.1000s; "
+                        "models there: %s",
+                        name, name, env ? env : "unset", dir[0] ? dir : "(this build installs no models)", names);
+    }
     const size_t len = strlen(path);
     if (len >= capacity)
         return dpc_fail(DPC_ERROR_LIMIT,

@@ -3,8 +3,9 @@
 #include <stdarg.h>
 #include <stdio.h>
 
-/* C11 thread-local storage: one message per thread, no locking, nothing to free. */
-static _Thread_local char g_message[512];
+/* C11 thread-local storage: one message per thread, no locking, nothing to free. Room for the
+ * longest message, the model search's (its folders and the names it could find). */
+static _Thread_local char g_message[4096];
 
 dpc_status dpc_fail(dpc_status status, const char *fmt, ...) {
     va_list args;

@@ -42,27 +42,6 @@ inline std::vector<std::string> split(const std::string &s, char sep) {
     return out;
 }
 
-// The models a name can find in the package (NAME.onnx regular files in dpc_model_dir()), for
-// the unknown-model message, as dpc.load lists them.
-inline std::string bundled() {
-    std::vector<std::string> names;
-    const std::string dir = dpc_model_dir();
-    if (DIR *d = dir.empty() ? nullptr : opendir(dir.c_str())) {
-        while (const dirent *e = readdir(d)) {
-            const std::string file = e->d_name;
-            struct stat info;
-            if (file.size() > 5 && file[0] != '.' && file.compare(file.size() - 5, 5, ".onnx") == 0 &&
-                stat((dir + "/" + file).c_str(), &info) == 0 && S_ISREG(info.st_mode))
-                names.push_back(file.substr(0, file.size() - 5));
-        }
-        closedir(d);
-    }
-    std::sort(names.begin(), names.end());
-    std::string out;
-    for (const std::string &n : names) out += (out.empty() ? "" : ", ") + n;
-    return out.empty() ? "(none)" : out;
-}
-
 // Load one model of the "model" property: a path (with a '/' or ending in ".onnx") as it is, a
 // name through libdpc's model search (dpc_model_find: $DPC_MODEL_PATH's folders, then the
 // package's; regular files only, never opened while searching), the one dpc.load uses. A
@@ -77,7 +56,7 @@ inline dpc_model *load(const std::string &spec, std::string &error) {
     }
     std::vector<char> found(DPC_PATH_MAX);
     if (dpc_model_find(spec.c_str(), found.data(), found.size()) != DPC_OK) {
-        error = std::string(dpc_last_error()) + "; bundled: " + bundled();
+        error = dpc_last_error(); // names the folders searched and the models there
         return nullptr;
     }
     if (dpc_model_load_file(found.data(), nullptr, &h) != DPC_OK) error = dpc_last_error();
