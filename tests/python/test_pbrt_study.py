@@ -84,7 +84,7 @@ def test_goals_meet_and_miss():
     ok, text = by["a, 64 spp: dpc MSE <= paddedsobol's"]
     assert not ok and "miss by 100%" in text and "more than 2 standard errors" in text
     ok, text = by["a, 16 spp: dpc MSE <= paddedsobol's"]
-    assert not ok and "folded" in text  # below 32 spp the cause names the fold
+    assert not ok and "the fold of the slots" in text  # below 32 spp the cause names the fold
     ok, text = by["a, 1 spp: dpc E_low <= zsobol's"]
     assert ok and "likely" not in text  # a met goal names no cause
     scenes["a"]["rows"]["dpc"] = rows(1.0, 2.0)
