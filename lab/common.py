@@ -38,7 +38,7 @@ REF_SPP = 8192
 def report_header(command: str) -> list[str]:
     """The lines under a report page's title: what made it, on which machine."""
     return [
-        f"> Measurements, not the manual: made by `{command}` on {cpu_name()}. "
+        f"> Measurements, not the manual: made by `{command}`; machine: {cpu_name()}. "
         "The manual is [docs/](../architecture.md).",
         "",
     ]
