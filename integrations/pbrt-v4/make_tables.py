@@ -14,7 +14,7 @@ declarations in ``pmj02tables.h`` and ``bluenoise.h``:
 
 These are regenerated tables, not the ones pbrt-v4 publishes; numbers measured with them say so.
 
-    python integrations/pbrt-v4/make_tables.py /work/pbrt/src --pmj-cpp /work/pbrt/pmj-cpp
+    python integrations/pbrt-v4/make_tables.py PBRT_SRC --pmj-cpp PMJ_CPP_SRC
 """
 
 from __future__ import annotations

@@ -51,7 +51,8 @@ from lab.rendering.bench_rendering import low_band_energy
 PAGE = REPORTS / "pbrt.md"
 FIGS = REPORTS / "figures" / "pbrt"
 SCENE_DIR = Path(__file__).resolve().parent / "pbrt_scenes"
-DEFAULT_CACHE = Path("/work/pbrt/study-cache")
+PBRT_SHOWN = "BUILD_DIR/build/pbrt"
+DEFAULT_CACHE = ROOT / "build" / "pbrt-study"  # ignored by git
 
 SAMPLERS = ["independent", "stratified", "halton", "sobol", "paddedsobol", "zsobol", "pmj02bn", "dpc"]
 # the Mitsuba plugin's default model (python/dpc/mitsuba), named explicitly
@@ -561,8 +562,9 @@ def page(res: dict, checks, figs, command: str) -> str:
     L = ["# pbrt-v4: dpc's sampler against pbrt's samplers", "", *report_header(command)]
     L += [
         f'pbrt-v4 commit {res["pbrt_commit"]} with dpc\'s `Sampler "dpc"` (integrations/pbrt-v4/; model '
-        f"`{DPC_MODEL}`, the Mitsuba plugin's default; the other parameters at their defaults), binary "
-        f"`{res['pbrt']}`, {res['nthreads']} threads under `nice -n 10`, on {res['cpu']}. The renders of this "
+        f"`{DPC_MODEL}`, the Mitsuba plugin's default; the other parameters at their defaults), "
+        f"`{PBRT_SHOWN}` a pbrt built by `bash integrations/pbrt-v4/run.sh PBRT_SRC BUILD_DIR`, "
+        f"{res['nthreads']} threads under `nice -n 10`, on {res['cpu']}. The renders of this "
         f"page's cells took {res['render_minutes']:.1f} minutes of wall clock (pbrt processes, the references "
         "not counted).",
         "",
@@ -684,7 +686,12 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--pbrt-commit", default="5f7a6068", help="the pbrt-v4 commit the binary was built from")
     ap.add_argument("--cache", type=Path, default=DEFAULT_CACHE, help="references and per-render results")
     ap.add_argument("--models", type=Path, default=ROOT / "models", help="DPC_MODEL_PATH for pbrt")
-    ap.add_argument("--dpc-prefix", type=Path, default=Path("/work/pbrt/dpc-prefix"), help="libdpc's install")
+    ap.add_argument(
+        "--dpc-prefix",
+        type=Path,
+        default=None,
+        help="libdpc's install (default: run.sh's layout, BUILD_DIR/dpc-prefix beside BUILD_DIR/build/pbrt)",
+    )
     ap.add_argument("--samplers", default=",".join(SAMPLERS), help="a subset, comma-separated (testing)")
     ap.add_argument("--skip-functions", action="store_true")
     ap.add_argument(
@@ -696,14 +703,19 @@ def main(argv: list[str] | None = None) -> None:
     samplers = [s for s in args.samplers.split(",") if s]
     exe = args.pbrt.resolve()
     env = dict(os.environ, DPC_MODEL_PATH=str(args.models))
-    lib = args.dpc_prefix / "lib"
+    prefix = args.dpc_prefix or args.pbrt.absolute().parent.parent / "dpc-prefix"
+    lib = prefix / "lib"
     if lib.is_dir():
         env["LD_LIBRARY_PATH"] = f"{lib}:{env['LD_LIBRARY_PATH']}" if env.get("LD_LIBRARY_PATH") else str(lib)
     args.cache.mkdir(parents=True, exist_ok=True)
     cache = Cache(args.cache / "results.json")
     st = exe.stat()
     tag = hashlib.sha256(f"{exe}|{st.st_size}|{st.st_mtime_ns}".encode()).hexdigest()[:12]
-    command = "python -m lab.rendering.pbrt_study " + shlex.join(sys.argv[1:] if argv is None else argv)
+    given = list(sys.argv[1:] if argv is None else argv)
+    # the page names no machine's paths: the binary is whatever run.sh built there
+    shown = [PBRT_SHOWN if i > 0 and given[i - 1] == "--pbrt" else a for i, a in enumerate(given)]
+    shown = [f"--pbrt={PBRT_SHOWN}" if a.startswith("--pbrt=") else a for a in shown]
+    command = "python -m lab.rendering.pbrt_study " + shlex.join(shown)
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="pbrt-study-") as tmp:
         pb = Pbrt(exe, args.nthreads, env, Path(tmp))
