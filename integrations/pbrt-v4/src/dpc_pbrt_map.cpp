@@ -1,11 +1,8 @@
 // dpc_pbrt_map.cpp: see dpc_pbrt_map.h.
 #include "dpc_pbrt_map.h"
 
-#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
-#include <filesystem>
-#include <system_error>
 #include <vector>
 
 namespace dpc_pbrt {
@@ -24,21 +21,15 @@ std::vector<std::string> split(const std::string &s, char sep) {
     return out;
 }
 
-// One model: a path as it is, a name through dpc_model_find. Null and a message on failure.
+// One model: a path as it is, a name through libdpc's model search (dpc_model_load_named). Null
+// and a message on failure (for an unknown name libdpc's message lists the models it finds).
 dpc_model *load(const std::string &spec, const dpc_load_options &options, std::string &error) {
     dpc_model *model = nullptr;
     const bool path =
         spec.find('/') != std::string::npos || (spec.size() > 5 && spec.compare(spec.size() - 5, 5, ".onnx") == 0);
-    if (path) {
-        if (dpc_model_load_file(spec.c_str(), &options, &model) != DPC_OK) error = dpc_last_error();
-        return model;
-    }
-    std::vector<char> found(DPC_PATH_MAX);
-    if (dpc_model_find(spec.c_str(), found.data(), found.size()) != DPC_OK) {
-        error = dpc_last_error(); // names the folders searched and the models there
-        return nullptr;
-    }
-    if (dpc_model_load_file(found.data(), &options, &model) != DPC_OK) error = dpc_last_error();
+    const dpc_status st = path ? dpc_model_load_file(spec.c_str(), &options, &model)
+                               : dpc_model_load_named(spec.c_str(), &options, &model);
+    if (st != DPC_OK) error = dpc_last_error();
     return model;
 }
 

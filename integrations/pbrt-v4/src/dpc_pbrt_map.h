@@ -45,8 +45,8 @@ struct Config {
 using SharedSampler = std::shared_ptr<const dpc_sampler>;
 
 // Loads the models, makes the dpc_sampler and frees the models. On failure: null, and `error`
-// says why (the parameter, or the model and libdpc's message; for an unknown name, the bundled
-// models).
+// says why (the parameter, or the model and libdpc's message; for an unknown name it lists the
+// models the search finds).
 SharedSampler make_sampler(const Config &config, std::string &error);
 
 // One line describing a config (for pbrt's ToString).

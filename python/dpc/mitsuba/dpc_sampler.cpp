@@ -13,13 +13,9 @@
 // and with the 32-pixel mask tile dividing the block size (32 unless the integrator's
 // block_size says otherwise) the mask tiles seamlessly across blocks without knowing where a
 // block lies in the image.
-#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <dirent.h>
-#include <sys/stat.h>
 
 #include <mitsuba/core/properties.h>
 #include <mitsuba/render/sampler.h>
@@ -43,23 +39,17 @@ inline std::vector<std::string> split(const std::string &s, char sep) {
 }
 
 // Load one model of the "model" property: a path (with a '/' or ending in ".onnx") as it is, a
-// name through libdpc's model search (dpc_model_find: $DPC_MODEL_PATH's folders, then the
+// name through libdpc's model search (dpc_model_load_named: $DPC_MODEL_PATH's folders, then the
 // package's; regular files only, never opened while searching), the one dpc.load uses. A
-// FIFO or device is refused at once by dpc_model_load_file. nullptr and a message on failure.
+// FIFO or device is refused at once by dpc_model_load_file. nullptr and a message on failure
+// (for an unknown name libdpc's message lists the models the search finds).
 inline dpc_model *load(const std::string &spec, std::string &error) {
     dpc_model *h = nullptr;
     const bool path =
         spec.find('/') != std::string::npos || (spec.size() > 5 && spec.compare(spec.size() - 5, 5, ".onnx") == 0);
-    if (path) {
-        if (dpc_model_load_file(spec.c_str(), nullptr, &h) != DPC_OK) error = dpc_last_error();
-        return h;
-    }
-    std::vector<char> found(DPC_PATH_MAX);
-    if (dpc_model_find(spec.c_str(), found.data(), found.size()) != DPC_OK) {
-        error = dpc_last_error(); // names the folders searched and the models there
-        return nullptr;
-    }
-    if (dpc_model_load_file(found.data(), nullptr, &h) != DPC_OK) error = dpc_last_error();
+    const dpc_status st =
+        path ? dpc_model_load_file(spec.c_str(), nullptr, &h) : dpc_model_load_named(spec.c_str(), nullptr, &h);
+    if (st != DPC_OK) error = dpc_last_error();
     return h;
 }
 
