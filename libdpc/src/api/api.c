@@ -308,21 +308,17 @@ static void collect_names(const char *dir, size_t dir_len, char **names, size_t 
     for (const struct dirent *e; *count < LISTED_NAMES_MAX && (e = readdir(d));) {
         const size_t len = strlen(e->d_name);
         if (len <= 5 || strcmp(e->d_name + len - 5, ".onnx") != 0 || !valid_name(e->d_name, len - 5)) continue;
-        char name[256];
-        memcpy(name, e->d_name, len - 5);
-        name[len - 5] = '\0';
-        if (!named_file(dir, dir_len, name, path, sizeof path)) continue; /* a FIFO, a folder, ...: skipped */
-        char *copy = (char *)malloc(len - 4);
-        if (!copy) break;
-        memcpy(copy, name, len - 4);
-        names[(*count)++] = copy;
+        char *name = strndup(e->d_name, len - 5);
+        if (!name) break;
+        if (named_file(dir, dir_len, name, path, sizeof path)) names[(*count)++] = name;
+        else free(name); /* a FIFO, a folder, ...: skipped */
     }
     closedir(d);
 }
 
 /* The names the search could find (every folder it reads), sorted, each once, joined by ", " into
- * out; "(none)" when there are none. For the message of a failed search: every client (dpc.load,
- * the Mitsuba and pbrt-v4 samplers) then shows the same list. */
+ * out; "(none)" when there are none. For the message of a failed search, so that C clients (the
+ * Mitsuba and pbrt-v4 samplers) show the list without reading the folders themselves. */
 static void list_names(const char *env, const char *dir, char *out, size_t cap) {
     char *names[LISTED_NAMES_MAX];
     size_t count = 0;
