@@ -35,6 +35,12 @@ CACHE = ROOT / "build" / "bench-rendering"
 REF_SPP = 8192
 
 
+def ratio_se(a: float, a_se: float, b: float, b_se: float) -> tuple[float, float]:
+    """a / b and its standard error for independent estimates (first-order propagation)."""
+    r = a / b
+    return r, r * float(np.hypot(a_se / a, b_se / b))
+
+
 def report_header(command: str) -> list[str]:
     """The lines under a report page's title: what made it, on which machine."""
     return [

@@ -28,7 +28,18 @@ import time
 
 import numpy as np
 
-from lab.common import CACHE, DIRECT_SCENES, REF_SPP, ROOT, SCENES, cpu_name, reference, render, replace_section
+from lab.common import (
+    CACHE,
+    DIRECT_SCENES,
+    REF_SPP,
+    ROOT,
+    SCENES,
+    cpu_name,
+    ratio_se,
+    reference,
+    render,
+    replace_section,
+)
 
 DOC = ROOT / "docs" / "rendering.md"
 FIGS = ROOT / "docs" / "figures" / "rendering"
@@ -141,16 +152,10 @@ def run(args) -> dict:
     return results
 
 
-def ratio_se(a: dict, b: dict) -> float:
-    """Standard error of mean(a) / mean(b) for independent seeds (first-order propagation)."""
-    r = a["mse"] / b["mse"]
-    return r * float(np.hypot(a["mse_se"] / a["mse"], b["mse_se"] / b["mse"]))
-
-
 def mse_verdict(d: dict, b: dict) -> str:
     """dpc's MSE over the other's, with its standard error and, for a miss, whether 1 lies within
     two standard errors (a miss not shown to be real at this many seeds)."""
-    r, se = d["mse"] / b["mse"], ratio_se(d, b)
+    r, se = ratio_se(d["mse"], d["mse_se"], b["mse"], b["mse_se"])
     note = ""
     if r > 1:
         note = "; within 2 standard errors of 1" if r - 1 <= 2 * se else "; more than 2 standard errors above 1"

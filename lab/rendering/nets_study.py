@@ -65,7 +65,7 @@ def main() -> None:
                     }
                 )
             a, b = stats
-            r, se = b["mse"] / a["mse"], br.ratio_se(b, a)
+            r, se = common.ratio_se(b["mse"], b["mse_se"], a["mse"], a["mse_se"])
             line = (
                 f"| {scene} | {spp} | {a['mse']:.3e} | {b['mse']:.3e} | x{r:.3f} ± {se:.3f} | "
                 f"{a['elow']:.3f} | {b['elow']:.3f} |"

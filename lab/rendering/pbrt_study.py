@@ -45,7 +45,7 @@ from pathlib import Path
 
 import numpy as np
 
-from lab.common import REPORTS, ROOT, cpu_name, report_header
+from lab.common import REPORTS, ROOT, cpu_name, ratio_se, report_header
 from lab.rendering.bench_rendering import low_band_energy
 
 PAGE = REPORTS / "pbrt.md"
@@ -112,12 +112,6 @@ def mean_se(values) -> tuple[float, float]:
     v = np.asarray(values, dtype=np.float64)
     se = float(v.std(ddof=1) / np.sqrt(len(v))) if len(v) > 1 else 0.0
     return float(v.mean()), se
-
-
-def ratio_se(a: float, a_se: float, b: float, b_se: float) -> tuple[float, float]:
-    """a / b and its standard error for independent estimates (first-order propagation)."""
-    r = a / b
-    return r, r * float(np.hypot(a_se / a, b_se / b))
 
 
 def parse_function_mse(text: str) -> dict[int, float]:
