@@ -6,8 +6,8 @@ Builds bench/bench_sampler.c in build/bench (Release) and measures, with bnot-2d
 dpc_sampler_create for (samples per pixel, dimensions) = (1, 16), (4, 16), (16, 16), (64, 16),
 (256, 16), (64, 64), (1024, 16); lookups in a renderer-style loop (256 x 256 pixels, every sample
 index up to 64, 8 dimensions): ns per dpc_sampler_get_2d / _get_1d value, median of 11 passes,
-with the default options (from 32 spp on every slot a net) and for get_2d with net_dims = 1 (the
-sets' lookup path in dimensions 1-7), and get_2d of dimension 0 alone (the net slot where spp is
+with the default options (every slot a net where spp is a power of two >= 2) and for get_2d with
+net_dims = 1 (the sets' lookup path in dimensions 1-7), and get_2d of dimension 0 alone (the net slot where spp is
 a power of two); the table memory. Goals of the sampler issue: 64 spp x 16 dimensions built in <= 1 s, <= 10 ns per 2-D
 value.
 """
@@ -33,11 +33,12 @@ def main() -> None:
         "",
         f"`python bench/bench_sampler.py` on {cpu}, one thread, `bnot-2d-stratified`. Construction: "
         "`dpc_sampler_create` (the model's cascade on the scalar path for every table that is not a net, then the "
-        "projections' ranks, and the nets where spp is a power of two >= 2: dimension 0's, and from "
-        "32 spp on every slot's), median over repeats. Lookups: ns per value in a renderer-style loop "
+        "projections' ranks, and the nets where spp is a power of two >= 2: by default every slot's), "
+        "median over repeats. Lookups: ns per value in a renderer-style loop "
         "(256 x 256 pixels, sample indices up to 64, 8 dimensions), median of 11 passes, with the "
         'default options; "get_2d, sets" with `net_dims = 1` (dimensions 1-7 on the sets\' path, '
-        "which the default takes below 32 spp); the last column is get_2d of dimension 0 alone "
+        "which the default takes at 1 spp and counts that are not powers of two); the last column is "
+        "get_2d of dimension 0 alone "
         "(the net slot, or at 1 spp the shifted set).",
         "",
         "| spp | dimensions | create (ms) | get_2d (ns) | get_1d (ns) | get_2d, sets (ns) | get_2d, dimension 0 (ns) "

@@ -263,11 +263,11 @@ TEST(PbrtMap, OptionsReachTheSampler) {
     EXPECT_EQ(info.fold_from, DPC_SAMPLER_NO_FOLD);
     EXPECT_EQ(info.net_slots, 0u);
     EXPECT_EQ(info.seed, 42u);
-    // the defaults: fold from slot 1, the film position a net at 16 spp
+    // the defaults: nothing folded, every slot a net at 16 spp
     SharedSampler d = make_default(16);
     ASSERT_EQ(dpc_sampler_get_info(d.get(), &info), DPC_OK);
-    EXPECT_EQ(info.fold_from, 1u);
-    EXPECT_EQ(info.net_slots, 1u);
+    EXPECT_EQ(info.fold_from, DPC_SAMPLER_NO_FOLD);
+    EXPECT_EQ(info.net_slots, 16u);
     EXPECT_EQ(info.dimensions, 16u);
     // two models by name, used in turn
     c.model = "bnot-2d-stratified,bnot-2d";

@@ -68,11 +68,11 @@ REF_SAMPLER = "zsobol"
 REF_SPP = 8192
 REF_SEEDS = (1000, 1001)
 FIG_SPP = (1, 4)
-# Diagnostics for the misses below 32 spp, not candidates: dpc with its documented switches
-# (docs/rendering.md), rendered at the goal counts below 32 spp and reported as they come.
+# Diagnostics below 32 spp, not candidates: dpc with its documented switches (docs/rendering.md):
+# blue-noise sets instead of nets in the slots after the pixel position, unfolded and folded.
 VARIANTS = {
-    "dpc nets everywhere": '"integer net_dims" 16',
-    "dpc no fold": '"integer fold_from" -1',
+    "dpc sets": '"integer net_dims" 1',
+    "dpc folded sets": '"integer net_dims" 1 "integer fold_from" 1',
 }
 VARIANT_SPP = [2, 4, 8, 16]
 
@@ -346,10 +346,11 @@ def variant_section(res: dict) -> list[str]:
     if not v:
         return []
     L = [
-        "## Diagnostics: dpc's switches below 32 spp",
+        "## Diagnostics: dpc's sets below 32 spp",
         "",
-        "Not candidates and not tuned: dpc with one documented switch changed (docs/rendering.md), "
-        "rendered with the same seeds, to see which part of the sampler a miss below 32 spp comes from. "
+        "Not candidates and not tuned: dpc with its documented switches (docs/rendering.md) set to "
+        "serve the slots after the pixel position with blue-noise sets, unfolded and folded, rendered "
+        "with the same seeds, to show what the default's nets in every slot gain or lose below 32 spp. "
         + "; ".join(f"`{n}`: `{VARIANTS[n]}`" for n in VARIANTS)
         + ". MSE over the default dpc's (below 1: the switch lowers the MSE) and, for scale, ZSobol's "
         "and PaddedSobol's MSE over the default dpc's.",
@@ -374,36 +375,18 @@ def variant_section(res: dict) -> list[str]:
 # goals
 
 
-FOLD_NOTE = (
-    "the diagnostics section renders dpc with no fold and with nets in every slot: no fold lowers dpc's "
-    "MSE at 8 and 16 spp and raises it at 2 and 4, so the fold, made for integrands that are not periodic "
-    "(docs/rendering.md, 'Folded dimensions'), is the lever below 32 spp; which of pbrt's slots it hurts "
-    "(the wavelength sample is slot 1, pbrt's light and BSDF samples follow) is not isolated here"
-)
-
-
 def mse_cause(scene: str, spp: int, other: str) -> str:
-    if spp < 32:
-        cause = (
-            "likely the fold of the slots after the pixel position (dpc's default below 32 spp, where "
-            "they are blue-noise sets): " + FOLD_NOTE
-        )
-        if other == "zsobol":
-            cause += (
-                "; besides, ZSobol stratifies all of a camera sample's dimensions jointly, while dpc pads "
-                "per-pair tables"
-            )
-        return cause
     if other == "zsobol":
         return (
             "likely the structure across dimensions: ZSobol draws one Owen-scrambled Sobol' point over all "
             "of a camera sample's dimensions (pbrt's wavelength Get1D, the pixel position, the light and "
-            "BSDF samples), so they are stratified jointly, while dpc pads per-pair tables whose pairing "
+            "BSDF samples), so they are stratified jointly, while dpc pads per-pair nets whose pairing "
             "across slots is a per-pixel rotation (docs/rendering.md, 'One dpc set per dimension')"
         )
     return (
-        "both pad Owen-scrambled nets from 32 spp on (dpc's shuffled and rotated per pixel), so a small "
-        "miss here is within what the pairing and the seeds' noise give (see the standard error)"
+        "both pad Owen-scrambled nets (dpc's one scramble per slot, digitally shifted, shuffled and "
+        "rotated per pixel; PaddedSobol's scrambled anew per pixel), so a small miss here is within what "
+        "the pairing and the seeds' noise give (see the standard error)"
     )
 
 
@@ -416,9 +399,9 @@ def elow_cause(spp: int) -> str:
             "dimensions against its neighbours' at once"
         )
     return (
-        "likely the net in the pixel position: at power-of-two counts below 32 dpc's slot 0 is an "
-        "Owen-scrambled net whose error is white across pixels (docs/rendering.md, 'what it costs'), "
-        "while ZSobol's Morton-ordered sample indices spread each pixel's samples against its neighbours'"
+        "likely the nets: at power-of-two counts dpc's slots are Owen-scrambled nets, digitally shifted "
+        "per pixel, whose error is white across pixels (docs/rendering.md, 'what it costs'), while "
+        "ZSobol's Morton-ordered sample indices spread each pixel's samples against its neighbours'"
     )
 
 
@@ -704,7 +687,11 @@ def main(argv: list[str] | None = None) -> None:
     args.cache.mkdir(parents=True, exist_ok=True)
     cache = Cache(args.cache / "results.json")
     st = exe.stat()
-    tag = hashlib.sha256(f"{exe}|{st.st_size}|{st.st_mtime_ns}".encode()).hexdigest()[:12]
+    libdpc = sorted(lib.glob("libdpc.so*")) if lib.is_dir() else []
+    # dpc's values come from the shared libdpc the binary loads: its bytes are part of the key
+    tag = hashlib.sha256(
+        f"{exe}|{st.st_size}|{st.st_mtime_ns}|{file_digest(*libdpc) if libdpc else ''}".encode()
+    ).hexdigest()[:12]
     given = list(sys.argv[1:] if argv is None else argv)
     # the page names no machine's paths: the binary is whatever run.sh built there
     shown = [PBRT_SHOWN if i > 0 and given[i - 1] == "--pbrt" else a for i, a in enumerate(given)]

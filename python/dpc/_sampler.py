@@ -43,14 +43,15 @@ class Sampler:
     reads it rotated and toroidally shifted by its entry of a 32 x 32 screen-space mask (moved
     per 32 x 32 tile, so tiles do not repeat each other), so neighbouring pixels'
     errors cancel at low screen frequencies. Dimensions from ``fold_from``
-    on (default 1: all but dimension 0, the pixel position) are folded by the baker's transform
-    ``1 - |2v - 1|``, which makes smooth integrands periodic over the shifted table; ``None``
-    folds none; net slots are never folded. Slots below ``net_dims`` hold blue-noise
+    on (1: all but dimension 0, the pixel position) are folded by the baker's transform
+    ``1 - |2v - 1|``, which makes smooth integrands periodic over the shifted table; the default
+    ``None`` folds none; net slots are never folded. Slots below ``net_dims`` hold blue-noise
     (0,m,2)-nets, each pixel's a digital shift of its own, when ``samples_per_pixel`` is a power
     of two >= 2: every elementary interval of a pixel's samples holds one, which integrates
     geometry edges nearly along the pixel axes like a Sobol' net; 0 for none. The default,
-    ``"auto"``, is every slot from 32 samples per pixel on (set models: there nets beat the
-    folded sets on a renderer's per-pixel error) and 1 (the pixel position) otherwise;
+    ``"auto"``, is every slot for set models (there nets beat the sets, folded or not, on a
+    renderer's per-pixel error; the sets serve 1 spp and the other counts) and 1 (the pixel
+    position) for progressive models;
     ``net_slots`` says how many slots are nets.
     docs/rendering.md defines every step. Values are float32 in [0, 1); the same C object backs
     the C API, the Mitsuba plugin and this class, so all three give the same bits.
@@ -74,7 +75,7 @@ class Sampler:
         samples_per_pixel: int = 16,
         dimensions: int = 16,
         seed: int = 0,
-        fold_from: int | None = 1,
+        fold_from: int | None = None,
         net_dims: int | str = "auto",
         *,
         progress=None,

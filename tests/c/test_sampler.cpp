@@ -56,7 +56,7 @@ TEST(SamplerOptions, InitSetsDocumentedDefaults) {
     EXPECT_EQ(o.n_models, 0u);
     EXPECT_EQ(o.samples_per_pixel, 16u);
     EXPECT_EQ(o.dimensions, 16u);
-    EXPECT_EQ(o.fold_from, 1u);
+    EXPECT_EQ(o.fold_from, DPC_SAMPLER_NO_FOLD);
     EXPECT_EQ(o.net_dims, DPC_SAMPLER_NET_DIMS_AUTO);
     EXPECT_EQ(o.seed, 0u);
     dpc_sampler_options_init(nullptr); // no-op
@@ -338,11 +338,11 @@ TEST(SamplerStructure, NetSlotsGiveEachPixelANet) {
     }
 }
 
-// The default net_dims (DPC_SAMPLER_NET_DIMS_AUTO) is every slot from 32 spp on, dimension 0
-// below: tables and lookups equal those of the explicit count.
-TEST(SamplerStructure, DefaultNetsEverySlotFrom32Spp) {
+// The default net_dims (DPC_SAMPLER_NET_DIMS_AUTO) is every slot for set models (from
+// DPC_SAMPLER_AUTO_NETS_SPP = 2 spp on): tables and lookups equal those of the explicit count.
+TEST(SamplerStructure, DefaultNetsEverySlot) {
     ModelPtr m = load(model_path("model_2d"));
-    for (uint32_t n : {16u, 32u, 64u}) {
+    for (uint32_t n : {2u, 4u, 16u, 64u}) {
         SamplerPtr autos = make({m.get()}, n, 3, 4, 1, DPC_SAMPLER_NET_DIMS_AUTO);
         SamplerPtr all = make({m.get()}, n, 3, 4, 1, 3), one = make({m.get()}, n, 3, 4, 1, 1);
         const dpc_sampler *want = n >= DPC_SAMPLER_AUTO_NETS_SPP ? all.get() : one.get();
@@ -360,8 +360,7 @@ TEST(SamplerStructure, DefaultNetsEverySlotFrom32Spp) {
 }
 
 // dpc_sampler_get_info reports the options as created, net_dims resolved: the default is every
-// slot from DPC_SAMPLER_AUTO_NETS_SPP on for set models and 1 otherwise (and for progressive
-// models), at most D, none when spp is not a power of two >= 2. Bad calls are statuses.
+// slot from DPC_SAMPLER_AUTO_NETS_SPP (2) on for set models and 1 for progressive models, at most D, none when spp is not a power of two >= 2. Bad calls are statuses.
 TEST(SamplerInfo, ReportsTheOptionsAndTheResolvedNetSlots) {
     ModelPtr m = load(model_path("model_2d")), prog = load(model_path("model_2d_progressive"));
     struct Case {
@@ -369,7 +368,7 @@ TEST(SamplerInfo, ReportsTheOptionsAndTheResolvedNetSlots) {
         uint32_t spp, dims, net_dims, want;
     };
     const uint32_t AUTO = DPC_SAMPLER_NET_DIMS_AUTO;
-    for (const Case &c : {Case{m.get(), 16, 5, AUTO, 1}, Case{m.get(), 32, 5, AUTO, 5}, Case{m.get(), 64, 3, AUTO, 3},
+    for (const Case &c : {Case{m.get(), 16, 5, AUTO, 5}, Case{m.get(), 2, 5, AUTO, 5}, Case{m.get(), 64, 3, AUTO, 3},
                           Case{m.get(), 12, 5, AUTO, 0}, Case{m.get(), 1, 5, AUTO, 0}, Case{m.get(), 64, 8, 3, 3},
                           Case{m.get(), 64, 4, 9, 4}, Case{m.get(), 64, 4, 0, 0}, Case{prog.get(), 64, 4, AUTO, 1},
                           Case{prog.get(), 32, 4, 2, 2}}) {

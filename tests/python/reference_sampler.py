@@ -132,7 +132,7 @@ def net_values(cell, j: int, h: int, m: int) -> list:
 
 
 class ReferenceSampler:
-    def __init__(self, model_paths, spp: int, dims: int, seed: int, fold_from: int | None = 1, net_dims="auto"):
+    def __init__(self, model_paths, spp: int, dims: int, seed: int, fold_from: int | None = None, net_dims="auto"):
         self.n, self.D, self.base = spp, dims, mix64(seed)
         self.fold_from = fold_from  # None: no dimension folded
         models = [dpc.load(p, isa="scalar", threads=1) for p in model_paths]
@@ -151,8 +151,8 @@ class ReferenceSampler:
         self.mask = dpc.Sampler.mask()
         # net slots: only when spp is a power of two >= 2
         self.m = spp.bit_length() - 1
-        if net_dims == "auto":  # every slot from 32 spp on for set models, else dimension 0
-            net_dims = dims if spp >= 32 and not self.progressive else 1
+        if net_dims == "auto":  # every slot for set models (from 2 spp on), else dimension 0
+            net_dims = dims if spp >= 2 and not self.progressive else 1
         self.net_slots = min(net_dims, dims) if spp >= 2 and spp == 1 << self.m else 0
         self.nets = []
         for t in range(self.net_slots):

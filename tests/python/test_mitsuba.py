@@ -75,7 +75,7 @@ def test_values_are_those_of_dpc_sampler():
     (32 (b & 0xFFFF) + x, 32 (b >> 16) + y), and in a later block (b + 1024) the same place
     gives other values."""
     plugin = mi.load_dict({"type": "dpc", "sample_count": 4, "seed": 9, "dimensions": 3})
-    ref = dpc.Sampler("bnot-2d-stratified", samples_per_pixel=4, dimensions=3, seed=9)  # both fold from 1
+    ref = dpc.Sampler("bnot-2d-stratified", samples_per_pixel=4, dimensions=3, seed=9)  # neither folds
     fork = plugin.fork()
     # a fork's first seed starts a block, whatever the render seed; the second block has
     # nonzero high bits, so both halves of the block's name are used

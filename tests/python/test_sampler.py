@@ -144,12 +144,19 @@ def test_net_slots_give_every_pixel_a_02_net(n):
     assert not is_02_net(s.get_2d(0, 0, np.arange(n), 1).astype(np.float64)) or n <= 4  # the set is not one
 
 
-def test_default_nets_every_slot_from_32_spp_for_set_models():
-    """net_dims "auto" (the default) is every slot from 32 spp on for set models and dimension 0
-    otherwise (progressive models, fewer samples); net_slots says so, and the values are those
-    of the explicit count."""
+def test_default_nets_every_slot_for_set_models():
+    """net_dims "auto" (the default) is every slot for set models and dimension 0 for progressive
+    models, at power-of-two counts >= 2; net_slots says so, and the values are those of the
+    explicit count."""
     x, y, index = np.arange(50) % 9, np.arange(50) // 9, np.arange(50) % 8
-    for models, n, want in [(BNOT, 32, 5), (BNOT, 256, 5), (BNOT, 16, 1), (BNOT, 48, 0), (PROGRESSIVE, 64, 1)]:
+    for models, n, want in [
+        (BNOT, 2, 5),
+        (BNOT, 16, 5),
+        (BNOT, 256, 5),
+        (BNOT, 48, 0),
+        (BNOT, 1, 0),
+        (PROGRESSIVE, 64, 1),
+    ]:
         auto = dpc.Sampler(models, samples_per_pixel=n, dimensions=5, seed=2)
         explicit = dpc.Sampler(models, samples_per_pixel=n, dimensions=5, seed=2, net_dims=max(want, 1))
         assert auto.net_dims == "auto" and auto.net_slots == want, (models, n, auto.net_slots)
@@ -216,11 +223,12 @@ def test_progressive_pixels_read_the_table_in_order():
 
 
 def test_folded_dimensions_are_the_baker_transform_of_the_unfolded():
-    """fold_from = 1 (the default): dimension 0 as without folding, every later one v -> 1 - |2v - 1|
-    on the 2^-24 grid, which keeps values in [0, 1) and maps the grid onto itself; dimension 4
-    reuses slot 0, a net at 16 spp, which is never folded."""
-    plain = dpc.Sampler(samples_per_pixel=16, dimensions=4, seed=3, fold_from=None)
-    folded = dpc.Sampler(samples_per_pixel=16, dimensions=4, seed=3)
+    """fold_from = 1: dimension 0 as without folding (the default, None), every later one
+    v -> 1 - |2v - 1| on the 2^-24 grid, which keeps values in [0, 1) and maps the grid onto
+    itself; dimension 4 reuses slot 0, a net at 16 spp, which is never folded."""
+    plain = dpc.Sampler(samples_per_pixel=16, dimensions=4, seed=3, net_dims=1)
+    folded = dpc.Sampler(samples_per_pixel=16, dimensions=4, seed=3, net_dims=1, fold_from=1)
+    assert plain.fold_from is None and "fold_from=None" in repr(plain)
     assert folded.fold_from == 1 and "fold_from=1" in repr(folded)
     xs, ys = np.meshgrid(np.arange(40), np.arange(40))
     for d in range(6):

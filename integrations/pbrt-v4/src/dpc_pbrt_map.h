@@ -33,7 +33,7 @@ struct Config {
     std::string model = "bnot-2d-stratified";
     int samples_per_pixel = 16; // "integer pixelsamples" (pbrt's --spp overrides it)
     int dimensions = 16;        // "integer dimensions": the tables D; slots d >= D reuse table d mod D
-    int fold_from = 1;          // "integer fold_from": first folded slot; -1 folds none
+    int fold_from = -1;         // "integer fold_from": first folded slot; -1 (default) folds none
     int net_dims = -1;          // "integer net_dims": slots that are (0,m,2)-nets; -1: libdpc's default
     int64_t seed = 0;           // "integer seed" (pbrt's --seed is the default)
     // Threads that make the tables (dpc_load_options.threads: 0 is one per CPU); the values do

@@ -73,13 +73,14 @@ typedef struct dpc_sampler_options {
     /* Dimensions d >= fold_from return their value v folded by the baker's (tent) transform
      * 1 - |2v - 1| (on the 2^-24 grid: 2v below 1/2, 2(1 - v) - 2^-24 from 1/2 on, a bijection
      * of the grid, so values stay uniform), which makes every continuous integrand periodic over
-     * the table. Net slots are never folded. Default 1 (all but the film position);
-     * DPC_SAMPLER_NO_FOLD for none, 0 for all set slots. */
+     * the table. Net slots are never folded. Default DPC_SAMPLER_NO_FOLD (none: a renderer that
+     * importance-samples turns smooth integrands into edges, which the fold doubles); 1 for all
+     * but the film position, 0 for all set slots. */
     uint32_t fold_from;
     /* Slots t < net_dims hold (0,m,2)-nets instead of the models' sets when spp = 2^m >= 2 (see
-     * "Net slots" above). Default DPC_SAMPLER_NET_DIMS_AUTO: every slot from
-     * DPC_SAMPLER_AUTO_NETS_SPP spp on for set models, else 1 (dimension 0, the film position,
-     * also for progressive models); 0 for none. */
+     * "Net slots" above). Default DPC_SAMPLER_NET_DIMS_AUTO: every slot for set models (so at
+     * every power-of-two spp from DPC_SAMPLER_AUTO_NETS_SPP on; the sets serve 1 spp and the
+     * other counts), 1 for progressive models (dimension 0, the film position); 0 for none. */
     uint32_t net_dims;
     uint64_t seed; /* default 0 */
     /* NULL (default): none. Called with done / total = sets made / sets to make (the tables'
@@ -94,9 +95,9 @@ typedef struct dpc_sampler_options {
 
 #define DPC_SAMPLER_NO_FOLD 0xFFFFFFFFu
 /* options.net_dims: every slot from DPC_SAMPLER_AUTO_NETS_SPP samples per pixel on (set
- * models), else 1 (dimension 0). */
+ * models; 2, so every power of two that has a net), else 1 (dimension 0). */
 #define DPC_SAMPLER_NET_DIMS_AUTO 0xFFFFFFFFu
-#define DPC_SAMPLER_AUTO_NETS_SPP 32u
+#define DPC_SAMPLER_AUTO_NETS_SPP 2u
 
 /* Fill *options with the defaults (no models: set models and n_models). */
 DPC_API void dpc_sampler_options_init(dpc_sampler_options *options);

@@ -15,7 +15,7 @@ void dpc_sampler_options_init(dpc_sampler_options *options) {
     options->struct_size = (uint32_t)sizeof *options;
     options->samples_per_pixel = 16;
     options->dimensions = 16;
-    options->fold_from = 1;
+    options->fold_from = DPC_SAMPLER_NO_FOLD;
     options->net_dims = DPC_SAMPLER_NET_DIMS_AUTO;
 }
 

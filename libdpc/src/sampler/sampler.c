@@ -91,8 +91,9 @@ static dpc_status build(dpc_sampler *s, const dpc_sampler_options *o, build_prog
     uint32_t log_n = 0;
     while ((1u << log_n) < n) log_n++;
     /* The default: nets in every slot from DPC_SAMPLER_AUTO_NETS_SPP on, where they beat the
-     * folded sets on a renderer's per-pixel error (docs/rendering.md, "Nets in every slot");
-     * progressive samplers keep one (more were not measured in a renderer). */
+     * sets, folded or not, on a renderer's per-pixel error in Mitsuba and pbrt
+     * (docs/rendering.md, "Nets in every slot"); progressive samplers keep one (more were not
+     * measured in a renderer). */
     uint32_t net_dims = o->net_dims;
     if (net_dims == DPC_SAMPLER_NET_DIMS_AUTO) net_dims = s->rotate && n >= DPC_SAMPLER_AUTO_NETS_SPP ? D : 1;
     s->net_slots = n >= 2 && (1u << log_n) == n ? (net_dims < D ? net_dims : D) : 0;

@@ -10,10 +10,9 @@ Plugin properties, as for Mitsuba's own samplers: ``sample_count`` (default 4), 
 (default 0), and ``model`` (default ``bnot-2d-stratified``; a bundled name or a ``.onnx`` path,
 several separated by commas), ``dimensions`` (tables, default 16), ``block_size`` (the
 integrator's block size when it is not Mitsuba's default 32), ``fold_from`` (the first dimension
-folded by the baker's transform, default 1: all but Mitsuba's film position; -1 folds none;
+folded by the baker's transform, default -1: none; 1: all but Mitsuba's film position;
 docs/rendering.md) and ``net_dims`` (the first dimensions served by blue-noise (0,m,2)-nets when
-``sample_count`` is a power of two; default -1: every dimension from 32 spp on, else the film
-position; 0 for none). In XML::
+``sample_count`` is a power of two; default -1: every dimension; 0 for none). In XML::
 
     <sampler type="dpc"><integer name="sample_count" value="16"/></sampler>
 

@@ -121,12 +121,12 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
         if (block < 32 || block > 4096 || (block & (block - 1)))
             Throw("property \"block_size\" is %d: a power of two from 32 (the mask tile) to 4096", block);
         m_dims = (uint32_t)dims;
-        // Mitsuba draws the film position first: dimension 0 stays unfolded by default
-        int fold_from = props.get<int>("fold_from", 1);
+        // -1, the default: no dimension folded (libdpc's default)
+        int fold_from = props.get<int>("fold_from", -1);
         if (fold_from < -1) Throw("property \"fold_from\" is %d: a dimension (>= 0), or -1 to fold none", fold_from);
         m_fold_from = fold_from < 0 ? DPC_SAMPLER_NO_FOLD : (uint32_t)fold_from;
-        // -1, the default: the film position (dimension 0) is a net when sample_count is a
-        // power of two, and every dimension from DPC_SAMPLER_AUTO_NETS_SPP on
+        // -1, the default: every dimension is a net when sample_count is a power of two >= 2
+        // (libdpc's DPC_SAMPLER_NET_DIMS_AUTO)
         int net_dims = props.get<int>("net_dims", -1);
         if (net_dims < -1)
             Throw("property \"net_dims\" is %d: a dimension count (>= 0), or -1 for the default", net_dims);
@@ -226,7 +226,7 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
     }
 
     std::vector<std::string> m_models;
-    uint32_t m_dims = 16, m_block_side = 32, m_block_pixels = 1024, m_fold_from = 1,
+    uint32_t m_dims = 16, m_block_side = 32, m_block_pixels = 1024, m_fold_from = DPC_SAMPLER_NO_FOLD,
              m_net_dims = DPC_SAMPLER_NET_DIMS_AUTO;
     std::shared_ptr<dpc_plugin::Table> m_table;
     uint32_t m_phase = 0;
