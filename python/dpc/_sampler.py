@@ -17,6 +17,13 @@ MAX_DIMENSIONS = int(_core.SAMPLER_MAX_DIMENSIONS)  # DPC_SAMPLER_MAX_DIMENSIONS
 NO_FOLD = int(_core.SAMPLER_NO_FOLD)  # DPC_SAMPLER_NO_FOLD
 NET_DIMS_AUTO = int(_core.SAMPLER_NET_DIMS_AUTO)  # DPC_SAMPLER_NET_DIMS_AUTO
 AUTO_NETS_SPP = int(_core.SAMPLER_AUTO_NETS_SPP)  # DPC_SAMPLER_AUTO_NETS_SPP
+SCREEN_NETS_BELOW = int(_core.SAMPLER_SCREEN_NETS_BELOW)  # DPC_SAMPLER_SCREEN_NETS_BELOW
+# net_layout: DPC_SAMPLER_NETS_AUTO, _SCREEN, _PER_PIXEL
+_LAYOUTS = {
+    "auto": int(_core.SAMPLER_NETS_AUTO),
+    "screen": int(_core.SAMPLER_NETS_SCREEN),
+    "pixel": int(_core.SAMPLER_NETS_PER_PIXEL),
+}
 #: Lookups are evaluated this many at a time: beyond the output, a lookup holds O(chunk) memory
 #: whatever the broadcast shape of its arguments.
 LOOKUP_CHUNK = 1 << 16
@@ -52,7 +59,11 @@ class Sampler:
     ``"auto"``, is every slot for set models (there nets beat the sets, folded or not, on a
     renderer's per-pixel error; the sets serve 1 spp and the other counts) and 1 (the pixel
     position) for progressive models;
-    ``net_slots`` says how many slots are nets.
+    ``net_slots`` says how many slots are nets. ``net_layout`` says how nets are randomised across
+    pixels: ``"screen"``, one Owen-scrambled Sobol' sequence per 32 x 32 tile, each pixel the
+    block at its randomised Morton code, so neighbouring pixels' samples together form finer
+    nets and the error is blue across pixels; ``"pixel"``, one optimised net per slot, digitally
+    shifted per pixel (white error); ``"auto"`` (default), screen below 64 samples per pixel.
     docs/rendering.md defines every step. Values are float32 in [0, 1); the same C object backs
     the C API, the Mitsuba plugin and this class, so all three give the same bits.
 
@@ -77,6 +88,7 @@ class Sampler:
         seed: int = 0,
         fold_from: int | None = None,
         net_dims: int | str = "auto",
+        net_layout: str = "auto",
         *,
         progress=None,
     ):
@@ -102,6 +114,9 @@ class Sampler:
             raise InvalidArgumentError(f'net_dims must be an integer or "auto", got {net_dims!r}')
         else:
             self.net_dims = _args.integer(net_dims, "net_dims", 0, NET_DIMS_AUTO - 1)
+        if not isinstance(net_layout, str) or net_layout not in _LAYOUTS:
+            raise InvalidArgumentError(f'net_layout must be "auto", "screen" or "pixel", got {net_layout!r}')
+        self.net_layout = net_layout
         self._h = _core.Sampler(
             [m._h for m in self.models],
             self.samples_per_pixel,
@@ -109,6 +124,7 @@ class Sampler:
             self.seed,
             NO_FOLD if self.fold_from is None else self.fold_from,
             NET_DIMS_AUTO if self.net_dims == "auto" else self.net_dims,
+            _LAYOUTS[net_layout],
             progress,
         )
 
@@ -116,7 +132,8 @@ class Sampler:
         names = ", ".join(m.name for m in self.models)
         return (
             f"dpc.Sampler([{names}], samples_per_pixel={self.samples_per_pixel}, "
-            f"dimensions={self.dimensions}, seed={self.seed}, fold_from={self.fold_from}, net_dims={self.net_dims!r})"
+            f"dimensions={self.dimensions}, seed={self.seed}, fold_from={self.fold_from}, net_dims={self.net_dims!r}, "
+            f"net_layout={self.net_layout!r})"
         )
 
     def _lookup(self, x, y, index, dimension, width: int, max_bytes) -> np.ndarray:
@@ -173,6 +190,12 @@ class Sampler:
         """How many slots (the first ones) hold nets: ``net_dims`` resolved by libdpc
         (``dpc_sampler_get_info``)."""
         return int(self._h.info()["net_slots"])
+
+    @property
+    def net_layout_resolved(self) -> str:
+        """How the net slots are laid out across pixels, ``net_layout`` resolved by libdpc:
+        ``"screen"`` or ``"pixel"`` (``"pixel"`` also when there are no net slots)."""
+        return "screen" if self._h.info()["net_layout"] == _core.SAMPLER_NETS_SCREEN else "pixel"
 
     def table(self, t: int) -> np.ndarray:
         """The (samples_per_pixel, 2) point set of table ``t`` (0 <= t < dimensions)."""

@@ -384,10 +384,19 @@ TEST(SamplerInfo, ReportsTheOptionsAndTheResolvedNetSlots) {
         EXPECT_EQ(info.net_slots, c.want) << c.spp << " " << c.dims << " " << c.net_dims;
         EXPECT_EQ(info.progressive, c.model == prog.get() ? 1u : 0u);
         EXPECT_EQ(info.seed, 99u);
+        // the default layout: screen-ordered nets below DPC_SAMPLER_SCREEN_NETS_BELOW spp
+        const bool screen = c.want > 0 && c.spp < DPC_SAMPLER_SCREEN_NETS_BELOW;
+        EXPECT_EQ(info.net_layout, screen ? DPC_SAMPLER_NETS_SCREEN : DPC_SAMPLER_NETS_PER_PIXEL) << c.spp;
     }
     SamplerPtr s = make({m.get()}, 16, 2, 0);
     dpc_sampler_info info;
-    info.struct_size = sizeof info - 8;
+    // a caller built before net_layout: accepted, the field left alone
+    std::memset(&info, 0xAB, sizeof info);
+    info.struct_size = (uint32_t)offsetof(dpc_sampler_info, net_layout);
+    ASSERT_EQ(dpc_sampler_get_info(s.get(), &info), DPC_OK) << dpc_last_error();
+    EXPECT_EQ(info.samples_per_pixel, 16u);
+    EXPECT_EQ(info.net_layout, 0xABABABABu);
+    info.struct_size = sizeof info - 4;
     EXPECT_EQ(dpc_sampler_get_info(s.get(), &info), DPC_ERROR_INVALID_ARGUMENT);
     EXPECT_NE(std::string(dpc_last_error()).find("struct_size"), std::string::npos) << dpc_last_error();
     info.struct_size = sizeof info;
@@ -523,6 +532,29 @@ TEST(SamplerProgress, OptionsWithoutTheCallbackFieldsStillWork) {
     o.struct_size = (uint32_t)sizeof o - 4;
     EXPECT_EQ(dpc_sampler_create(&o, &s), DPC_ERROR_INVALID_ARGUMENT);
     EXPECT_EQ(s, nullptr);
+}
+
+// net_layout: a caller built before it passes a shorter struct (the default, AUTO, applies); a
+// value other than the three names is a status with a message.
+TEST(SamplerOptions, NetLayoutIsCheckedAndOptional) {
+    ModelPtr m = load(model_path("model_2d"));
+    const dpc_model *h = m.get();
+    dpc_sampler_options o;
+    dpc_sampler_options_init(&o);
+    EXPECT_EQ(o.net_layout, DPC_SAMPLER_NETS_AUTO);
+    o.models = &h;
+    o.n_models = 1;
+    o.net_layout = 7;
+    dpc_sampler *s = nullptr;
+    EXPECT_EQ(dpc_sampler_create(&o, &s), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(dpc_last_error()).find("net_layout"), std::string::npos) << dpc_last_error();
+    o.struct_size = (uint32_t)offsetof(dpc_sampler_options, net_layout);
+    ASSERT_EQ(dpc_sampler_create(&o, &s), DPC_OK) << dpc_last_error();
+    SamplerPtr old(s);
+    dpc_sampler_info info;
+    info.struct_size = sizeof info;
+    ASSERT_EQ(dpc_sampler_get_info(old.get(), &info), DPC_OK);
+    EXPECT_EQ(info.net_layout, DPC_SAMPLER_NETS_SCREEN); // 16 spp: the default's screen-ordered nets
 }
 
 // A progressive model with the prefix relaxation (seconds per large table): a cancel is seen

@@ -5,6 +5,8 @@ compare libdpc's dpc_sampler_get_1d / _get_2d with it bit for bit."""
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 
 import dpc
@@ -131,8 +133,72 @@ def net_values(cell, j: int, h: int, m: int) -> list:
     ]
 
 
+M32 = (1 << 32) - 1
+PERM4 = list(itertools.permutations(range(4)))  # lexicographic
+SCREEN_BELOW = 64
+
+
+def reverse32(v: int) -> int:
+    return int(f"{v & M32:032b}"[::-1], 2)
+
+
+def nested(v: int, seed: int) -> int:
+    """Laine and Karras's hash with Burley's constants: bit b of the result is bit b of v XOR a
+    function of the bits below b and the seed."""
+    v &= M32
+    v ^= (v * 0x3D20ADEA) & M32
+    v = (v + seed) & M32
+    v = (v * ((seed >> 16) | 1)) & M32
+    v ^= (v * 0x05526C56) & M32
+    v ^= (v * 0x53A22864) & M32
+    return v
+
+
+def screen_code(key: int, x: int, y: int) -> int:
+    """The Morton code of tile place (x, y), its base-4 digits permuted from the top."""
+    code = 0
+    for b in range(5):
+        code |= ((x >> b) & 1) << (2 * b) | ((y >> b) & 1) << (2 * b + 1)
+    out = 0
+    for level in range(5):
+        shift = 8 - 2 * level
+        digit, prefix = (code >> shift) & 3, code >> (shift + 2)
+        h = mix64(key + ((((prefix << 3) | level) + 1) * GOLDEN))
+        out |= PERM4[((h >> 32) * 24) >> 32][digit] << shift
+    return out
+
+
+def sobol1(i: int) -> int:
+    """Sobol's second coordinate of i, 32 bits: v_0 = 2^31, v_b = v_(b-1) XOR v_(b-1) >> 1."""
+    out, v = 0, 1 << 31
+    for b in range(32):
+        if (i >> b) & 1:
+            out ^= v
+        v ^= v >> 1
+    return out
+
+
+def screen_values(kt: int, code: int, k: int, m: int) -> list:
+    hp = mix64(kt ^ ((code << 1) | 1))
+    kk = reverse32(nested(reverse32(k) >> (32 - m), hp & M32)) >> (32 - m)
+    i = (code << m) | kk
+    hs = mix64(kt + GOLDEN)
+    xs = reverse32(nested(i, hs & M32))
+    ys = reverse32(nested(reverse32(sobol1(i)), hs >> 32))
+    return [F32(xs >> 8) * F32(2.0**-24), F32(ys >> 8) * F32(2.0**-24)]
+
+
 class ReferenceSampler:
-    def __init__(self, model_paths, spp: int, dims: int, seed: int, fold_from: int | None = None, net_dims="auto"):
+    def __init__(
+        self,
+        model_paths,
+        spp: int,
+        dims: int,
+        seed: int,
+        fold_from: int | None = None,
+        net_dims="auto",
+        net_layout="auto",
+    ):
         self.n, self.D, self.base = spp, dims, mix64(seed)
         self.fold_from = fold_from  # None: no dimension folded
         models = [dpc.load(p, isa="scalar", threads=1) for p in model_paths]
@@ -154,6 +220,9 @@ class ReferenceSampler:
         if net_dims == "auto":  # every slot for set models (from 2 spp on), else dimension 0
             net_dims = dims if spp >= 2 and not self.progressive else 1
         self.net_slots = min(net_dims, dims) if spp >= 2 and spp == 1 << self.m else 0
+        if net_layout == "auto":  # screen-ordered below 64 spp
+            net_layout = "screen" if spp < SCREEN_BELOW else "pixel"
+        self.screen = self.net_slots > 0 and net_layout == "screen"
         self.nets = []
         for t in range(self.net_slots):
             seed_t = mix64(self.base ^ mix64(t + NET_SEED))
@@ -174,6 +243,9 @@ class ReferenceSampler:
         pass_, k = divmod(index, n)
         key = self.key(dim, pass_)
         t = dim % self.D
+        if t < self.net_slots and self.screen:  # the tile's hash, the pixel's permuted code
+            kt = mix64(key ^ (((y // TILE) << 32) | (x // TILE)))
+            return t, k, None, None, (kt, screen_code(key, x % TILE, y % TILE))
         if t < self.net_slots:  # the pixel's own hash: rotation and digital shift
             h = mix64(key ^ ((y << 32) | x))
             j = k + (((h >> 32) * self.rotate) >> 32)
@@ -189,6 +261,8 @@ class ReferenceSampler:
 
     def get_2d(self, x: int, y: int, index: int, dim: int) -> np.ndarray:
         t, j, m, c, h = self._locate(x, y, index, dim)
+        if t < self.net_slots and self.screen:  # never folded
+            return np.array(screen_values(h[0], h[1], j, self.m), dtype=F32)
         if t < self.net_slots:  # never folded
             return np.array(net_values(self.nets[t][j], j, h, self.m), dtype=F32)
         p = self.tables[t][j]
@@ -202,6 +276,8 @@ class ReferenceSampler:
 
     def get_1d(self, x: int, y: int, index: int, dim: int) -> np.float32:
         t, j, m, c, h = self._locate(x, y, index, dim)
+        if t < self.net_slots and self.screen:
+            return screen_values(h[0], h[1], j, self.m)[0]  # never folded
         if t < self.net_slots:
             return net_values(self.nets[t][j], j, h, self.m)[0]  # never folded
         u = wrap(m[2], c[0])

@@ -22,34 +22,50 @@ PROGRESSIVE = dpc.model_path("progressive-2d")
 
 
 @pytest.mark.parametrize(
-    "models,spp,dims,seed,fold_from,net_dims",
+    "models,spp,dims,seed,fold_from,net_dims,net_layout",
     [
-        ([BNOT], 16, 4, 0, 1, 1),  # dimension 0 a net (the default below 32 spp)
-        ([BNOT], 16, 4, 0, None, 0),  # no dimension folded, no nets
-        ([BNOT], 16, 4, 0, 0, 3),  # three net slots, folded
-        ([BNOT], 5, 3, 12345, 0, 1),  # spp not a power of two (no nets); every dimension folded
-        ([BNOT], 1, 2, 7, 1, 1),
-        ([BNOT], 2, 3, 7, 1, 2),  # the smallest net
-        ([BNOT], 64, 2, 11, 1, 1),  # the largest optimised net
-        ([BNOT], 128, 2, 11, 1, 1),  # past the optimised sizes: the randomly scrambled net
-        ([BNOT], 2048, 1, 4, 1, 1),
-        ([dpc.model_path("bnot-4d"), BNOT], 8, 5, 2**64 - 1, 3, 1),  # 4-D model fills two slots per set
-        ([DATA / "model_3d_mixed.onnx"], 12, 3, 99, 1, 1),  # odd dims: the last is left out
-        ([BNOT], 3, 70, 5, 66, 1),  # past the 64 dimensions with precomputed shifted masks
-        ([BNOT], 4, 70, 5, 66, 67),  # net slots past them too
-        ([PROGRESSIVE], 64, 4, 3, 1, 1),  # progressive: tables in order, 1-D strata by x rank
-        ([PROGRESSIVE], 48, 70, 8, None, 1),
-        ([PROGRESSIVE], 64, 4, 3, 1, 2),  # progressive nets: later ones shuffled within octaves
-        ([BNOT], 256, 3, 9, None, 3),  # nets after the first reordered
-        ([BNOT], 32, 5, 21, 1, "auto"),  # the default from 32 spp on: every slot a net
-        ([BNOT], 16, 3, 21, 1, "auto"),  # below 32 spp: dimension 0 only
-        ([PROGRESSIVE], 64, 3, 3, 1, "auto"),  # progressive: dimension 0 only
-        ([dpc.model_path("progressive-2d-relaxed")], 64, 20, 5, 1, 1),  # relaxed tables, made 2+ at once
+        ([BNOT], 16, 4, 0, 1, 1, "auto"),  # dimension 0 a net, screen-ordered
+        ([BNOT], 16, 4, 0, None, 0, "auto"),  # no dimension folded, no nets
+        ([BNOT], 16, 4, 0, 0, 3, "auto"),  # three net slots, folded
+        ([BNOT], 5, 3, 12345, 0, 1, "auto"),  # spp not a power of two (no nets); every dimension folded
+        ([BNOT], 1, 2, 7, 1, 1, "auto"),
+        ([BNOT], 2, 3, 7, 1, 2, "auto"),  # the smallest net
+        ([BNOT], 64, 2, 11, 1, 1, "pixel"),  # the largest optimised net
+        ([BNOT], 128, 2, 11, 1, 1, "auto"),  # past the optimised sizes: the randomly scrambled net
+        ([BNOT], 2048, 1, 4, 1, 1, "auto"),
+        ([dpc.model_path("bnot-4d"), BNOT], 8, 5, 2**64 - 1, 3, 1, "auto"),  # 4-D model fills two slots per set
+        ([DATA / "model_3d_mixed.onnx"], 12, 3, 99, 1, 1, "auto"),  # odd dims: the last is left out
+        ([BNOT], 3, 70, 5, 66, 1, "auto"),  # past the 64 dimensions with precomputed shifted masks
+        ([BNOT], 4, 70, 5, 66, 67, "auto"),  # net slots past them too
+        ([PROGRESSIVE], 64, 4, 3, 1, 1, "auto"),  # progressive: tables in order, 1-D strata by x rank
+        ([PROGRESSIVE], 48, 70, 8, None, 1, "auto"),
+        ([PROGRESSIVE], 64, 4, 3, 1, 2, "auto"),  # progressive nets: later ones shuffled within octaves
+        ([BNOT], 256, 3, 9, None, 3, "auto"),  # nets after the first reordered
+        ([BNOT], 32, 5, 21, 1, "auto", "auto"),  # the default: every slot a screen-ordered net
+        ([BNOT], 16, 3, 21, 1, "auto", "auto"),  # and at 16 spp
+        ([PROGRESSIVE], 64, 3, 3, 1, "auto", "auto"),  # progressive: dimension 0 only
+        ([dpc.model_path("progressive-2d-relaxed")], 64, 20, 5, 1, 1, "auto"),  # relaxed tables, made 2+ at once
+        ([BNOT], 16, 4, 0, None, 3, "pixel"),  # nets digitally shifted per pixel
+        ([BNOT], 16, 4, 0, None, 3, "screen"),  # screen-ordered nets, named
+        ([BNOT], 128, 3, 9, None, 3, "screen"),  # past the default's screen-ordered counts
+        ([BNOT], 2, 3, 7, 1, 2, "screen"),  # the smallest: one bit of sample index
+        ([BNOT], 65536, 1, 4, None, 1, "screen"),  # the largest: 26-bit sequence indices
+        ([PROGRESSIVE], 64, 3, 3, None, 2, "screen"),  # progressive: sample index shuffled, nested
+        ([BNOT], 4, 70, 5, 66, 67, "screen"),  # codes past the precomputed slots
     ],
 )
-def test_lookups_match_the_reference_bit_for_bit(models, spp, dims, seed, fold_from, net_dims):
-    s = dpc.Sampler(models, samples_per_pixel=spp, dimensions=dims, seed=seed, fold_from=fold_from, net_dims=net_dims)
-    ref = ReferenceSampler(models, spp, dims, seed, fold_from, net_dims)
+def test_lookups_match_the_reference_bit_for_bit(models, spp, dims, seed, fold_from, net_dims, net_layout):
+    s = dpc.Sampler(
+        models,
+        samples_per_pixel=spp,
+        dimensions=dims,
+        seed=seed,
+        fold_from=fold_from,
+        net_dims=net_dims,
+        net_layout=net_layout,
+    )
+    ref = ReferenceSampler(models, spp, dims, seed, fold_from, net_dims, net_layout)
+    assert s.net_layout_resolved == ("screen" if ref.screen else "pixel")
     for t in range(dims):
         want = ref.tables[t] if t >= ref.net_slots else ((ref.nets[t] + 0.5) / spp).astype(np.float32)
         assert np.array_equal(s.table(t), want), f"table {t}"
@@ -79,15 +95,19 @@ def test_net_slots_are_never_folded():
     assert not np.array_equal(folded.get_2d(x, y, index, 2), plain.get_2d(x, y, index, 2))
 
 
-@pytest.mark.parametrize("models,prefixes", [(BNOT, (256,)), (PROGRESSIVE, (64, 256))])
-def test_net_slots_pair_up_like_a_random_pairing(models, prefixes):
+@pytest.mark.parametrize(
+    "models,prefixes,layout",
+    [(BNOT, (256,), "pixel"), (PROGRESSIVE, (64, 256), "pixel"), (BNOT, (16, 256), "screen")],
+)
+def test_net_slots_pair_up_like_a_random_pairing(models, prefixes, layout):
     """Two net slots, their samples paired by index, integrate a product of one coordinate of
     each as well as the same points paired at random. Nets in Sobol' order rotated against each
     other did not (16 times the error at 256 spp): later nets are stored in a random order. A
     progressive sampler's prefixes too (read in Sobol' order, 4-40 times the error from 64 on):
-    its later nets are shuffled within each octave, and every prefix stays a (0,k,2)-net."""
+    its later nets are shuffled within each octave, and every prefix stays a (0,k,2)-net.
+    Screen-ordered nets shuffle each pixel's sample index per slot (nested, from its top bit)."""
     n, side = 256, 32
-    s = dpc.Sampler(models, samples_per_pixel=n, dimensions=3, seed=1, fold_from=None, net_dims=3)
+    s = dpc.Sampler(models, samples_per_pixel=n, dimensions=3, seed=1, fold_from=None, net_dims=3, net_layout=layout)
     x, y = (a.ravel() for a in np.meshgrid(np.arange(side), np.arange(side)))
     v = {d: np.stack([s.get_2d(x, y, np.full(x.size, i), d) for i in range(n)], 1) for d in range(3)}
     bump = lambda u: np.exp(-((u - 0.4) ** 2) / (2 * 0.15**2))  # noqa: E731
@@ -136,12 +156,55 @@ def test_structure_each_pixel_gets_the_table_shifted_and_a_stratified_lattice():
 
 
 @pytest.mark.parametrize("n", [2, 4, 16, 64, 256])
-def test_net_slots_give_every_pixel_a_02_net(n):
-    s = dpc.Sampler(samples_per_pixel=n, dimensions=2, seed=3, net_dims=1)  # dimension 0
+@pytest.mark.parametrize("layout", ["pixel", "screen"])
+def test_net_slots_give_every_pixel_a_02_net(n, layout):
+    s = dpc.Sampler(samples_per_pixel=n, dimensions=2, seed=3, net_dims=1, net_layout=layout)  # dimension 0
     for x, y, first in [(0, 0, 0), (17, 3, n), (-5, 40, 5 * n)]:
         assert is_02_net(s.get_2d(x, y, first + np.arange(n), 0).astype(np.float64))
     assert is_02_net(s.table(0).astype(np.float64))
     assert not is_02_net(s.get_2d(0, 0, np.arange(n), 1).astype(np.float64)) or n <= 4  # the set is not one
+
+
+@pytest.mark.parametrize("n", [1 << m for m in range(1, 9)])
+def test_screen_nets_neighbours_form_finer_nets_and_prefixes_nets(n):
+    """Screen-ordered nets: the samples of each aligned 2 x 2 and 4 x 4 group of pixels in a
+    32 x 32 tile together form a (0,m+2,2)- and a (0,m+4,2)-net, and each power-of-two prefix of a
+    pixel's samples is a (0,k,2)-net (a renderer that stops early), in every slot and pass."""
+    s = dpc.Sampler(samples_per_pixel=n, dimensions=3, seed=5, net_layout="screen")
+    for d, first in ((0, 0), (2, 0), (1, 3 * n)):
+        for x0, y0, side in ((0, 0, 2), (6, 10, 2), (44, 36, 4), (-32, 0, 4), (8, 24, 8)):
+            xx, yy = (a.ravel()[:, None] for a in np.meshgrid(np.arange(x0, x0 + side), np.arange(y0, y0 + side)))
+            pts = s.get_2d(xx, yy, first + np.arange(n), d).reshape(-1, 2).astype(np.float64)
+            assert is_02_net(pts), (n, d, x0, y0, side)
+        v = s.get_2d(13, 7, first + np.arange(n), d).astype(np.float64)
+        assert all(is_02_net(v[: 1 << k]) for k in range(n.bit_length())), (n, d)
+    # not aligned: a 2 x 2 group across two aligned ones is not a net (at 4 spp and more)
+    xx, yy = (a.ravel()[:, None] for a in np.meshgrid(np.arange(1, 3), np.arange(0, 2)))
+    pts = s.get_2d(xx, yy, np.arange(n), 0).reshape(-1, 2).astype(np.float64)
+    assert n < 4 or not is_02_net(pts)
+
+
+@pytest.mark.parametrize("n", [4, 16, 64])
+def test_screen_nets_error_is_blue_in_screen_space(n):
+    """A disc's shadow edge moving across the screen: with screen-ordered nets the error image's
+    low-frequency energy (white = 1) is about half (0.51-0.54 here at 2-64 spp), with nets shifted
+    per pixel it is white (0.98-1.03)."""
+    W = 128
+    xs, ys = np.meshgrid(np.arange(W), np.arange(W))
+    cx, cy = 0.25 + 0.5 * xs / W, 0.3 + 0.4 * ys / W
+    exact = 1 - np.pi * 0.25**2
+
+    def f(p):
+        return (((p[..., 0] - cx[..., None]) ** 2 + (p[..., 1] - cy[..., None]) ** 2) > 0.25**2).astype(float)
+
+    energy = {}
+    for layout in ("screen", "pixel"):
+        e = []
+        for seed in range(3):
+            s = dpc.Sampler(samples_per_pixel=n, dimensions=2, seed=seed, net_layout=layout)
+            e.append(_low_band_energy(f(s.get_2d(xs[..., None], ys[..., None], np.arange(n), 1)).mean(-1) - exact))
+        energy[layout] = np.mean(e)
+    assert energy["screen"] < 0.65 and energy["pixel"] > 0.85, energy
 
 
 def test_default_nets_every_slot_for_set_models():
@@ -340,12 +403,15 @@ def test_models_a_sampler_cannot_use_are_refused_with_the_reason():
 
 def test_each_value_is_uniform_over_seeds():
     """KS test of one lookup over 2,000 seeds (each a new sampler: new tables, keys, rotation)."""
-    samplers = [dpc.Sampler(samples_per_pixel=4, dimensions=2, seed=s) for s in range(2000)]
-    for d in (0, 1):  # dimension 0 is a net slot, 1 a shifted set
-        v2 = np.array([s.get_2d(5, 9, 2, d) for s in samplers])
-        v1 = np.array([s.get_1d(5, 9, 2, d) for s in samplers])
-        for sample in (v2[:, 0], v2[:, 1], v1):
-            assert stats.kstest(sample, "uniform").pvalue > 1e-3
+    for layout in ("screen", "pixel"):
+        samplers = [
+            dpc.Sampler(samples_per_pixel=4, dimensions=2, seed=s, net_dims=1, net_layout=layout) for s in range(2000)
+        ]
+        for d in (0, 1):  # dimension 0 is a net slot, 1 a shifted set
+            v2 = np.array([s.get_2d(5, 9, 2, d) for s in samplers])
+            v1 = np.array([s.get_1d(5, 9, 2, d) for s in samplers])
+            for sample in (v2[:, 0], v2[:, 1], v1):
+                assert stats.kstest(sample, "uniform").pvalue > 1e-3, (layout, d)
 
 
 def test_mean_image_over_seeds_converges_to_the_integral():

@@ -46,7 +46,7 @@ void check(dpc_status status) {
 std::string describe(const Config &c) {
     return "model \"" + c.model + "\" pixelsamples " + std::to_string(c.samples_per_pixel) + " dimensions " +
            std::to_string(c.dimensions) + " fold_from " + std::to_string(c.fold_from) + " net_dims " +
-           std::to_string(c.net_dims) + " seed " + std::to_string(c.seed);
+           std::to_string(c.net_dims) + " net_layout " + c.net_layout + " seed " + std::to_string(c.seed);
 }
 
 SharedSampler make_sampler(const Config &config, std::string &error) {
@@ -68,6 +68,10 @@ SharedSampler make_sampler(const Config &config, std::string &error) {
     if (config.net_dims < -1) {
         error = "\"integer net_dims\" is " + std::to_string(config.net_dims) +
                 ": a slot count (>= 0), or -1 for libdpc's default";
+        return nullptr;
+    }
+    if (config.net_layout != "auto" && config.net_layout != "pixel" && config.net_layout != "screen") {
+        error = "\"string net_layout\" is \"" + config.net_layout + "\": \"auto\", \"screen\" or \"pixel\"";
         return nullptr;
     }
     if (config.model.find('\0') != std::string::npos) {
@@ -105,6 +109,9 @@ SharedSampler make_sampler(const Config &config, std::string &error) {
         o.fold_from = config.fold_from < 0 ? DPC_SAMPLER_NO_FOLD : (uint32_t)config.fold_from;
         o.net_dims = config.net_dims < 0 ? DPC_SAMPLER_NET_DIMS_AUTO : (uint32_t)config.net_dims;
         o.seed = (uint64_t)config.seed;
+        o.net_layout = config.net_layout == "screen"  ? DPC_SAMPLER_NETS_SCREEN
+                       : config.net_layout == "pixel" ? DPC_SAMPLER_NETS_PER_PIXEL
+                                                      : DPC_SAMPLER_NETS_AUTO;
         if (dpc_sampler_create(&o, &sampler) != DPC_OK)
             error = std::string(dpc_last_error()) + " (" + describe(config) + ")";
     }

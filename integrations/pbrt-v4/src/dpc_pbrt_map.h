@@ -36,6 +36,9 @@ struct Config {
     int fold_from = -1;         // "integer fold_from": first folded slot; -1 (default) folds none
     int net_dims = -1;          // "integer net_dims": slots that are (0,m,2)-nets; -1: libdpc's default
     int64_t seed = 0;           // "integer seed" (pbrt's --seed is the default)
+    // "string net_layout": "auto" (libdpc's default), "screen" (one Sobol' sequence per 32 x 32
+    // tile, pixels in a randomised Morton order) or "pixel" (nets digitally shifted per pixel)
+    std::string net_layout = "auto";
     // Threads that make the tables (dpc_load_options.threads: 0 is one per CPU); the values do
     // not depend on it.
     uint32_t threads = 1;

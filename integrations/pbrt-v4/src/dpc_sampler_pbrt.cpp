@@ -46,6 +46,7 @@ DPCSampler *DPCSampler::Create(const ParameterDictionary &parameters, const File
     c.dimensions = parameters.GetOneInt("dimensions", c.dimensions);
     c.fold_from = parameters.GetOneInt("fold_from", c.fold_from);
     c.net_dims = parameters.GetOneInt("net_dims", c.net_dims);
+    c.net_layout = parameters.GetOneString("net_layout", c.net_layout);
     c.seed = parameters.GetOneInt("seed", Options->seed);
     // the tables are made on pbrt's threads (--nthreads; 0 is one per CPU): the values are the same
     c.threads = Options->nThreads > 0 ? (uint32_t)Options->nThreads : 0u;

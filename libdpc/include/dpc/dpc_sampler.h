@@ -91,7 +91,20 @@ typedef struct dpc_sampler_options {
      * none. */
     dpc_progress_fn progress;
     void *user; /* passed to progress */
+    /* How net slots are randomised across pixels. DPC_SAMPLER_NETS_PER_PIXEL: one optimised net
+     * per slot, digitally shifted per pixel (errors white across pixels). DPC_SAMPLER_NETS_SCREEN:
+     * a 32 x 32 tile of pixels shares one Owen-scrambled 2-D Sobol' sequence, each pixel the block
+     * at its randomised Morton code, so each pixel's samples are a net and neighbouring pixels'
+     * together a finer one (errors blue across pixels). Default DPC_SAMPLER_NETS_AUTO: screen
+     * below DPC_SAMPLER_SCREEN_NETS_BELOW spp, per pixel from there on. Added after `user`: older
+     * struct sizes are still accepted, as the default. */
+    uint32_t net_layout;
 } dpc_sampler_options;
+
+#define DPC_SAMPLER_NETS_PER_PIXEL 0u
+#define DPC_SAMPLER_NETS_SCREEN 1u
+#define DPC_SAMPLER_NETS_AUTO 0xFFFFFFFFu
+#define DPC_SAMPLER_SCREEN_NETS_BELOW 64u
 
 #define DPC_SAMPLER_NO_FOLD 0xFFFFFFFFu
 /* options.net_dims: every slot from DPC_SAMPLER_AUTO_NETS_SPP samples per pixel on (set
@@ -128,6 +141,10 @@ typedef struct dpc_sampler_info {
     uint32_t net_slots;
     uint32_t progressive; /* 1: progressive models, tables read in order; 0: set models */
     uint64_t seed;
+    /* options.net_layout resolved (DPC_SAMPLER_NETS_PER_PIXEL or _SCREEN; PER_PIXEL when there
+     * are no net slots). Added after `seed`: a struct_size of offsetof(dpc_sampler_info,
+     * net_layout) is still accepted and leaves it out. */
+    uint32_t net_layout;
 } dpc_sampler_info;
 
 /* Fill *out_info (its struct_size set by the caller, see above). */

@@ -17,6 +17,7 @@ void dpc_sampler_options_init(dpc_sampler_options *options) {
     options->dimensions = 16;
     options->fold_from = DPC_SAMPLER_NO_FOLD;
     options->net_dims = DPC_SAMPLER_NET_DIMS_AUTO;
+    options->net_layout = DPC_SAMPLER_NETS_AUTO;
 }
 
 /* The caller's options in the current layout: older callers pass the struct without `progress`
@@ -24,10 +25,11 @@ void dpc_sampler_options_init(dpc_sampler_options *options) {
 static dpc_status read_options(const dpc_sampler_options *options, dpc_sampler_options *o) {
     dpc_sampler_options_init(o);
     const size_t before_progress = offsetof(dpc_sampler_options, progress);
+    const size_t before_layout = offsetof(dpc_sampler_options, net_layout);
     if (options->struct_size == sizeof *o) {
         *o = *options;
-    } else if (options->struct_size == before_progress) {
-        memcpy(o, options, before_progress);
+    } else if (options->struct_size == before_progress || options->struct_size == before_layout) {
+        memcpy(o, options, options->struct_size);
         o->struct_size = (uint32_t)sizeof *o;
     } else {
         return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
@@ -58,6 +60,12 @@ static dpc_status check_options(const dpc_sampler_options *o) {
                             j, dpc_model_name(m), m->cascade.progressive_base ? "progressive" : "a set model",
                             dpc_model_name(o->models[0]));
     }
+    if (o->net_layout != DPC_SAMPLER_NETS_PER_PIXEL && o->net_layout != DPC_SAMPLER_NETS_SCREEN &&
+        o->net_layout != DPC_SAMPLER_NETS_AUTO)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
+                        "options.net_layout is %u: DPC_SAMPLER_NETS_PER_PIXEL (0), DPC_SAMPLER_NETS_SCREEN (1) or "
+                        "DPC_SAMPLER_NETS_AUTO",
+                        o->net_layout);
     if (o->samples_per_pixel < 1 || o->samples_per_pixel > DPC_SAMPLER_MAX_SPP)
         return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "options.samples_per_pixel is %u, must be 1 .. %u",
                         o->samples_per_pixel, DPC_SAMPLER_MAX_SPP);
@@ -94,6 +102,8 @@ void dpc_sampler_free(dpc_sampler *sampler) {
     free(sampler->keys);
     free(sampler->shifted);
     free(sampler->nets);
+    free(sampler->sobol1);
+    free(sampler->screen_codes);
     free(sampler);
 }
 
@@ -112,18 +122,22 @@ dpc_status dpc_sampler_get_2d(const dpc_sampler *sampler, uint32_t x, uint32_t y
 dpc_status dpc_sampler_get_info(const dpc_sampler *sampler, dpc_sampler_info *out_info) {
     dpc_clear_error();
     if (!sampler || !out_info) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "sampler or out_info is NULL");
-    if (out_info->struct_size != sizeof *out_info)
+    const uint32_t size = out_info->struct_size, before_layout = (uint32_t)offsetof(dpc_sampler_info, net_layout);
+    if (size != sizeof *out_info && size != before_layout)
         return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
                         "out_info->struct_size is %u, expected %u: set it to sizeof(dpc_sampler_info)",
                         out_info->struct_size, (unsigned)sizeof *out_info);
-    memset(out_info, 0, sizeof *out_info);
-    out_info->struct_size = (uint32_t)sizeof *out_info;
-    out_info->samples_per_pixel = sampler->spp;
-    out_info->dimensions = sampler->slots;
-    out_info->fold_from = sampler->fold_from;
-    out_info->net_slots = sampler->net_slots;
-    out_info->progressive = sampler->rotate == 0;
-    out_info->seed = sampler->seed;
+    dpc_sampler_info info;
+    memset(&info, 0, sizeof info);
+    info.struct_size = size;
+    info.samples_per_pixel = sampler->spp;
+    info.dimensions = sampler->slots;
+    info.fold_from = sampler->fold_from;
+    info.net_slots = sampler->net_slots;
+    info.progressive = sampler->rotate == 0;
+    info.seed = sampler->seed;
+    info.net_layout = sampler->net_layout;
+    memcpy(out_info, &info, size); /* an older caller's struct ends before net_layout */
     return DPC_OK;
 }
 

@@ -98,6 +98,13 @@ static dpc_status build(dpc_sampler *s, const dpc_sampler_options *o, build_prog
     if (net_dims == DPC_SAMPLER_NET_DIMS_AUTO) net_dims = s->rotate && n >= DPC_SAMPLER_AUTO_NETS_SPP ? D : 1;
     s->net_slots = n >= 2 && (1u << log_n) == n ? (net_dims < D ? net_dims : D) : 0;
     s->net_shift = 24 - log_n;
+    /* The default: screen-ordered below DPC_SAMPLER_SCREEN_NETS_BELOW, where their errors are blue
+     * across pixels at the per-pixel nets' MSE; per pixel from there on, where the optimised
+     * scrambling had the lower MSE in pbrt-v4 (docs/rendering.md, "Screen-ordered nets"). */
+    uint32_t layout = o->net_layout;
+    if (layout == DPC_SAMPLER_NETS_AUTO)
+        layout = n < DPC_SAMPLER_SCREEN_NETS_BELOW ? DPC_SAMPLER_NETS_SCREEN : DPC_SAMPLER_NETS_PER_PIXEL;
+    s->net_layout = s->net_slots ? layout : DPC_SAMPLER_NETS_PER_PIXEL;
     s->tables = (float *)malloc((size_t)D * n * 2 * sizeof(float));
     s->keys = (uint64_t *)malloc((size_t)D * sizeof *s->keys);
     s->fast_slots = D < DPC_SAMPLER_FAST_SLOTS ? D : DPC_SAMPLER_FAST_SLOTS;
@@ -112,13 +119,35 @@ static dpc_status build(dpc_sampler *s, const dpc_sampler_options *o, build_prog
     float *set = (float *)malloc((size_t)workers * n * widest * sizeof(float)); /* sets of the widest model */
     ranked *scratch = (ranked *)malloc((size_t)n * sizeof *scratch);
     s->nets = s->net_slots ? (uint32_t *)malloc((size_t)s->net_slots * n * sizeof *s->nets) : NULL;
+    if (s->net_layout) {
+        s->sobol1 = (uint32_t *)malloc(4 * 256 * sizeof *s->sobol1);
+        s->screen_codes =
+            (uint16_t *)malloc((size_t)s->fast_slots * DPC_SAMPLER_TILE * DPC_SAMPLER_TILE * sizeof *s->screen_codes);
+    }
     dpc_status st = DPC_OK;
-    if (!s->tables || !s->keys || !s->shifted || !set || !scratch || (s->net_slots && !s->nets)) {
+    if (!s->tables || !s->keys || !s->shifted || !set || !scratch || (s->net_slots && !s->nets) ||
+        (s->net_layout && (!s->sobol1 || !s->screen_codes))) {
         st = dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory for a sampler of %u x %u points", D, n);
         goto done;
     }
     for (uint32_t d = 0; d < D; d++) s->keys[d] = dpc_sampler_key(s->base, d, 0);
     for (uint32_t d = 0; d < s->fast_slots; d++) s->fast_key[d] = s->keys[d];
+    if (s->net_layout) {
+        uint32_t v[32];
+        v[0] = 1u << 31;
+        for (uint32_t b = 1; b < 32; b++) v[b] = v[b - 1] ^ (v[b - 1] >> 1);
+        for (uint32_t byte = 0; byte < 4; byte++)
+            for (uint32_t e = 0; e < 256; e++) {
+                uint32_t acc = 0;
+                for (uint32_t b = 0; b < 8; b++)
+                    if (e >> b & 1u) acc ^= v[byte * 8 + b];
+                s->sobol1[byte * 256 + e] = acc;
+            }
+        for (uint32_t d = 0; d < s->fast_slots; d++)
+            for (uint32_t at = 0; at < DPC_SAMPLER_TILE * DPC_SAMPLER_TILE; at++)
+                s->screen_codes[(size_t)d * DPC_SAMPLER_TILE * DPC_SAMPLER_TILE + at] =
+                    (uint16_t)dpc_sampler_screen_code(s->keys[d], at % DPC_SAMPLER_TILE, at / DPC_SAMPLER_TILE);
+    }
     for (uint32_t d = 0; d < s->fast_slots; d++) /* what dpc_sampler_locate and the lookups compute */
         for (uint32_t at = 0; at < DPC_SAMPLER_TILE * DPC_SAMPLER_TILE; at++) {
             const float *m = dpc_sampler_mask_data + (size_t)at * DPC_SAMPLER_MASK_CHANNELS;
@@ -222,9 +251,16 @@ dpc_status dpc_sampler_build(dpc_sampler *s, const dpc_sampler_options *o) {
     return st;
 }
 
+const uint8_t dpc_sampler_perm4[24] = {0xE4, 0xB4, 0xD8, 0x78, 0x9C, 0x6C, 0xE1, 0xB1, 0xC9, 0x39, 0x8D, 0x2D,
+                                       0xD2, 0x72, 0xC6, 0x36, 0x4E, 0x1E, 0x93, 0x63, 0x87, 0x27, 0x4B, 0x1B};
+
 dpc_status dpc_sampler_lookup_2d_general(const dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index, uint32_t dim,
                                          float out[2]) {
     const dpc_sampler_point p = dpc_sampler_locate(s, x, y, index, dim);
+    if (p.table < s->net_slots && s->net_layout) {
+        dpc_sampler_screen_values(s, p.h, p.code, p.j, out); /* never folded */
+        return DPC_OK;
+    }
     if (p.table < s->net_slots) {
         dpc_sampler_net_values(s, p.table, p.j, p.h, out); /* never folded */
         return DPC_OK;
@@ -240,7 +276,8 @@ dpc_status dpc_sampler_lookup_1d_general(const dpc_sampler *s, uint32_t x, uint3
     const dpc_sampler_point p = dpc_sampler_locate(s, x, y, index, dim);
     if (p.table < s->net_slots) { /* the net's x: one value per stratum, as the lattice */
         float v[2];
-        dpc_sampler_net_values(s, p.table, p.j, p.h, v);
+        if (s->net_layout) dpc_sampler_screen_values(s, p.h, p.code, p.j, v);
+        else dpc_sampler_net_values(s, p.table, p.j, p.h, v);
         *out = v[0]; /* never folded */
         return DPC_OK;
     }

@@ -53,6 +53,12 @@ struct dpc_sampler {
      * the key's rotation added, wrap(mask0, c0), wrap(mask1, c1), wrap(mask2, c0): the values
      * the general path computes, read instead of recomputed (the same bits). */
     float *shifted; /* fast_slots * 32 * 32 * 3 floats */
+    /* Screen-ordered nets (net_layout DPC_SAMPLER_NETS_SCREEN): the Sobol' second coordinate of
+     * an index, byte by byte (4 x 256 words), and for pass 0 of the fast net slots each tile
+     * place's permuted Morton code (fast_slots * 1024). NULL for per-pixel nets. */
+    uint32_t net_layout;
+    uint32_t *sobol1;
+    uint16_t *screen_codes;
     /* keys[d] for d < fast_slots, inside the object: one dependent load less on the lookups'
      * critical path (key -> hash -> point -> table read) */
     uint64_t fast_key[DPC_SAMPLER_FAST_SLOTS];
@@ -184,12 +190,86 @@ static inline void dpc_sampler_net_values(const struct dpc_sampler *s, uint32_t 
     out[1] = (float)(b << s->net_shift | ((uint32_t)(g >> 16) & low)) * 0x1p-24f;
 }
 
+/* Screen-ordered net slots (docs/rendering.md, "Screen-ordered nets"): a 32 x 32 tile of pixels
+ * shares one 2-D Sobol' sequence of 1024 n points; pixel (x, y) takes the block of n points at its
+ * Morton code in the tile, the code's base-4 digits permuted (nested, per dimension and pass), its
+ * sample index shuffled (nested, per pixel), and both coordinates Owen-scrambled per tile, so a
+ * pixel's samples are a (0,m,2)-net and each aligned group of 4^k pixels' samples a finer one. */
+static inline uint32_t dpc_sampler_reverse32(uint32_t v) {
+    v = (v >> 16) | (v << 16);
+    v = ((v & 0xFF00FF00u) >> 8) | ((v & 0x00FF00FFu) << 8);
+    v = ((v & 0xF0F0F0F0u) >> 4) | ((v & 0x0F0F0F0Fu) << 4);
+    v = ((v & 0xCCCCCCCCu) >> 2) | ((v & 0x33333333u) << 2);
+    return ((v & 0xAAAAAAAAu) >> 1) | ((v & 0x55555555u) << 1);
+}
+
+/* A nested scramble of v's bits from bit 0 up (each output bit is its input bit XOR a function
+ * of the bits below it and the seed): the hash of Laine and Karras 2011 with the constants of
+ * Burley 2020 ("Practical Hash-based Owen Scrambling"). Applied to bit-reversed values it is an
+ * Owen scrambling: every elementary interval keeps its points. */
+static inline uint32_t dpc_sampler_nested(uint32_t v, uint32_t seed) {
+    v ^= v * 0x3d20adeau;
+    v += seed;
+    v *= (seed >> 16) | 1u;
+    v ^= v * 0x05526c56u;
+    v ^= v * 0x53a22864u;
+    return v;
+}
+
+/* The 24 permutations of {0, 1, 2, 3} in lexicographic order, each packed 2 bits per image. */
+extern const uint8_t dpc_sampler_perm4[24];
+
+/* The Morton code (x bit b at 2b, y bit b at 2b + 1) of a tile place, its five base-4 digits
+ * permuted from the top, each by permutation mix(key + ((prefix << 3 | level) + 1) golden) of 24,
+ * prefix the original digits above it. */
+static inline uint32_t dpc_sampler_screen_code(uint64_t key, uint32_t x, uint32_t y) {
+    uint32_t code = 0, out = 0;
+    for (uint32_t b = 0; b < 5; b++) code |= ((x >> b) & 1u) << (2 * b) | ((y >> b) & 1u) << (2 * b + 1);
+    for (uint32_t l = 0; l < 5; l++) {
+        const uint32_t shift = 8 - 2 * l, digit = (code >> shift) & 3u;
+        const uint64_t prefix = code >> (shift + 2);
+        const uint64_t h = dpc_mix64(key + ((prefix << 3 | l) + 1) * 0x9E3779B97F4A7C15ull);
+        const uint32_t perm = dpc_sampler_perm4[((h >> 32) * 24) >> 32];
+        out |= ((perm >> (2 * digit)) & 3u) << shift;
+    }
+    return out;
+}
+
+/* Sobol's second coordinate of index i (32-bit, generator v_0 = 2^31, v_b = v_{b-1} XOR
+ * v_{b-1} >> 1) from the sampler's byte tables. */
+static inline uint32_t dpc_sampler_sobol1(const struct dpc_sampler *s, uint32_t i) {
+    return s->sobol1[i & 0xFFu] ^ s->sobol1[256 + ((i >> 8) & 0xFFu)] ^ s->sobol1[512 + ((i >> 16) & 0xFFu)] ^
+           s->sobol1[768 + (i >> 24)];
+}
+
+/* The values of screen-ordered net sample k (< n = 2^m, m = 24 - net_shift) for tile hash kt
+ * and permuted code c. */
+static inline void dpc_sampler_screen_values(const struct dpc_sampler *s, uint64_t kt, uint32_t c, uint32_t k,
+                                             float out[2]) {
+    const uint32_t m = 24 - s->net_shift;
+    const uint64_t hp = dpc_mix64(kt ^ ((uint64_t)c << 1 | 1u));
+    /* the sample index shuffled, nested from its top bit: every power-of-two prefix of the
+     * pixel's samples stays an aligned block of the sequence */
+    const uint32_t kk =
+        dpc_sampler_reverse32(dpc_sampler_nested(dpc_sampler_reverse32(k) >> (32 - m), (uint32_t)hp)) >> (32 - m);
+    const uint32_t i = c << m | kk;
+    const uint64_t hs = dpc_mix64(kt + 0x9E3779B97F4A7C15ull);
+    /* x is i bit-reversed: scrambling i from bit 0 up is x's Owen scrambling from the top */
+    const uint32_t xs = dpc_sampler_reverse32(dpc_sampler_nested(i, (uint32_t)hs));
+    const uint32_t ys = dpc_sampler_reverse32(
+        dpc_sampler_nested(dpc_sampler_reverse32(dpc_sampler_sobol1(s, i)), (uint32_t)(hs >> 32)));
+    out[0] = (float)(xs >> 8) * 0x1p-24f;
+    out[1] = (float)(ys >> 8) * 0x1p-24f;
+}
+
 typedef struct dpc_sampler_point {
     uint32_t table; /* t = dim mod D */
     uint32_t j;     /* point of table t: k rotated by the pixel's offset */
     float mask[3];  /* set slots: the pixel's mask values, the mask moved by its tile's (ox, oy) */
     float c[2];     /* set slots: the key's rotation of every value */
-    uint64_t h;     /* net slots: the pixel's hash, its index rotation and digital shift */
+    uint64_t h;     /* net slots: the pixel's hash, its index rotation and digital shift (screen-ordered:
+                     * the tile's hash) */
+    uint32_t code;  /* screen-ordered net slots: the pixel's permuted Morton code */
 } dpc_sampler_point;
 
 /* Fill a zeroed sampler from checked options: keys, then D tables from the models' sets, each
@@ -213,7 +293,13 @@ static inline dpc_sampler_point dpc_sampler_locate(const struct dpc_sampler *s, 
     dpc_sampler_point p;
     uint32_t rot;
     p.table = table;
-    if (table < s->net_slots) {
+    p.code = 0;
+    if (table < s->net_slots && s->net_layout) { /* h: the tile's hash; j: the permuted code, k the index */
+        p.h = dpc_mix64(key ^ ((uint64_t)(y / DPC_SAMPLER_TILE) << 32 | (x / DPC_SAMPLER_TILE)));
+        p.code = dpc_sampler_screen_code(key, x & (DPC_SAMPLER_TILE - 1), y & (DPC_SAMPLER_TILE - 1));
+        rot = 0;
+        p.mask[0] = p.mask[1] = p.mask[2] = p.c[0] = p.c[1] = 0.0f;
+    } else if (table < s->net_slots) {
         p.h = dpc_mix64(key ^ ((uint64_t)y << 32 | x));
         rot = dpc_sampler_rotation(p.h, s->rotate);
         p.mask[0] = p.mask[1] = p.mask[2] = p.c[0] = p.c[1] = 0.0f;
@@ -249,6 +335,15 @@ dpc_status dpc_sampler_lookup_1d_general(const struct dpc_sampler *s, uint32_t x
 static inline dpc_status dpc_sampler_lookup_2d(const struct dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index,
                                                uint32_t dim, float out[2]) {
     if (index >= s->spp || dim >= s->fast_slots) return dpc_sampler_lookup_2d_general(s, x, y, index, dim, out);
+    if (dim < s->net_slots && s->net_layout) {
+        const uint32_t last = DPC_SAMPLER_TILE - 1;
+        const uint64_t kt =
+            dpc_mix64(s->fast_key[dim] ^ ((uint64_t)(y / DPC_SAMPLER_TILE) << 32 | (x / DPC_SAMPLER_TILE)));
+        const uint32_t c = s->screen_codes[(size_t)dim * DPC_SAMPLER_TILE * DPC_SAMPLER_TILE +
+                                           (y & last) * DPC_SAMPLER_TILE + (x & last)];
+        dpc_sampler_screen_values(s, kt, c, index, out);
+        return DPC_OK;
+    }
     if (dim < s->net_slots) { /* a net slot's pass 0: one hash, one read, one multiply */
         const uint64_t h = dpc_mix64(s->fast_key[dim] ^ ((uint64_t)y << 32 | x));
         const uint32_t j = dpc_sampler_rotated(s->spp, index, dpc_sampler_rotation(h, s->rotate));

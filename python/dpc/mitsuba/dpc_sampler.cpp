@@ -60,7 +60,7 @@ struct Table {
 };
 
 inline std::shared_ptr<Table> build(const std::vector<std::string> &models, uint32_t spp, uint32_t dims, uint64_t seed,
-                                    uint32_t fold_from, uint32_t net_dims, std::string &error) {
+                                    uint32_t fold_from, uint32_t net_dims, uint32_t net_layout, std::string &error) {
     std::vector<dpc_model *> loaded;
     auto table = std::make_shared<Table>();
     for (const std::string &m : models) {
@@ -83,6 +83,7 @@ inline std::shared_ptr<Table> build(const std::vector<std::string> &models, uint
         o.seed = seed;
         o.fold_from = fold_from;
         o.net_dims = net_dims;
+        o.net_layout = net_layout;
         if (dpc_sampler_create(&o, &table->sampler) != DPC_OK) error = dpc_last_error();
     }
     for (dpc_model *h : loaded) dpc_model_free(h);
@@ -131,6 +132,13 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
         if (net_dims < -1)
             Throw("property \"net_dims\" is %d: a dimension count (>= 0), or -1 for the default", net_dims);
         m_net_dims = net_dims < 0 ? DPC_SAMPLER_NET_DIMS_AUTO : (uint32_t)net_dims;
+        // "auto", the default: libdpc's (screen-ordered nets below 64 spp, per pixel from there on)
+        const std::string layout = props.get<std::string>("net_layout", "auto");
+        if (layout != "auto" && layout != "screen" && layout != "pixel")
+            Throw("property \"net_layout\" is \"%s\": \"auto\", \"screen\" or \"pixel\"", layout);
+        m_net_layout = layout == "screen"  ? DPC_SAMPLER_NETS_SCREEN
+                       : layout == "pixel" ? DPC_SAMPLER_NETS_PER_PIXEL
+                                           : DPC_SAMPLER_NETS_AUTO;
         m_block_side = (uint32_t)block;
         m_block_pixels = (uint32_t)block * (uint32_t)block;
         rebuild();
@@ -199,6 +207,10 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
                (m_fold_from == DPC_SAMPLER_NO_FOLD ? std::string("none") : std::to_string(m_fold_from)) +
                ", net_dims = " +
                (m_net_dims == DPC_SAMPLER_NET_DIMS_AUTO ? std::string("auto") : std::to_string(m_net_dims)) +
+               ", net_layout = " +
+               (m_net_layout == DPC_SAMPLER_NETS_SCREEN      ? std::string("screen")
+                : m_net_layout == DPC_SAMPLER_NETS_PER_PIXEL ? std::string("pixel")
+                                                             : std::string("auto")) +
                ", seed = " + std::to_string(m_base_seed) + "]";
     }
 
@@ -216,18 +228,20 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
         m_x = other.m_x;
         m_fold_from = other.m_fold_from;
         m_net_dims = other.m_net_dims;
+        m_net_layout = other.m_net_layout;
         m_y = other.m_y;
     }
 
     void rebuild() {
         std::string error;
-        m_table = dpc_plugin::build(m_models, m_sample_count, m_dims, m_base_seed, m_fold_from, m_net_dims, error);
+        m_table = dpc_plugin::build(m_models, m_sample_count, m_dims, m_base_seed, m_fold_from, m_net_dims,
+                                    m_net_layout, error);
         if (!m_table) Throw("dpc sampler: %s", error);
     }
 
     std::vector<std::string> m_models;
     uint32_t m_dims = 16, m_block_side = 32, m_block_pixels = 1024, m_fold_from = DPC_SAMPLER_NO_FOLD,
-             m_net_dims = DPC_SAMPLER_NET_DIMS_AUTO;
+             m_net_dims = DPC_SAMPLER_NET_DIMS_AUTO, m_net_layout = DPC_SAMPLER_NETS_AUTO;
     std::shared_ptr<dpc_plugin::Table> m_table;
     uint32_t m_phase = 0;
     bool m_phase_known = false;
