@@ -263,11 +263,19 @@ TEST(PbrtMap, OptionsReachTheSampler) {
     EXPECT_EQ(info.fold_from, DPC_SAMPLER_NO_FOLD);
     EXPECT_EQ(info.net_slots, 0u);
     EXPECT_EQ(info.seed, 42u);
-    // the defaults: nothing folded, every slot a net at 16 spp
+    EXPECT_EQ(info.net_layout, DPC_SAMPLER_NETS_PER_PIXEL); // no net slots
+    // the defaults: nothing folded, every slot a screen-ordered net at 16 spp
     SharedSampler d = make_default(16);
     ASSERT_EQ(dpc_sampler_get_info(d.get(), &info), DPC_OK);
     EXPECT_EQ(info.fold_from, DPC_SAMPLER_NO_FOLD);
     EXPECT_EQ(info.net_slots, 16u);
+    EXPECT_EQ(info.net_layout, DPC_SAMPLER_NETS_SCREEN);
+    c.net_dims = 2;
+    c.net_layout = "pixel";
+    SharedSampler p = make(c);
+    ASSERT_TRUE(p);
+    ASSERT_EQ(dpc_sampler_get_info(p.get(), &info), DPC_OK);
+    EXPECT_EQ(info.net_layout, DPC_SAMPLER_NETS_PER_PIXEL);
     EXPECT_EQ(info.dimensions, 16u);
     // two models by name, used in turn
     c.model = "bnot-2d-stratified,bnot-2d";
@@ -322,4 +330,8 @@ TEST(PbrtMap, ErrorsNameTheProblem) {
     c.net_dims = -3;
     EXPECT_FALSE(dpc_pbrt::make_sampler(c, error));
     EXPECT_NE(error.find("net_dims"), std::string::npos) << error;
+    c = Config();
+    c.net_layout = "diagonal";
+    EXPECT_FALSE(dpc_pbrt::make_sampler(c, error));
+    EXPECT_NE(error.find("net_layout"), std::string::npos) << error;
 }

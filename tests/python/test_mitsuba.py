@@ -53,6 +53,7 @@ def test_loads_from_xml_with_every_property():
           <integer name="block_size" value="32"/>
           <integer name="fold_from" value="-1"/>
           <integer name="net_dims" value="2"/>
+          <string name="net_layout" value="pixel"/>
         </sampler>
         <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film>
       </sensor>
@@ -62,8 +63,9 @@ def test_loads_from_xml_with_every_property():
     sampler = scene.sensors()[0].sampler()
     assert sampler.sample_count() == 8
     assert "bnot-2d-stratified,bnot-4d" in str(sampler) and "fold_from = none" in str(sampler)
-    assert "net_dims = 2" in str(sampler)
+    assert "net_dims = 2" in str(sampler) and "net_layout = pixel" in str(sampler)
     assert "net_dims = auto" in str(mi.load_dict({"type": "dpc"}))
+    assert "net_layout = auto" in str(mi.load_dict({"type": "dpc"}))
     img = np.array(mi.render(scene))
     assert img.shape == (16, 16, 3) and np.all(np.isfinite(img))
 
@@ -160,6 +162,7 @@ def test_bad_properties_say_what_is_wrong():
         ({"block_size": 48}, "block_size"),
         ({"fold_from": -2}, "fold_from"),
         ({"net_dims": -2}, "net_dims"),
+        ({"net_layout": "diagonal"}, "net_layout"),
         ({"sample_count": 0}, "samples_per_pixel"),
     ]:
         with pytest.raises(Exception, match=says):

@@ -36,15 +36,18 @@
  * - get_1d draws from the stratified lattice (j + u) / spp (one value per stratum, u the pixel's
  *   mask value), get_2d from the table; dimension d of get_1d and of get_2d share their index
  *   rotation and shift (hence rule 1).
- * - Net slots: when spp = 2^m >= 2, slots t < N hold (0,m,2)-nets instead of the models' sets,
- *   each pixel's digitally shifted: every elementary interval of a pixel's samples holds one
- *   sample. N = min(options.net_dims, D); dpc_sampler_get_info reports it.
+ * - Net slots: when spp = 2^m >= 2, slots t < N hold (0,m,2)-nets instead of the models' sets:
+ *   every elementary interval of a pixel's samples holds one sample. N = min(options.net_dims,
+ *   D). Screen-ordered (options.net_layout; the default below 64 spp) the samples of each
+ *   aligned 2 x 2, 4 x 4, ... group of pixels in a 32 x 32 tile are a finer net too, and each
+ *   power-of-two prefix of a pixel's samples a (0,k,2)-net; per pixel, each pixel's net is one
+ *   net digitally shifted. dpc_sampler_get_info reports N and the layout.
  * - Threads: a created sampler is immutable: lookups take no lock, allocate nothing and may run
  *   on any number of threads. It does not keep the models: they may be freed after
  *   dpc_sampler_create. Lookups leave the thread's error message alone unless they fail (the one
  *   exception to the convention of dpc.h).
  * - Memory: sizeof(dpc_sampler) + D * (8 * spp + 8) + min(D, 64) * 12,288 + N * 4 * spp bytes,
- *   plus a 12 KiB mask shared by all samplers.
+ *   screen-ordered nets 4,096 + min(D, 64) * 2,048 more, plus a 12 KiB mask shared by all.
  */
 #ifndef DPC_DPC_SAMPLER_H
 #define DPC_DPC_SAMPLER_H
