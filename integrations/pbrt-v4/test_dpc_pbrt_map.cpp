@@ -270,13 +270,13 @@ TEST(PbrtMap, OptionsReachTheSampler) {
     EXPECT_EQ(info.fold_from, DPC_SAMPLER_NO_FOLD);
     EXPECT_EQ(info.net_slots, 16u);
     EXPECT_EQ(info.net_layout, DPC_SAMPLER_NETS_SCREEN);
+    EXPECT_EQ(info.dimensions, 16u);
     c.net_dims = 2;
     c.net_layout = "pixel";
     SharedSampler p = make(c);
     ASSERT_TRUE(p);
     ASSERT_EQ(dpc_sampler_get_info(p.get(), &info), DPC_OK);
     EXPECT_EQ(info.net_layout, DPC_SAMPLER_NETS_PER_PIXEL);
-    EXPECT_EQ(info.dimensions, 16u);
     // two models by name, used in turn
     c.model = "bnot-2d-stratified,bnot-2d";
     EXPECT_TRUE(make(c));
