@@ -255,14 +255,14 @@ def reference(pb: Pbrt, cache_dir: Path, scene: str, width: int, ref_spp: int, t
     return ref, ref_mse, seconds
 
 
-def run_functions(pb: Pbrt, cache: Cache, tag: str, samplers: list[str]) -> dict:
+def run_functions(pb: Pbrt, cache: Cache, tags: tuple[str, str], samplers: list[str]) -> dict:
     res = {}
     for func in FUNCTIONS:
         for spp in FUNC_SPP:
             for sampler in samplers:
                 if sampler == "sobol":
                     continue  # pbrt: '"sobol" sampler should be replaced with "paddedsobol"'
-                key = f"func|{tag}|{func}|{sampler}|{spp}|{FUNC_RES}"
+                key = f"func|{tags[sampler == 'dpc']}|{func}|{sampler}|{spp}|{FUNC_RES}"
                 v = cache.get(key)
                 if v is None:
                     t = time.perf_counter()
@@ -275,7 +275,7 @@ def run_functions(pb: Pbrt, cache: Cache, tag: str, samplers: list[str]) -> dict
     return res
 
 
-def run_scenes(pb: Pbrt, cache: Cache, cache_dir: Path, tag: str, args, samplers: list[str]) -> dict:
+def run_scenes(pb: Pbrt, cache: Cache, cache_dir: Path, tags: tuple[str, str], args, samplers: list[str]) -> dict:
     res = {}
     for scene in SCENES:
         sdig = file_digest(SCENE_DIR / f"{scene}.pbrt")
@@ -289,6 +289,7 @@ def run_scenes(pb: Pbrt, cache: Cache, cache_dir: Path, tag: str, args, samplers
             per = {s: {"mse": [], "elow": [], "time": []} for s in samplers}
             for seed in range(args.seeds):
                 for sampler in samplers:  # one seed's samplers back to back: load hits all alike
+                    tag = tags[sampler == "dpc"]
                     key = f"scene|{tag}|{sdig}|{scene}|{sampler}|{spp}|{seed}|{args.width}|{args.ref_spp}"
                     fig_path = cache_dir / f"err-{tag}-{sdig}-{scene}-{sampler}-{spp}-{args.width}.npy"
                     v = cache.get(key)
@@ -701,10 +702,11 @@ def main(argv: list[str] | None = None) -> None:
     cache = Cache(args.cache / "results.json")
     st = exe.stat()
     libdpc = sorted(lib.glob("libdpc.so*")) if lib.is_dir() else []
-    # dpc's values come from the shared libdpc the binary loads: its bytes are part of the key
-    tag = hashlib.sha256(
-        f"{exe}|{st.st_size}|{st.st_mtime_ns}|{file_digest(*libdpc) if libdpc else ''}".encode()
-    ).hexdigest()[:12]
+    # cells are keyed by the binary; dpc's also by the shared libdpc it loads (the other samplers
+    # do not use it)
+    tag = hashlib.sha256(f"{exe}|{st.st_size}|{st.st_mtime_ns}".encode()).hexdigest()[:12]
+    dpc_tag = hashlib.sha256(f"{tag}|{file_digest(*libdpc) if libdpc else ''}".encode()).hexdigest()[:12]
+    tags = (tag, dpc_tag)
     given = list(sys.argv[1:] if argv is None else argv)
     # the page names no machine's paths: the binary is whatever run.sh built there
     shown = [PBRT_SHOWN if i > 0 and given[i - 1] == "--pbrt" else a for i, a in enumerate(given)]
@@ -713,9 +715,9 @@ def main(argv: list[str] | None = None) -> None:
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="pbrt-study-") as tmp:
         pb = Pbrt(exe, args.nthreads, env, Path(tmp))
-        functions = {} if args.skip_functions else run_functions(pb, cache, tag, samplers)
-        scenes = run_scenes(pb, cache, args.cache, tag, args, samplers)
-        variants = run_variants(pb, cache, args.cache, tag, args) if "dpc" in samplers else {}
+        functions = {} if args.skip_functions else run_functions(pb, cache, tags, samplers)
+        scenes = run_scenes(pb, cache, args.cache, tags, args, samplers)
+        variants = run_variants(pb, cache, args.cache, dpc_tag, args) if "dpc" in samplers else {}
     res = {
         "samplers": samplers,
         "functions": functions,

@@ -154,8 +154,9 @@ def nested(v: int, seed: int) -> int:
     return v
 
 
-def screen_code(key: int, x: int, y: int) -> int:
-    """The Morton code of tile place (x, y), its base-4 digits permuted from the top."""
+def screen_code(kt: int, x: int, y: int) -> int:
+    """The Morton code of tile place (x, y), its base-4 digits permuted from the top (kt: the
+    tile's hash)."""
     code = 0
     for b in range(5):
         code |= ((x >> b) & 1) << (2 * b) | ((y >> b) & 1) << (2 * b + 1)
@@ -163,7 +164,7 @@ def screen_code(key: int, x: int, y: int) -> int:
     for level in range(5):
         shift = 8 - 2 * level
         digit, prefix = (code >> shift) & 3, code >> (shift + 2)
-        h = mix64(key + ((((prefix << 3) | level) + 1) * GOLDEN))
+        h = mix64(kt + ((((prefix << 3) | level) + 1) * GOLDEN))
         out |= PERM4[((h >> 32) * 24) >> 32][digit] << shift
     return out
 
@@ -245,7 +246,7 @@ class ReferenceSampler:
         t = dim % self.D
         if t < self.net_slots and self.screen:  # the tile's hash, the pixel's permuted code
             kt = mix64(key ^ (((y // TILE) << 32) | (x // TILE)))
-            return t, k, None, None, (kt, screen_code(key, x % TILE, y % TILE))
+            return t, k, None, None, (kt, screen_code(kt, x % TILE, y % TILE))
         if t < self.net_slots:  # the pixel's own hash: rotation and digital shift
             h = mix64(key ^ ((y << 32) | x))
             j = k + (((h >> 32) * self.rotate) >> 32)

@@ -47,7 +47,7 @@
  *   dpc_sampler_create. Lookups leave the thread's error message alone unless they fail (the one
  *   exception to the convention of dpc.h).
  * - Memory: sizeof(dpc_sampler) + D * (8 * spp + 8) + min(D, 64) * 12,288 + N * 4 * spp bytes,
- *   screen-ordered nets 4,096 + min(D, 64) * 2,048 more, plus a 12 KiB mask shared by all.
+ *   screen-ordered nets 4,096 more, plus a 12 KiB mask shared by all samplers.
  */
 #ifndef DPC_DPC_SAMPLER_H
 #define DPC_DPC_SAMPLER_H

@@ -103,7 +103,6 @@ void dpc_sampler_free(dpc_sampler *sampler) {
     free(sampler->shifted);
     free(sampler->nets);
     free(sampler->sobol1);
-    free(sampler->screen_codes);
     free(sampler);
 }
 

@@ -119,14 +119,10 @@ static dpc_status build(dpc_sampler *s, const dpc_sampler_options *o, build_prog
     float *set = (float *)malloc((size_t)workers * n * widest * sizeof(float)); /* sets of the widest model */
     ranked *scratch = (ranked *)malloc((size_t)n * sizeof *scratch);
     s->nets = s->net_slots ? (uint32_t *)malloc((size_t)s->net_slots * n * sizeof *s->nets) : NULL;
-    if (s->net_layout) {
-        s->sobol1 = (uint32_t *)malloc(4 * 256 * sizeof *s->sobol1);
-        s->screen_codes =
-            (uint16_t *)malloc((size_t)s->fast_slots * DPC_SAMPLER_TILE * DPC_SAMPLER_TILE * sizeof *s->screen_codes);
-    }
+    if (s->net_layout) s->sobol1 = (uint32_t *)malloc(4 * 256 * sizeof *s->sobol1);
     dpc_status st = DPC_OK;
     if (!s->tables || !s->keys || !s->shifted || !set || !scratch || (s->net_slots && !s->nets) ||
-        (s->net_layout && (!s->sobol1 || !s->screen_codes))) {
+        (s->net_layout && !s->sobol1)) {
         st = dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory for a sampler of %u x %u points", D, n);
         goto done;
     }
@@ -143,10 +139,6 @@ static dpc_status build(dpc_sampler *s, const dpc_sampler_options *o, build_prog
                     if (e >> b & 1u) acc ^= v[byte * 8 + b];
                 s->sobol1[byte * 256 + e] = acc;
             }
-        for (uint32_t d = 0; d < s->fast_slots; d++)
-            for (uint32_t at = 0; at < DPC_SAMPLER_TILE * DPC_SAMPLER_TILE; at++)
-                s->screen_codes[(size_t)d * DPC_SAMPLER_TILE * DPC_SAMPLER_TILE + at] =
-                    (uint16_t)dpc_sampler_screen_code(s->keys[d], at % DPC_SAMPLER_TILE, at / DPC_SAMPLER_TILE);
     }
     for (uint32_t d = 0; d < s->fast_slots; d++) /* what dpc_sampler_locate and the lookups compute */
         for (uint32_t at = 0; at < DPC_SAMPLER_TILE * DPC_SAMPLER_TILE; at++) {

@@ -54,11 +54,9 @@ struct dpc_sampler {
      * the general path computes, read instead of recomputed (the same bits). */
     float *shifted; /* fast_slots * 32 * 32 * 3 floats */
     /* Screen-ordered nets (net_layout DPC_SAMPLER_NETS_SCREEN): the Sobol' second coordinate of
-     * an index, byte by byte (4 x 256 words), and for pass 0 of the fast net slots each tile
-     * place's permuted Morton code (fast_slots * 1024). NULL for per-pixel nets. */
+     * an index, byte by byte (4 x 256 words). NULL for per-pixel nets. */
     uint32_t net_layout;
     uint32_t *sobol1;
-    uint16_t *screen_codes;
     /* keys[d] for d < fast_slots, inside the object: one dependent load less on the lookups'
      * critical path (key -> hash -> point -> table read) */
     uint64_t fast_key[DPC_SAMPLER_FAST_SLOTS];
@@ -192,9 +190,12 @@ static inline void dpc_sampler_net_values(const struct dpc_sampler *s, uint32_t 
 
 /* Screen-ordered net slots (docs/rendering.md, "Screen-ordered nets"): a 32 x 32 tile of pixels
  * shares one 2-D Sobol' sequence of 1024 n points; pixel (x, y) takes the block of n points at its
- * Morton code in the tile, the code's base-4 digits permuted (nested, per dimension and pass), its
- * sample index shuffled (nested, per pixel), and both coordinates Owen-scrambled per tile, so a
- * pixel's samples are a (0,m,2)-net and each aligned group of 4^k pixels' samples a finer one. */
+ * Morton code in the tile, the code's base-4 digits permuted (nested, per dimension, pass and
+ * tile), its sample index shuffled (nested, per pixel), and both coordinates Owen-scrambled per
+ * tile, so a pixel's samples are a (0,m,2)-net and each aligned group of 4^k pixels' samples a
+ * finer one. The permutation is the tile's own: with one per dimension, tiles shared which pixel
+ * took which block, and their error images correlated (|r| 0.2-0.4 on smooth and step integrands;
+ * 0.03 with the tile's own). */
 static inline uint32_t dpc_sampler_reverse32(uint32_t v) {
     v = (v >> 16) | (v << 16);
     v = ((v & 0xFF00FF00u) >> 8) | ((v & 0x00FF00FFu) << 8);
@@ -220,15 +221,15 @@ static inline uint32_t dpc_sampler_nested(uint32_t v, uint32_t seed) {
 extern const uint8_t dpc_sampler_perm4[24];
 
 /* The Morton code (x bit b at 2b, y bit b at 2b + 1) of a tile place, its five base-4 digits
- * permuted from the top, each by permutation mix(key + ((prefix << 3 | level) + 1) golden) of 24,
- * prefix the original digits above it. */
-static inline uint32_t dpc_sampler_screen_code(uint64_t key, uint32_t x, uint32_t y) {
+ * permuted from the top, each by permutation mix(kt + ((prefix << 3 | level) + 1) golden) of 24,
+ * prefix the original digits above it, kt the tile's hash. */
+static inline uint32_t dpc_sampler_screen_code(uint64_t kt, uint32_t x, uint32_t y) {
     uint32_t code = 0, out = 0;
     for (uint32_t b = 0; b < 5; b++) code |= ((x >> b) & 1u) << (2 * b) | ((y >> b) & 1u) << (2 * b + 1);
     for (uint32_t l = 0; l < 5; l++) {
         const uint32_t shift = 8 - 2 * l, digit = (code >> shift) & 3u;
         const uint64_t prefix = code >> (shift + 2);
-        const uint64_t h = dpc_mix64(key + ((prefix << 3 | l) + 1) * 0x9E3779B97F4A7C15ull);
+        const uint64_t h = dpc_mix64(kt + ((prefix << 3 | l) + 1) * 0x9E3779B97F4A7C15ull);
         const uint32_t perm = dpc_sampler_perm4[((h >> 32) * 24) >> 32];
         out |= ((perm >> (2 * digit)) & 3u) << shift;
     }
@@ -296,7 +297,7 @@ static inline dpc_sampler_point dpc_sampler_locate(const struct dpc_sampler *s, 
     p.code = 0;
     if (table < s->net_slots && s->net_layout) { /* h: the tile's hash; j: the permuted code, k the index */
         p.h = dpc_mix64(key ^ ((uint64_t)(y / DPC_SAMPLER_TILE) << 32 | (x / DPC_SAMPLER_TILE)));
-        p.code = dpc_sampler_screen_code(key, x & (DPC_SAMPLER_TILE - 1), y & (DPC_SAMPLER_TILE - 1));
+        p.code = dpc_sampler_screen_code(p.h, x & (DPC_SAMPLER_TILE - 1), y & (DPC_SAMPLER_TILE - 1));
         rot = 0;
         p.mask[0] = p.mask[1] = p.mask[2] = p.c[0] = p.c[1] = 0.0f;
     } else if (table < s->net_slots) {
@@ -339,9 +340,7 @@ static inline dpc_status dpc_sampler_lookup_2d(const struct dpc_sampler *s, uint
         const uint32_t last = DPC_SAMPLER_TILE - 1;
         const uint64_t kt =
             dpc_mix64(s->fast_key[dim] ^ ((uint64_t)(y / DPC_SAMPLER_TILE) << 32 | (x / DPC_SAMPLER_TILE)));
-        const uint32_t c = s->screen_codes[(size_t)dim * DPC_SAMPLER_TILE * DPC_SAMPLER_TILE +
-                                           (y & last) * DPC_SAMPLER_TILE + (x & last)];
-        dpc_sampler_screen_values(s, kt, c, index, out);
+        dpc_sampler_screen_values(s, kt, dpc_sampler_screen_code(kt, x & last, y & last), index, out);
         return DPC_OK;
     }
     if (dim < s->net_slots) { /* a net slot's pass 0: one hash, one read, one multiply */
