@@ -154,7 +154,7 @@ typedef struct dpc_sampler_info {
 DPC_API dpc_status dpc_sampler_get_info(const dpc_sampler *sampler, dpc_sampler_info *out_info);
 
 /* The sampler's tables: table t (0 <= t < D) is spp points of 2 floats, row-major (a net slot's
- * table holds its cells' centres); *out_table stays valid while the sampler lives. For
+ * table holds its per-pixel net's cell centres, which screen-ordered lookups do not read); *out_table stays valid while the sampler lives. For
  * inspection and for reimplementing lookups elsewhere (e.g. on a GPU) from docs/rendering.md. */
 DPC_API dpc_status dpc_sampler_table(const dpc_sampler *sampler, uint32_t t, const float **out_table);
 /* The 32 x 32 screen-space mask shared by all samplers: 3072 floats, pixel (x, y) at
