@@ -39,7 +39,9 @@ def main() -> None:
         'default options; "get_2d, sets" with `net_dims = 1` (dimensions 1-7 on the sets\' path, '
         "which the default takes at 1 spp and counts that are not powers of two); the last column is "
         "get_2d of dimension 0 alone "
-        "(the net slot, or at 1 spp the shifted set).",
+        "(the net slot, or at 1 spp the shifted set). Below 64 spp the default's nets are screen-ordered: "
+        "a lookup hashes the pixel's Morton code in its tile digit by digit (eight 64-bit hashes), "
+        "where a per-pixel net takes one.",
         "",
         "| spp | dimensions | create (ms) | get_2d (ns) | get_1d (ns) | get_2d, sets (ns) | get_2d, dimension 0 (ns) "
         "| tables (bytes) |",
