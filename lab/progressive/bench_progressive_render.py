@@ -128,13 +128,20 @@ def pool_sampler_class(mi, pool_array: np.ndarray):
     return PoolSampler
 
 
+# The dpc plugin as this section measures it: every dimension after the pixel position folded,
+# nets laid out per pixel, and for the set model a net in the pixel position below 32 spp and in
+# every slot from 32 on (the sampler's defaults are now no fold, screen-ordered nets below 64 spp
+# and nets in every slot: docs/rendering.md).
+PINNED = {"fold_from": 1, "net_layout": "pixel"}
+
+
 def render(mi, sampler: str, spp: int, seed: int, width: int) -> np.ndarray:
     d = BR.scene_dict(mi, SCENE, width)
     kind, extra = {
-        "dpc progressive": ("dpc", {"model": "progressive-2d"}),
-        "dpc progressive balanced": ("dpc", {"model": "progressive-2d-balanced"}),
-        "dpc progressive relaxed": ("dpc", {"model": "progressive-2d-relaxed"}),
-        "dpc set": ("dpc", {"model": "bnot-2d-stratified"}),
+        "dpc progressive": ("dpc", {"model": "progressive-2d", **PINNED}),
+        "dpc progressive balanced": ("dpc", {"model": "progressive-2d-balanced", **PINNED}),
+        "dpc progressive relaxed": ("dpc", {"model": "progressive-2d-relaxed", **PINNED}),
+        "dpc set": ("dpc", {"model": "bnot-2d-stratified", "net_dims": 16 if spp >= 32 else 1, **PINNED}),
         "pmj02bn": ("pmj02bn_bench", {}),
         "dpc progressive, relaxed": ("relaxed_bench", {}),
         "dpc progressive, pool": ("progressive_bench", {}),
