@@ -84,7 +84,13 @@ def test_goals_meet_and_miss():
     ok, text = by["a, 64 spp: dpc MSE <= paddedsobol's"]
     assert not ok and "miss by 100%" in text and "more than 2 standard errors" in text
     ok, text = by["a, 16 spp: dpc MSE <= paddedsobol's"]
-    assert not ok and "the fold of the slots" in text  # below 32 spp the cause names the fold
+    assert not ok and "pad Owen-scrambled nets" in text
+    ok, text = by["a, 1 spp: dpc E_low <= zsobol's"]
+    assert ok and "likely" not in text  # a met goal names no cause
+    scenes["a"]["rows"]["zsobol"] = rows(0.5, 1.0)  # a clear miss below 64 spp: not isolated
+    by = {name: (ok, text + cause) for name, ok, text, cause in S.goals(scenes)}
+    ok, text = by["a, 16 spp: dpc MSE <= zsobol's"]
+    assert not ok and "not isolated" in text
     ok, text = by["a, 1 spp: dpc E_low <= zsobol's"]
     assert ok and "likely" not in text  # a met goal names no cause
     scenes["a"]["rows"]["dpc"] = rows(1.0, 2.0)

@@ -32,9 +32,9 @@ def test_ctrl_c_stops_a_long_creation_within_half_a_second_every_time():
 def test_progress_counts_the_tables_sets_and_changes_no_value():
     seen = []
     with_progress = dpc.Sampler(
-        "bnot-2d", samples_per_pixel=16, dimensions=6, progress=lambda d, t: seen.append((d, t))
+        "bnot-2d", samples_per_pixel=16, dimensions=6, net_dims=1, progress=lambda d, t: seen.append((d, t))
     )
-    plain = dpc.Sampler("bnot-2d", samples_per_pixel=16, dimensions=6)
+    plain = dpc.Sampler("bnot-2d", samples_per_pixel=16, dimensions=6, net_dims=1)
     for t in range(6):
         np.testing.assert_array_equal(with_progress.table(t), plain.table(t))
     assert seen and seen[-1] == (5, 5)  # slot 0 is a net: five sets
