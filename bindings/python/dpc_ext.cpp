@@ -247,6 +247,28 @@ class Model {
         call([&] { return dpc_filter(model_.get(), m, p); });
     }
 
+    // n_points points following a (height, width) density (dpc_generate_density): (m, 2).
+    py::array_t<float> generate_density(py::array_t<float, py::array::c_style | py::array::forcecast> density,
+                                        uint64_t seed, size_t n_points) const {
+        if (density.ndim() != 2)
+            raise_status(DPC_ERROR_INVALID_ARGUMENT, "density must be a 2-D array (height, width)");
+        const uint64_t h = static_cast<uint64_t>(density.shape(0)), w = static_cast<uint64_t>(density.shape(1));
+        if (h > UINT32_MAX || w > UINT32_MAX || h * w > DPC_DENSITY_MAX_CELLS)
+            raise_status(DPC_ERROR_LIMIT, "density is " + std::to_string(h) + " x " + std::to_string(w) +
+                                              " cells, at most " + std::to_string(DPC_DENSITY_MAX_CELLS) + " in all");
+        size_t floats = 0;
+        call([&] { return dpc_generate_size(model_.get(), 1, n_points, &floats); });
+        const size_t m = floats / info_.dims;
+        py::array_t<float> out({static_cast<py::ssize_t>(m), static_cast<py::ssize_t>(2)});
+        const float *d = density.data();
+        float *o = out.mutable_data();
+        call([&] {
+            return dpc_generate_density(model_.get(), d, static_cast<uint32_t>(w), static_cast<uint32_t>(h), seed,
+                                        m, o);
+        });
+        return out;
+    }
+
     const dpc_model *handle() const { return model_.get(); }
     std::shared_ptr<dpc_model> shared() const { return model_; }
 
@@ -618,7 +640,9 @@ PYBIND11_MODULE(_core, mod) {
              "count sets of n_points points (0: the trained count): (count, m, n) if batch else (m, n); "
              "runs off the calling thread when large, so Ctrl-C stops it (KeyboardInterrupt) and "
              "progress(done, total) is called on the calling thread")
-        .def("filter", &Model::filter, py::arg("points"));
+        .def("filter", &Model::filter, py::arg("points"))
+        .def("generate_density", &Model::generate_density, py::arg("density"), py::arg("seed"), py::arg("n_points"));
+    mod.attr("DENSITY_MAX_CELLS") = DPC_DENSITY_MAX_CELLS;
     mod.attr("DEFAULT_MAX_NEIGHBOURS") = DPC_DEFAULT_MAX_NEIGHBOURS;
     mod.attr("MAX_POINTS") = DPC_MAX_POINTS;
     mod.attr("SAMPLER_MAX_SPP") = DPC_SAMPLER_MAX_SPP;

@@ -291,6 +291,21 @@ class Model:
         count = _args.integer(count, "count", 1, (1 << 63) - 1, limit=True)
         return self._h.generate(_args.seed(seed), count, self._count(n_points), True, _max_bytes(max_bytes), progress)
 
+    def generate_density(
+        self, density, n_points: int | None = None, seed: int = 0, *, resolution: int = 512
+    ) -> np.ndarray:
+        """Blue noise that follows ``density``: (n_points or the trained count, 2) float32 in
+        [0, 1)^2 (dpc_generate_density). ``density``: a 2-D array (row r covers y in
+        [r/H, (r+1)/H)), a callable ``f(x, y)`` sampled on a ``resolution``-square grid, or an
+        image (bright is dense; :func:`dpc.density.as_density` for ``invert`` and ``gamma``).
+        A 2-D set model whose layers filter the plane as a whole is needed (bnot-2d, blue-2d,
+        ...; others raise :class:`UnsupportedError`). The same bits on every CPU and thread
+        count; bad densities raise :class:`InvalidArgumentError` before any work."""
+        from .density import as_density
+
+        grid = as_density(density, resolution=resolution)
+        return self._h.generate_density(grid, _args.seed(seed), self._count(n_points))
+
     def filter(self, points) -> np.ndarray:
         """Run the cascade on your own (m, dims) points; returns a new float32 array."""
         pts = np.array(points, dtype=np.float32, order="C", copy=True)

@@ -289,6 +289,23 @@ DPC_API dpc_status dpc_generate_batch(const dpc_model *model, uint64_t seed, siz
  * count * n_points * dims. For hosts that allocate out themselves (the Python binding). */
 DPC_API dpc_status dpc_generate_size(const dpc_model *model, size_t count, size_t n_points, size_t *out_floats);
 
+/* Blue noise that follows a density: n_points points (0 = the trained count) in [0,1)^2 whose
+ * local count follows `density`, a width x height grid of cells, piecewise constant: cell
+ * (cx, cy) = [cx/width, (cx+1)/width) x [cy/height, (cy+1)/height) has the value
+ * density[cy * width + cx] (row cy along the second coordinate). Values are finite and >= 0,
+ * not all zero, at most DPC_DENSITY_MAX_CELLS cells; only their ratios matter. The model must be
+ * a 2-D set model whose layers filter the plane as a whole (bnot-2d, bnot-2d-stratified,
+ * blue-2d, ...; others: DPC_ERROR_UNSUPPORTED). The model's input points are mapped through the
+ * density's inverse CDF and every layer runs in units of the local spacing (h_ij, the harmonic
+ * mean of the pair's spacings 1/sqrt(n_points * density)), with mirror edges at the square's
+ * sides; no point ever lies in a zero-density cell. The output balance of a uniform model is not
+ * applied. A pure function of (model file, input kind, density, seed, n_points): the same bits
+ * on every CPU ISA and thread count; it runs on the CPU whatever the model's backend.
+ * docs/density.md states the definition and its measurements. */
+#define DPC_DENSITY_MAX_CELLS (1u << 24)
+DPC_API dpc_status dpc_generate_density(const dpc_model *model, const float *density, uint32_t width, uint32_t height,
+                                        uint64_t seed, size_t n_points, float *out);
+
 /* Progress and cancellation of a long call. libdpc calls progress(user, done, total) as work
  * goes on: total = count * layers units, one per layer of each set. It is called before and
  * after every set, after every layer where the backend reports layers, and possibly again with

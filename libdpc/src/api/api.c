@@ -20,6 +20,7 @@
 #include "common/threads.h"
 #include "cpu/cpu_cascade.h"
 #include "cpu/cpu_layer_train.h"
+#include "density/density.h"
 #include "model/balance.h"
 #include "model/input.h"
 #include "model/level_order.h"
@@ -625,6 +626,16 @@ dpc_status dpc_generate_n(const dpc_model *model, uint64_t seed, size_t n_points
     if (model->backend == DPC_BACKEND_VULKAN) return vk_generate(model, seed, 1, n_points, out);
 #endif
     return dpc_cpu_generate(&model->cascade, model->input, &model->engine, seed, 1, n_points, out, NULL, NULL);
+}
+
+dpc_status dpc_generate_density(const dpc_model *model, const float *density, uint32_t width, uint32_t height,
+                                uint64_t seed, size_t n_points, float *out) {
+    dpc_clear_error();
+    if (!model || !out) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "model or out is NULL");
+    dpc_status st = dpc_model_check_count(model, &n_points);
+    if (st != DPC_OK) return st;
+    if ((st = dpc_density_check(model, density, width, height)) != DPC_OK) return st;
+    return dpc_density_generate(model, density, width, height, seed, n_points, out);
 }
 
 dpc_status dpc_generate(const dpc_model *model, uint64_t seed, float *out) {

@@ -1,0 +1,30 @@
+/* Blue noise that follows a density (dpc_generate_density; docs/density.md states the
+ * definition): a 2-D cascade run with every distance measured in units of the local spacing.
+ *
+ * The density is piecewise constant over a W x H grid of cells on [0,1)^2 (cell (cx, cy) is
+ * [cx/W, (cx+1)/W) x [cy/H, (cy+1)/H), value density[cy * W + cx]). The input points are the
+ * model's input kind mapped through the density's inverse CDF (rows, then the cell within the
+ * row), so they follow it exactly and keep their strata. Each layer then moves point i by
+ *     sum_j h_ij g(d_ij / (rho h_ij)) delta_ij / d_ij,   h = (m rho(x))^(-1/2),
+ *     h_ij = 2 h_i h_j / (h_i + h_j) (the harmonic mean: the pair's two terms are equal and
+ *     opposite, and a sparse point does not push back the dense side of an edge),
+ * with mirror edges: the square's edges reflect the set, and a point that would leave the square
+ * or enter a zero-density cell stays where it is. Everything is float32 in one
+ * fixed order (double for the inverse CDF), the same bits for every CPU and thread count. */
+#ifndef DPC_DENSITY_DENSITY_H
+#define DPC_DENSITY_DENSITY_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "model/model_handle.h"
+
+/* Check the model and the density (finite, >= 0, positive somewhere, shape within bounds) as
+ * dpc_generate_density does, before any work; DPC_OK or a status with its message. */
+dpc_status dpc_density_check(const dpc_model *model, const float *density, uint32_t width, uint32_t height);
+
+/* m points (checked) following density into out (m * 2 floats); threads from the model's engine. */
+dpc_status dpc_density_generate(const dpc_model *model, const float *density, uint32_t width, uint32_t height,
+                                uint64_t seed, size_t m, float *out);
+
+#endif
