@@ -632,9 +632,9 @@ dpc_status dpc_generate_density(const dpc_model *model, const float *density, ui
                                 uint64_t seed, size_t n_points, float *out) {
     dpc_clear_error();
     if (!model || !out) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "model or out is NULL");
-    dpc_status st = dpc_model_check_count(model, &n_points);
+    dpc_status st = dpc_density_check(model, density, width, height);
     if (st != DPC_OK) return st;
-    if ((st = dpc_density_check(model, density, width, height)) != DPC_OK) return st;
+    if ((st = dpc_model_check_count(model, &n_points)) != DPC_OK) return st;
     return dpc_density_generate(model, density, width, height, seed, n_points, out);
 }
 
