@@ -67,6 +67,13 @@ CASES = [
     (["dither", "{d}/small.png", "-m", "no-such-mask", "-o", "{d}/o.png"], "unknown mask"),
     (["dither", "{d}/small.png", "-m", "white", "-n", "40000", "-o", "{d}/o.png"], "DPC_MAX_PIXELS"),
     (["dither", "{d}/small.png", "--mask-output", "{d}/m.exr", "-o", "{d}/o.png"], "--mask-output"),
+    (["stipple", "{d}/fifo.png", "-o", "{d}/o.png"], "FIFO"),
+    (["stipple", "{d}/missing.png", "-o", "{d}/o.png"], "does not exist"),
+    (["stipple", "{d}/garbage.png", "-o", "{d}/o.png"], "cannot read image"),
+    (["stipple", "{d}/bomb.png", "-o", "{d}/o.png"], "DPC_MAX_PIXELS"),
+    (["stipple", "{d}/small.png", "-o", "{d}/o.jpg"], ".svg"),
+    (["stipple", "{d}/small.png", "-m", "bnot-3d", "-o", "{d}/o.png"], "2-D model"),
+    (["generate", "-m", "bnot-2d", "--invert"], "--density"),
     # list, the group
     (["list", "extra"], "unexpected extra argument"),
     (["no-such-command"], "No such command"),

@@ -1,4 +1,4 @@
-"""The ``dpc`` command line: list, generate, analyze, compare, mask, dither (one module each;
+"""The ``dpc`` command line: list, generate, analyze, compare, mask, dither, stipple (one module each;
 ``options`` holds the options they share, ``sources`` reads and generates their points).
 
 UTK-style short flags: -m model (in mask and dither: the mask's source, a model or baseline;
@@ -26,6 +26,7 @@ from .list_ import list_cmd
 from .mask import mask_cmd
 from .options import DISC_DEFAULT as _DISC_DEFAULT  # noqa: F401 (tests hold it to dpc.analysis's list)
 from .options import one_line
+from .stipple import stipple_cmd
 
 __all__ = ["cli", "main"]
 
@@ -38,7 +39,7 @@ def cli():
     """dpc: point patterns from Deep Point Correlation Design (Leimkuehler et al. 2019)."""
 
 
-for _command in (list_cmd, generate_cmd, analyze_cmd, compare_cmd, mask_cmd, dither_cmd):
+for _command in (list_cmd, generate_cmd, analyze_cmd, compare_cmd, mask_cmd, dither_cmd, stipple_cmd):
     cli.add_command(_command)
 
 

@@ -17,10 +17,12 @@ from .options import (
     input_kind,
     max_bytes,
     max_output_option,
+    progress_bar,
     stratified_option,
     threads_option,
 )
 from .sources import generate_sets, ran_on
+from .stipple import density_model, image_density
 
 
 @click.command("generate")
@@ -100,19 +102,62 @@ from .sources import generate_sets, ran_on
     "with metadata dpc.balance (blue-2d) are balanced already; not for progressive models.",
 )
 @max_output_option
+@click.option(
+    "--density",
+    type=click.Path(exists=True, dir_okay=False),
+    default=None,
+    metavar="IMAGE",
+    help="Blue noise that follows an image (any format Pillow reads; Model.generate_density): "
+    "bright is dense, density tone^gamma; transparent pixels get no points. Image rows run "
+    "down the second coordinate. 2-D models whose layers filter the plane as a whole only "
+    "(bnot-2d-stratified, bnot-2d, blue-2d, ...); it runs on the CPU. See also 'dpc stipple'.",
+)
+@click.option("--invert", is_flag=True, help="With --density: dark is dense, density (1 - tone)^gamma.")
+@click.option(
+    "--gamma",
+    type=click.FloatRange(min=0, min_open=True),
+    default=None,
+    help="With --density: the exponent of the density (default 1).",
+)
 def generate_cmd(
-    model, n_points, dims, seed, count, output, fmt, bin_dtype, threads, isa, backend, stratified, balance, max_output
+    model,
+    n_points,
+    dims,
+    seed,
+    count,
+    output,
+    fmt,
+    bin_dtype,
+    threads,
+    isa,
+    backend,
+    stratified,
+    balance,
+    max_output,
+    density,
+    invert,
+    gamma,
 ):
     """Generate point sets from a model or a baseline. A model's sets are float32 (kept so in
-    .npy and float32 .bin files; text has 17 significant digits)."""
+    .npy and float32 .bin files; text has 17 significant digits). With --density IMAGE a 2-D
+    model's points follow the image (bright is dense)."""
+    if density is None and (invert or gamma is not None):
+        raise click.UsageError("--invert and --gamma apply with --density only")
+    if density is not None and balance:
+        raise click.UsageError("--balance would undo --density (it evens out the low frequencies a density has)")
     if output is not None:
         pointio.resolve_format(output, fmt)  # fail on a bad name or folder before the work
         check_output(output)
     if stratified is not None and model in baselines.BASELINES:
         raise click.UsageError("--stratified/--uniform apply to models, not to baselines")
-    sets, name, loaded = generate_sets(
-        model, n_points, dims, count, seed, threads, isa, backend, input_kind(stratified), max_bytes(max_output)
-    )
+    if density is not None:
+        sets, name, loaded = density_sets(
+            model, density, invert, gamma, n_points, dims, count, seed, threads, isa, backend, stratified, max_output
+        )
+    else:
+        sets, name, loaded = generate_sets(
+            model, n_points, dims, count, seed, threads, isa, backend, input_kind(stratified), max_bytes(max_output)
+        )
     if balance:
         if loaded is not None and loaded.order == "progressive":
             raise click.UsageError(
@@ -134,6 +179,40 @@ def generate_cmd(
     pointio.write_points(output, sets, fmt, bin_dtype=bin_dtype, progress_bar=True)
     click.echo(
         f"wrote {count_of(sets.shape[0])} of {sets.shape[1]} {sets.shape[2]}-D points "
-        f"from {name}{f' ({ran_on(loaded)})' if loaded else ''} to {output}",
+        f"from {name}{f' ({ran_on(loaded)})' if loaded else ''}{f' following {density}' if density else ''} "
+        f"to {output}",
         err=True,
     )
+
+
+def density_sets(
+    spec, image, invert, gamma, n_points, dims, count, seed, threads, isa, backend, stratified, max_output
+) -> tuple[np.ndarray, str, object]:
+    """``count`` sets that follow the density of ``image`` (bright is dense; dark with
+    ``invert``), set c from seed + c (mod 2^64), as generate_sets makes them without a density."""
+    from .._model import _max_bytes
+    from ..errors import InvalidArgumentError, LimitError
+
+    if backend == "vulkan":
+        raise click.UsageError("--density runs on the CPU (dpc_generate_density); leave out --backend vulkan")
+    loaded = density_model(spec, threads, isa, input_kind(stratified))
+    if dims is not None and dims != loaded.dims:
+        raise InvalidArgumentError(f"model {loaded.name} makes {loaded.dims}-D points, not {dims}-D")
+    n = loaded.n_points if n_points is None else n_points
+    size, limit = count * n * 2 * 4, _max_bytes(max_bytes(max_output))
+    if size > limit:
+        raise LimitError(
+            f"the output would take {size / 2**30:.3g} GiB, more than the limit of {limit / 2**30:.3g} GiB: "
+            "raise it with --max-output or DPC_MAX_OUTPUT_BYTES"
+        )
+    grid, _ = image_density(
+        image,
+        ink=invert,
+        gamma=1.0 if gamma is None else gamma,
+        empty_hint=" (the image is white: leave out --invert)" if invert else " (the image is black: try --invert)",
+    )
+    sets = [
+        loaded.generate_density(grid, n, (seed + c) % (1 << 64))
+        for c in progress_bar(range(count), f"{loaded.name} (density)")
+    ]
+    return np.stack(sets), loaded.name, loaded
