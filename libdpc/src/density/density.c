@@ -7,6 +7,8 @@
 
 #include "common/error.h"
 #include "common/threads.h"
+#include "cpu/cpu_cascade.h"
+#include "density/density_kernel.h"
 #include "model/input.h"
 
 #define PARALLEL_MIN_POINTS 2048
@@ -158,108 +160,235 @@ static void map_point(const density_map *d, float *p) {
 
 /* ---- one layer ---------------------------------------------------------------------------- */
 
+/* The neighbour grid: G x G cells about the radius at the mean spacing wide, and a cell holding
+ * more than SPLIT_MIN points cut into k x k leaves of about LEAF_POINTS (a dense spot otherwise
+ * makes every point of it scan thousands); a cell not cut is one leaf. The points are sorted by
+ * cell, and within a cut cell by leaf (row-major), each sort stable. A leaf's query points,
+ * GROUP_MAX at a time, share one run of candidates: the points of every leaf (of every mirror
+ * image) that one of them may reach, in a fixed order (images, cell rows, cells, leaf rows,
+ * leaves, sorted order), gathered in image coordinates and in chunks of RUN_CAP. The run depends
+ * on the group alone, so neither the thread count nor the ISA path changes it; the kernel
+ * (density_kernel.h) fixes the rest of the evaluation order. */
+#define SPLIT_MIN 48u
+#define LEAF_POINTS 16u
+#define GROUP_MAX 32u
+#define RUN_CAP DPC_DENSITY_CHUNK
+#define FAR_AWAY 1.0e4f /* the padding's coordinates: beyond every reach */
+
 typedef struct layer_pass {
-    const density_map *map;
-    size_t m;
-    const float *x;                /* m x 2, caller order */
-    const float *h;                 /* per point: the local spacing */
-    const float *sx, *sy, *sa; /* sorted by grid cell: x, y, 1/h */
+    const float *sx, *sy, *sa, *sh; /* sorted: x, y, 1/h, h (readable 16 floats past m) */
     const uint32_t *start;          /* G * G + 1 cell starts */
     const float *hmax;              /* per cell: the largest h of its points */
-    uint32_t G;
-    const float *w, *dw;
-    float rho, c2, cut, umax; /* c2 = (b - 1) / (2 rho) */
-    int32_t qmax;
-    float *delta; /* m x 2 */
+    const uint32_t *kdiv;           /* per cell: k, leaves per axis */
+    const uint32_t *leaf_off;       /* per cell: its first leaf (G * G + 1) */
+    const uint32_t *leaf_start;     /* per leaf: its first point (n_leaves + 1) */
+    const float *leaf_hmax;         /* per leaf: the largest h of its points */
+    uint32_t G, n_leaves;
+    float rho, h_max;
+    dpc_density_job job;
+    dpc_density_fn kernel;
+    float *scratch; /* SLOT_FLOATS per slot */
+    float *delta;   /* m x 2, sorted order */
 } layer_pass;
 
-/* The distance from v to the span [lo, hi] (0 inside). */
-static float span_gap(float v, float lo, float hi) {
-    return v < lo ? lo - v : v > hi ? v - hi : 0.0f;
-}
+#define SLOT_FLOATS (3u * (RUN_CAP + 16u) + 4u * GROUP_MAX + 16u * GROUP_MAX + 3u * DPC_DENSITY_DENSE)
+
+/* The distance from the span [a, b] to the span [lo, hi] (0 where they meet). */
+static float span_gap(float a, float b, float lo, float hi) { return b < lo ? lo - b : a > hi ? a - hi : 0.0f; }
 
 /* The pair spacing's bound rho h_ij for h_j <= hc (h_ij grows with h_j), with a margin for rounding. */
-static float reach(float rho, float hi, float hc) {
-    return rho * (2.0f * hi * hc / (hi + hc)) * 1.001f;
-}
+static float reach(float rho, float hi, float hc) { return rho * (2.0f * hi * hc / (hi + hc)) * 1.001f; }
 
-/* The sum over the candidates of cells [gx0, gx1] x [gy0, gy1] seen through the image
- * x' = ax + bx x, y' = ay + by y, in row-major cell order and sorted order within a cell. A cell
- * none of whose points can reach the query (its nearest edge beyond the reach of its largest h)
- * is passed over: its terms are zero, so the bits are those of scanning it. */
-static void scan(const layer_pass *p, float xi, float yi, float hi_, float ai, uint32_t gx0, uint32_t gx1, uint32_t gy0,
-                 uint32_t gy1, float ax, float bx, float ay, float by, float *acc) {
-    const uint32_t G = p->G;
-    const float inv_g = 1.0f / (float)G;
-    for (uint32_t gy = gy0; gy <= gy1; gy++) {
-        const float ya = ay + by * ((float)gy * inv_g), yb = ay + by * ((float)(gy + 1) * inv_g);
-        const float gap_y = span_gap(yi, ya < yb ? ya : yb, ya < yb ? yb : ya);
-        for (uint32_t gx = gx0; gx <= gx1; gx++) {
-            const size_t cell = (size_t)gy * G + gx;
-            const uint32_t lo = p->start[cell], hi = p->start[cell + 1];
-            if (lo == hi) continue;
-            const float xa = ax + bx * ((float)gx * inv_g), xb = ax + bx * ((float)(gx + 1) * inv_g);
-            const float gap_x = span_gap(xi, xa < xb ? xa : xb, xa < xb ? xb : xa);
-            const float R = reach(p->rho, hi_, p->hmax[cell]);
-            if (gap_x * gap_x + gap_y * gap_y >= R * R) continue;
-            const float R2 = R * R;
-            for (uint32_t j = lo; j < hi; j++) {
-                const float dx = (ax + bx * p->sx[j]) - xi;
-                const float dy = (ay + by * p->sy[j]) - yi;
-                const float d2 = dx * dx + dy * dy;
-                if (!(d2 < R2)) continue;
-                const float d = sqrtf(d2);
-                const float a = ai + p->sa[j]; /* 2 / h_ij */
-                const float u = (d * p->c2) * a;
-                if (!(u > p->cut && u < p->umax)) continue;
-                int32_t q = (int32_t)u;
-                if (q > p->qmax) q = p->qmax;
-                const float f = u - (float)q;
-                const float g = p->w[q] + f * p->dw[q];
-                const float k = (2.0f * g) / (a * d);
-                acc[0] += k * dx;
-                acc[1] += k * dy;
-            }
-        }
-    }
-}
-
-/* The cells [g0, g1] of an axis holding originals in [lo, hi] (clipped to [0, 1]); 0 if none. */
-static int cell_span(float lo, float hi, uint32_t G, uint32_t *g0, uint32_t *g1) {
+/* The cells [g0, g1] of an axis of n holding originals in [lo, hi] (clipped to [0, 1]); 0 if none. */
+static int cell_span(float lo, float hi, uint32_t n, uint32_t *g0, uint32_t *g1) {
     if (hi < 0.0f || lo > 1.0f || lo > hi) return 0;
-    *g0 = lo <= 0.0f ? 0 : cell_of(lo < 1.0f ? lo : nextafterf(1.0f, 0.0f), G);
-    *g1 = hi >= 1.0f ? G - 1 : cell_of(hi, G);
+    *g0 = lo <= 0.0f ? 0 : cell_of(lo < 1.0f ? lo : nextafterf(1.0f, 0.0f), n);
+    *g1 = hi >= 1.0f ? n - 1 : cell_of(hi, n);
     return 1;
 }
 
-static void layer_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
-    (void)slot;
-    const layer_pass *p = (const layer_pass *)ctx;
-    for (size_t i = lo; i < hi; i++) {
-        const float xi = p->x[2 * i], yi = p->x[2 * i + 1], hi_ = p->h[i], ai = 1.0f / hi_;
-        const float R = reach(p->rho, hi_, p->map->h_max);
-        float acc[2] = {0.0f, 0.0f};
-        /* images per axis: 0 the set, 1 mirrored at 0 (-x), 2 mirrored at 1 (2 - x) */
-        for (int iy = 0; iy < 3; iy++) {
-            const float ay = iy == 2 ? 2.0f : 0.0f, by = iy ? -1.0f : 1.0f;
-            float ylo = yi - R, yhi = yi + R;
-            if (iy == 1) ylo = -yi - R, yhi = R - yi;
-            if (iy == 2) ylo = 2.0f - yi - R, yhi = 2.0f - yi + R;
-            uint32_t gy0, gy1;
-            if (!cell_span(ylo, yhi, p->G, &gy0, &gy1)) continue;
-            for (int ix = 0; ix < 3; ix++) {
-                const float ax = ix == 2 ? 2.0f : 0.0f, bx = ix ? -1.0f : 1.0f;
-                float xlo = xi - R, xhi = xi + R;
-                if (ix == 1) xlo = -xi - R, xhi = R - xi;
-                if (ix == 2) xlo = 2.0f - xi - R, xhi = 2.0f - xi + R;
-                uint32_t gx0, gx1;
-                if (!cell_span(xlo, xhi, p->G, &gx0, &gx1)) continue;
-                scan(p, xi, yi, hi_, ai, gx0, gx1, gy0, gy1, ax, bx, ay, by, acc);
-            }
+/* Image k of an axis: v -> off + sgn v (0: the set, 1: mirrored at 0, 2: mirrored at 1). */
+static const float img_off[3] = {0.0f, 0.0f, 2.0f}, img_sgn[3] = {1.0f, -1.0f, -1.0f};
+
+/* The originals [lo, hi] whose image k lies within R of [v0, v1]. */
+static void image_span(int k, float v0, float v1, float R, float *lo, float *hi) {
+    if (k == 0) *lo = v0 - R, *hi = v1 + R;
+    else if (k == 1) *lo = -v1 - R, *hi = R - v0;
+    else *lo = 2.0f - v1 - R, *hi = 2.0f - v0 + R;
+}
+
+/* The gap from the image (off + sgn [i, i + 1] / n) of span i of an axis of n to [v0, v1]. */
+static float image_gap(float off, float sgn, uint32_t i, float inv_n, float v0, float v1) {
+    const float a = off + sgn * ((float)i * inv_n), b = off + sgn * ((float)(i + 1) * inv_n);
+    return span_gap(a < b ? a : b, a < b ? b : a, v0, v1);
+}
+
+typedef struct group {
+    float *cx, *cy, *ca; /* the chunk: RUN_CAP (+ 16 of padding) each */
+    uint32_t n;
+    float *q; /* the queries (density_kernel.h) */
+    unsigned nq;
+    float *acc;           /* nq x 16 lane sums */
+    float *dense;         /* the kernel's scratch */
+    uint32_t r0, r1;      /* the range waiting to be appended */
+    float ax, bx, ay, by; /* the image it is seen through */
+} group;
+
+/* Pad the chunk to whole vectors (far away: out of every window) and add its terms. */
+static void flush(const layer_pass *p, group *g) {
+    uint32_t n = g->n;
+    for (; n % 16u; n++) g->cx[n] = FAR_AWAY, g->cy[n] = FAR_AWAY, g->ca[n] = 0.0f;
+    p->kernel(&p->job, g->cx, g->cy, g->ca, n, g->q, g->nq, g->acc, g->dense);
+    g->n = 0;
+}
+
+typedef float v8 __attribute__((vector_size(32)));
+
+/* Append the waiting range of sorted points, seen through its image, to the chunk. */
+static void append(const layer_pass *p, group *g) {
+    uint32_t j0 = g->r0;
+    const uint32_t j1 = g->r1;
+    const v8 oxv = (v8){0} + g->ax, sxv = (v8){0} + g->bx, oyv = (v8){0} + g->ay, syv = (v8){0} + g->by;
+    while (j0 < j1) {
+        if (g->n == RUN_CAP) flush(p, g);
+        const uint32_t len = j1 - j0 < RUN_CAP - g->n ? j1 - j0 : RUN_CAP - g->n;
+        /* whole vectors of 8: the sorted arrays are readable, and the chunk writable, 16 floats
+         * past their ends; what lies past the range is overwritten before the kernel reads it */
+        float *cx = g->cx + g->n, *cy = g->cy + g->n, *ca = g->ca + g->n;
+        for (uint32_t k = 0; k < len; k += 8) {
+            v8 vx, vy, va;
+            memcpy(&vx, p->sx + j0 + k, sizeof vx);
+            memcpy(&vy, p->sy + j0 + k, sizeof vy);
+            memcpy(&va, p->sa + j0 + k, sizeof va);
+            vx = oxv + sxv * vx;
+            vy = oyv + syv * vy;
+            memcpy(cx + k, &vx, sizeof vx);
+            memcpy(cy + k, &vy, sizeof vy);
+            memcpy(ca + k, &va, sizeof va);
         }
-        p->delta[2 * i] = acc[0];
-        p->delta[2 * i + 1] = acc[1];
+        g->n += len;
+        j0 += len;
     }
+    g->r0 = g->r1 = j1;
+}
+
+/* Add the sorted points [a, b) to the run: one range with the waiting one where they touch. */
+static void add_range(const layer_pass *p, group *g, uint32_t a, uint32_t b) {
+    if (a != g->r1) {
+        append(p, g);
+        g->r0 = a;
+    }
+    g->r1 = b;
+}
+
+/* The sum of lane sums l[0 .. 8) in the canonical tree. */
+static float lane_tree(const float *l) { return ((l[0] + l[4]) + (l[2] + l[6])) + ((l[1] + l[5]) + (l[3] + l[7])); }
+
+/* The leaves of cut cell (gx, gy) (k per axis) that may hold a point within reach of the group:
+ * bbox [bx0, bx1] x [by0, by1], largest h hq; [xlo, xhi] x [ylo, yhi] the originals within the
+ * group's widest reach. */
+static void scan_leaves(const layer_pass *p, group *g, uint32_t gx, uint32_t gy, const float box[4], float hq,
+                        float xlo, float xhi, float ylo, float yhi) {
+    const size_t cell = (size_t)gy * p->G + gx;
+    const uint32_t k = p->kdiv[cell], n = p->G * k, first = p->leaf_off[cell];
+    uint32_t lx0, lx1, ly0, ly1;
+    if (!cell_span(xlo, xhi, n, &lx0, &lx1) || !cell_span(ylo, yhi, n, &ly0, &ly1)) return;
+    /* the cell's own leaves only */
+    lx0 = lx0 > gx * k ? lx0 - gx * k : 0;
+    ly0 = ly0 > gy * k ? ly0 - gy * k : 0;
+    if (lx1 < gx * k || ly1 < gy * k) return;
+    lx1 = lx1 - gx * k < k - 1 ? lx1 - gx * k : k - 1;
+    ly1 = ly1 - gy * k < k - 1 ? ly1 - gy * k : k - 1;
+    const float inv_n = 1.0f / (float)n;
+    for (uint32_t ly = ly0; ly <= ly1; ly++) {
+        const float gap_y = image_gap(g->ay, g->by, gy * k + ly, inv_n, box[2], box[3]);
+        for (uint32_t lx = lx0; lx <= lx1; lx++) {
+            const uint32_t leaf = first + ly * k + lx;
+            const uint32_t a = p->leaf_start[leaf], b = p->leaf_start[leaf + 1];
+            if (a == b) continue;
+            const float gap_x = image_gap(g->ax, g->bx, gx * k + lx, inv_n, box[0], box[1]);
+            const float Rc = reach(p->rho, hq, p->leaf_hmax[leaf]);
+            if (gap_x * gap_x + gap_y * gap_y < Rc * Rc) add_range(p, g, a, b);
+        }
+    }
+}
+
+/* The sorted points [s0, s1) (one leaf's, at most GROUP_MAX) as one group. */
+static void run_group(const layer_pass *p, float *slot, uint32_t s0, uint32_t s1) {
+    group g;
+    g.cx = slot;
+    g.cy = slot + (RUN_CAP + 16);
+    g.ca = slot + 2 * (RUN_CAP + 16);
+    g.q = slot + 3 * (RUN_CAP + 16);
+    g.acc = g.q + 4 * GROUP_MAX;
+    g.dense = g.acc + 16 * GROUP_MAX;
+    g.n = 0;
+    g.nq = s1 - s0;
+    float box[4] = {p->sx[s0], p->sx[s0], p->sy[s0], p->sy[s0]}, hq = 0.0f; /* x0, x1, y0, y1 */
+    for (unsigned k = 0; k < g.nq; k++) {
+        const uint32_t i = s0 + k;
+        g.q[4 * k] = p->sx[i];
+        g.q[4 * k + 1] = p->sy[i];
+        g.q[4 * k + 2] = p->sa[i];
+        g.q[4 * k + 3] = 0.0f;
+        box[0] = p->sx[i] < box[0] ? p->sx[i] : box[0];
+        box[1] = p->sx[i] > box[1] ? p->sx[i] : box[1];
+        box[2] = p->sy[i] < box[2] ? p->sy[i] : box[2];
+        box[3] = p->sy[i] > box[3] ? p->sy[i] : box[3];
+        hq = p->sh[i] > hq ? p->sh[i] : hq;
+    }
+    memset(g.acc, 0, 16 * g.nq * sizeof(float));
+    const uint32_t G = p->G;
+    const float inv_g = 1.0f / (float)G;
+    const float R = reach(p->rho, hq, p->h_max);
+    for (int iy = 0; iy < 3; iy++) {
+        float ylo, yhi, xlo, xhi;
+        uint32_t gy0, gy1, gx0, gx1;
+        image_span(iy, box[2], box[3], R, &ylo, &yhi);
+        if (!cell_span(ylo, yhi, G, &gy0, &gy1)) continue;
+        g.ay = img_off[iy], g.by = img_sgn[iy];
+        for (int ix = 0; ix < 3; ix++) {
+            image_span(ix, box[0], box[1], R, &xlo, &xhi);
+            if (!cell_span(xlo, xhi, G, &gx0, &gx1)) continue;
+            g.ax = img_off[ix], g.bx = img_sgn[ix];
+            g.r0 = g.r1 = 0;
+            for (uint32_t gy = gy0; gy <= gy1; gy++) {
+                const float gap_y = image_gap(g.ay, g.by, gy, inv_g, box[2], box[3]);
+                const uint32_t *st = p->start + (size_t)gy * G;
+                const float *hm = p->hmax + (size_t)gy * G;
+                for (uint32_t gx = gx0; gx <= gx1; gx++) {
+                    if (st[gx] == st[gx + 1]) continue;
+                    const float gap_x = image_gap(g.ax, g.bx, gx, inv_g, box[0], box[1]);
+                    const float Rc = reach(p->rho, hq, hm[gx]);
+                    if (!(gap_x * gap_x + gap_y * gap_y < Rc * Rc)) continue; /* no point of it in reach */
+                    if (p->kdiv[(size_t)gy * G + gx] == 1) add_range(p, &g, st[gx], st[gx + 1]);
+                    else scan_leaves(p, &g, gx, gy, box, hq, xlo, xhi, ylo, yhi);
+                }
+            }
+            append(p, &g);
+        }
+    }
+    if (g.n) flush(p, &g);
+    for (unsigned k = 0; k < g.nq; k++) {
+        p->delta[2 * (size_t)(s0 + k)] = lane_tree(g.acc + 16 * k);
+        p->delta[2 * (size_t)(s0 + k) + 1] = lane_tree(g.acc + 16 * k + 8);
+    }
+}
+
+/* The leaves whose first sorted point is in [lo, hi). */
+static void layer_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
+    const layer_pass *p = (const layer_pass *)ctx;
+    float *scratch = p->scratch + (size_t)slot * SLOT_FLOATS;
+    const uint32_t *ls = p->leaf_start;
+    size_t a = 0, b = p->n_leaves; /* the first leaf starting at or after lo */
+    while (a < b) {
+        const size_t mid = a + (b - a) / 2;
+        if (ls[mid] < lo) a = mid + 1;
+        else b = mid;
+    }
+    for (size_t l = a; l < p->n_leaves && ls[l] < hi; l++)
+        for (uint32_t s = ls[l]; s < ls[l + 1]; s += GROUP_MAX)
+            run_group(p, scratch, s, ls[l + 1] - s < GROUP_MAX ? ls[l + 1] : s + GROUP_MAX);
 }
 
 /* A coordinate after a step: mirrored at the square's edges; NaN when it stays outside. */
@@ -270,87 +399,215 @@ static float reflect(float v) {
 }
 
 typedef struct workspace {
-    float *h, *delta, *sx, *sy, *sa, *hmax;
-    uint32_t *cell, *start;
+    float *x[2], *y[2], *h[2]; /* the points in the order of the last sort, and the next sort's */
+    uint32_t *id[2];           /* their index in the caller's order */
+    float *a, *delta, *hmax, *leaf_hmax, *scratch;
+    uint32_t *cell, *start, *kdiv, *leaf_off, *leaf_start;
 } workspace;
 
 static void workspace_free(workspace *w) {
-    free(w->h);
+    for (int k = 0; k < 2; k++) free(w->x[k]), free(w->y[k]), free(w->h[k]), free(w->id[k]);
+    free(w->a);
     free(w->delta);
-    free(w->sx);
-    free(w->sy);
-    free(w->sa);
     free(w->hmax);
+    free(w->leaf_hmax);
+    free(w->scratch);
     free(w->cell);
     free(w->start);
+    free(w->kdiv);
+    free(w->leaf_off);
+    free(w->leaf_start);
 }
 
-static dpc_status run_layers(const dpc_cascade *c, const density_map *map, unsigned threads, size_t m, float *x) {
-    uint32_t G = (uint32_t)sqrt((double)m / 2.0);
-    if (G < 1) G = 1;
-    if (G > MAX_GRID) G = MAX_GRID;
+/* The kernel of the model's ISA path: every one gives the same bits (density_kernel.h). */
+static dpc_density_fn pick_kernel(dpc_isa isa) {
+#if defined(DPC_HAVE_AVX2)
+    if (isa == DPC_ISA_AVX512 && dpc_cpu_isa_available(DPC_ISA_AVX512)) return dpc_density_kernel_avx512;
+    if (isa == DPC_ISA_AVX2 && dpc_cpu_isa_available(DPC_ISA_AVX2)) return dpc_density_kernel_avx2;
+#else
+    (void)isa;
+#endif
+    return dpc_density_kernel_generic;
+}
+
+/* The neighbour grid of a layer: cells about the radius at the mean spacing wide, so that a
+ * cell's points find their candidates in the 3 x 3 cells around it where the density is flat. */
+static uint32_t grid_size(size_t m, float rho) {
+    const double g = floor(sqrt((double)m) / (double)rho);
+    return g < 1.0 ? 1u : g > (double)MAX_GRID ? MAX_GRID : (uint32_t)g;
+}
+
+/* Leaves per axis for a cell of n points. */
+static uint32_t leaves_for(uint32_t n) {
+    uint32_t k = 1;
+    if (n > SPLIT_MIN)
+        while ((uint64_t)k * k * LEAF_POINTS < n) k++;
+    return k;
+}
+
+/* Cut the cells of more than SPLIT_MIN points into leaves: sort their points (x, y, h, id, in
+ * place, stable, tmp_* as room) by leaf, and fill the leaf tables. */
+static void make_leaves(workspace *w, uint32_t G, size_t m, float *x, float *y, float *h, uint32_t *id, float *tx,
+                        float *ty, float *th, uint32_t *tid) {
     const size_t cells = (size_t)G * G;
+    uint32_t L = 0;
+    for (size_t c = 0; c < cells; c++) {
+        const uint32_t s0 = w->start[c], s1 = w->start[c + 1], k = leaves_for(s1 - s0);
+        w->kdiv[c] = k;
+        w->leaf_off[c] = L;
+        if (k == 1) {
+            w->leaf_start[L] = s0;
+            w->leaf_hmax[L++] = w->hmax[c];
+            continue;
+        }
+        const uint32_t gx = (uint32_t)(c % G), gy = (uint32_t)(c / G), n = G * k, kk = k * k;
+        uint32_t *cnt = w->leaf_start + L; /* counts, then starts */
+        float *lh = w->leaf_hmax + L;
+        memset(cnt, 0, (kk + 1) * sizeof(uint32_t));
+        memset(lh, 0, kk * sizeof(float));
+        for (uint32_t i = s0; i < s1; i++) {
+            uint32_t lx = cell_of(x[i], n), ly = cell_of(y[i], n);
+            lx = lx < gx * k ? 0 : lx - gx * k < k ? lx - gx * k : k - 1;
+            ly = ly < gy * k ? 0 : ly - gy * k < k ? ly - gy * k : k - 1;
+            const uint32_t leaf = ly * k + lx;
+            w->cell[i] = leaf;
+            cnt[leaf + 1]++;
+            if (h[i] > lh[leaf]) lh[leaf] = h[i];
+        }
+        cnt[0] = s0;
+        for (uint32_t q = 0; q < kk; q++) cnt[q + 1] += cnt[q];
+        for (uint32_t i = s0; i < s1; i++) {
+            const uint32_t at = cnt[w->cell[i]]++;
+            tx[at] = x[i], ty[at] = y[i], th[at] = h[i], tid[at] = id[i];
+        }
+        for (uint32_t q = kk; q > 0; q--) cnt[q] = cnt[q - 1];
+        cnt[0] = s0;
+        memcpy(x + s0, tx + s0, (s1 - s0) * sizeof(float));
+        memcpy(y + s0, ty + s0, (s1 - s0) * sizeof(float));
+        memcpy(h + s0, th + s0, (s1 - s0) * sizeof(float));
+        memcpy(id + s0, tid + s0, (s1 - s0) * sizeof(uint32_t));
+        L += kk;
+    }
+    w->leaf_off[cells] = L;
+    w->leaf_start[L] = (uint32_t)m;
+}
+
+static dpc_status run_layers(const dpc_cascade *c, const density_map *map, dpc_isa isa, unsigned threads, size_t m,
+                             float *x) {
+    uint32_t G_max = 1;
+    for (uint32_t l = 0; l < c->n_layers; l++) {
+        const uint32_t G = grid_size(m, c->layers[l].radius[0]);
+        if (G > G_max) G_max = G;
+    }
+    const size_t max_cells = (size_t)G_max * G_max;
+    /* leaves: at most one per cell not cut, k^2 <= n / 4 + 1 for a cut one (n > SPLIT_MIN) */
+    const size_t max_leaves = max_cells + m / 4 + 1;
+    if (m < PARALLEL_MIN_POINTS || threads < 1) threads = 1;
+    if (threads > DPC_MAX_THREADS) threads = DPC_MAX_THREADS;
     workspace w;
-    w.h = (float *)malloc(m * sizeof(float));
+    int ok = 1;
+    for (int k = 0; k < 2; k++) {
+        w.x[k] = (float *)calloc(m + 16, sizeof(float)); /* + 16: append() reads whole vectors */
+        w.y[k] = (float *)calloc(m + 16, sizeof(float));
+        w.h[k] = (float *)malloc(m * sizeof(float));
+        w.id[k] = (uint32_t *)malloc(m * sizeof(uint32_t));
+        ok = ok && w.x[k] && w.y[k] && w.h[k] && w.id[k];
+    }
+    w.a = (float *)calloc(m + 16, sizeof(float));
     w.delta = (float *)malloc(2 * m * sizeof(float));
-    w.sx = (float *)malloc(m * sizeof(float));
-    w.sy = (float *)malloc(m * sizeof(float));
-    w.sa = (float *)malloc(m * sizeof(float));
+    w.scratch = (float *)calloc((size_t)threads * SLOT_FLOATS, sizeof(float));
     w.cell = (uint32_t *)malloc(m * sizeof(uint32_t));
-    w.start = (uint32_t *)calloc(cells + 1, sizeof(uint32_t));
-    w.hmax = (float *)malloc(cells * sizeof(float));
-    if (!w.h || !w.delta || !w.sx || !w.sy || !w.sa || !w.cell || !w.start || !w.hmax) {
+    w.start = (uint32_t *)calloc(max_cells + 1, sizeof(uint32_t));
+    w.hmax = (float *)malloc(max_cells * sizeof(float));
+    w.kdiv = (uint32_t *)malloc(max_cells * sizeof(uint32_t));
+    w.leaf_off = (uint32_t *)malloc((max_cells + 1) * sizeof(uint32_t));
+    w.leaf_start = (uint32_t *)malloc((max_leaves + 1) * sizeof(uint32_t));
+    w.leaf_hmax = (float *)malloc(max_leaves * sizeof(float));
+    if (!ok || !w.a || !w.delta || !w.scratch || !w.cell || !w.start || !w.hmax || !w.kdiv || !w.leaf_off ||
+        !w.leaf_start || !w.leaf_hmax) {
         workspace_free(&w);
         return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory for %zu points", m);
     }
-    if (m < PARALLEL_MIN_POINTS) threads = 1;
+    /* The points stay in the order of the last sort (each sort stable), so that a step's density
+     * look-up and the next sort walk the plane cell by cell; the caller's order comes back at
+     * the end. */
+    float *px = w.x[0], *py = w.y[0], *ph = w.h[0];
+    uint32_t *pid = w.id[0];
+    for (size_t i = 0; i < m; i++) {
+        px[i] = x[2 * i];
+        py[i] = x[2 * i + 1];
+        ph[i] = cell_h(map, px[i], py[i]);
+        pid[i] = (uint32_t)i;
+    }
     for (uint32_t l = 0; l < c->n_layers; l++) {
         const dpc_layer *L = &c->layers[l];
-        /* the points' spacing and grid cells; a stable counting sort by cell */
+        const uint32_t G = grid_size(m, L->radius[0]);
+        const size_t cells = (size_t)G * G;
+        float *sx = w.x[(l + 1) & 1], *sy = w.y[(l + 1) & 1], *sh = w.h[(l + 1) & 1];
+        uint32_t *sid = w.id[(l + 1) & 1];
+        /* the points' grid cells; a stable counting sort by cell */
         memset(w.start, 0, (cells + 1) * sizeof(uint32_t));
         memset(w.hmax, 0, cells * sizeof(float));
         for (size_t i = 0; i < m; i++) {
-            w.h[i] = cell_h(map, x[2 * i], x[2 * i + 1]);
-            w.cell[i] = cell_of(x[2 * i + 1], G) * G + cell_of(x[2 * i], G);
-            w.start[w.cell[i] + 1]++;
-            if (w.h[i] > w.hmax[w.cell[i]]) w.hmax[w.cell[i]] = w.h[i];
+            const uint32_t cell = cell_of(py[i], G) * G + cell_of(px[i], G);
+            w.cell[i] = cell;
+            w.start[cell + 1]++;
+            if (ph[i] > w.hmax[cell]) w.hmax[cell] = ph[i];
         }
         for (size_t k = 0; k < cells; k++) w.start[k + 1] += w.start[k];
         for (size_t i = 0; i < m; i++) {
             const uint32_t at = w.start[w.cell[i]]++;
-            w.sx[at] = x[2 * i];
-            w.sy[at] = x[2 * i + 1];
-            w.sa[at] = 1.0f / w.h[i];
+            sx[at] = px[i];
+            sy[at] = py[i];
+            sh[at] = ph[i];
+            sid[at] = pid[i];
         }
         for (size_t k = cells; k > 0; k--) w.start[k] = w.start[k - 1];
         w.start[0] = 0;
+        make_leaves(&w, G, m, sx, sy, sh, sid, px, py, ph, pid);
+        for (size_t i = 0; i < m; i++) w.a[i] = 1.0f / sh[i];
         layer_pass p;
-        p.map = map;
-        p.m = m;
-        p.x = x;
-        p.h = w.h;
-        p.sx = w.sx;
-        p.sy = w.sy;
-        p.sa = w.sa;
+        p.sx = sx;
+        p.sy = sy;
+        p.sa = w.a;
+        p.sh = sh;
         p.start = w.start;
         p.hmax = w.hmax;
+        p.kdiv = w.kdiv;
+        p.leaf_off = w.leaf_off;
+        p.leaf_start = w.leaf_start;
+        p.leaf_hmax = w.leaf_hmax;
         p.G = G;
-        p.w = L->kernels;
-        p.dw = L->slopes;
+        p.n_leaves = w.leaf_off[cells];
         p.rho = L->radius[0];
-        p.umax = (float)(L->bins - 1);
-        p.c2 = p.umax / p.rho * 0.5f;
-        p.cut = L->eps * (p.umax / p.rho);
-        p.qmax = (int32_t)L->bins - 2;
+        p.h_max = map->h_max;
+        p.job.w = L->kernels;
+        p.job.dw = L->slopes;
+        p.job.umax = (float)(L->bins - 1);
+        p.job.c2 = p.job.umax / p.rho * 0.5f;
+        const float cut = L->eps * (p.job.umax / p.rho);
+        p.job.cut2 = cut * cut;
+        p.job.umax2 = p.job.umax * p.job.umax;
+        p.job.qmax = (int32_t)L->bins - 2;
+        p.kernel = pick_kernel(isa);
+        p.scratch = w.scratch;
         p.delta = w.delta;
         dpc_parallel_ranges(threads, m, layer_range, &p);
         for (size_t i = 0; i < m; i++) {
-            const float nx = reflect(x[2 * i] + w.delta[2 * i]);
-            const float ny = reflect(x[2 * i + 1] + w.delta[2 * i + 1]);
-            if (nx != nx || ny != ny || cell_h(map, nx, ny) == 0.0f) continue; /* the step is not taken */
-            x[2 * i] = nx;
-            x[2 * i + 1] = ny;
+            const float nx = reflect(sx[i] + w.delta[2 * i]);
+            const float ny = reflect(sy[i] + w.delta[2 * i + 1]);
+            if (nx != nx || ny != ny) continue; /* the step is not taken */
+            const float h = cell_h(map, nx, ny);
+            if (h == 0.0f) continue; /* nor into a cell of zero density */
+            sx[i] = nx;
+            sy[i] = ny;
+            sh[i] = h;
         }
+        px = sx, py = sy, ph = sh, pid = sid;
+    }
+    for (size_t i = 0; i < m; i++) {
+        x[2 * (size_t)pid[i]] = px[i];
+        x[2 * (size_t)pid[i] + 1] = py[i];
     }
     workspace_free(&w);
     return DPC_OK;
@@ -364,7 +621,7 @@ dpc_status dpc_density_generate(const dpc_model *model, const float *density, ui
     if (st != DPC_OK) return st;
     dpc_input_fill(c, model->input, seed, m, out);
     for (size_t i = 0; i < m; i++) map_point(&map, out + 2 * i);
-    st = run_layers(c, &map, model->engine.threads, m, out);
+    st = run_layers(c, &map, model->engine.isa, model->engine.threads, m, out);
     map_free(&map);
     return st;
 }

@@ -1,0 +1,43 @@
+/* The hot loop of a density layer (density.c), written once (density_kernel_body.h), compiled
+ * for any CPU (density_kernel.c: the scalar path) and for AVX2 and AVX-512, and chosen by the
+ * model's ISA path; every path gives the same bits. For a few query points it adds the terms
+ * of a chunk of candidates (already in the coordinates of their mirror image) to per-lane sums.
+ * With t = c_j - x_i, a = 1/h_i + 1/h_j:
+ *     window:  cut^2 < d2 (a c2)^2 < umax^2,   d2 = tx tx + ty ty,
+ *     term:    k = 2 g(u) / (a d),   d = sqrt(d2), u = (d c2) a,
+ *              g(u) = w[q] + (u' - q) dw[q],  u' = min(u, umax), q = min(trunc(u'), qmax),
+ *     sums:    the terms in the window, in chunk order, go to lanes 0, 1, .., 7, 0, 1, ..: the
+ *              lane of the r-th one is r mod 8, and each lane adds k tx (and k ty) in order.
+ * The caller adds the 8 lane sums in the tree (l, l + 4), (l, l + 2), (0, 1). Every step is an
+ * IEEE float32 operation (sqrt and division correctly rounded; a multiply then an add, never an
+ * FMA) or an exact integer one, in this order, on every path. */
+#ifndef DPC_DENSITY_KERNEL_H
+#define DPC_DENSITY_KERNEL_H
+
+#include <stdint.h>
+
+#define DPC_DENSITY_CHUNK 1024u /* candidates per chunk at most; chunks are padded to a multiple of 16 */
+#define DPC_DENSITY_DENSE (DPC_DENSITY_CHUNK + 32u) /* floats per stream of the kernels' scratch */
+
+typedef struct dpc_density_job {
+    const float *w, *dw; /* the kernel table and its slopes, qmax + 2 entries */
+    float c2, cut2, umax, umax2;
+    int32_t qmax;
+} dpc_density_job;
+
+/* Query p is q[4p], q[4p+1], q[4p+2] = x, y, 1/h; its lane sums acc[16p .. 16p+7] (x) and
+ * acc[16p+8 .. 16p+15] (y) are added to. The chunk is cx, cy, ca[0 .. n) (x, y, 1/h), n a
+ * multiple of 16 (padding out of every window). scratch: 3 * DPC_DENSITY_DENSE floats. */
+typedef void (*dpc_density_fn)(const dpc_density_job *job, const float *cx, const float *cy, const float *ca,
+                               uint32_t n, const float *q, unsigned nq, float *acc, float *scratch);
+
+void dpc_density_kernel_generic(const dpc_density_job *job, const float *cx, const float *cy, const float *ca,
+                                uint32_t n, const float *q, unsigned nq, float *acc, float *scratch);
+#if defined(DPC_HAVE_AVX2)
+void dpc_density_kernel_avx2(const dpc_density_job *job, const float *cx, const float *cy, const float *ca, uint32_t n,
+                             const float *q, unsigned nq, float *acc, float *scratch);
+void dpc_density_kernel_avx512(const dpc_density_job *job, const float *cx, const float *cy, const float *ca,
+                               uint32_t n, const float *q, unsigned nq, float *acc, float *scratch);
+#endif
+
+#endif
