@@ -162,3 +162,19 @@ def test_models_without_a_plane_filter_are_refused(tmp_path):
 
 def test_the_limit_matches_the_library():
     assert MAX_CELLS == dpc._core.DENSITY_MAX_CELLS
+
+
+@pytest.mark.parametrize("m", [64, 1024])
+def test_strong_edges_keep_their_counts_at_small_counts(model, m):
+    """A bright spot (3000 : 1) and a 1 : 16 step: the filters would spread the dense side into
+    the sparse one; the walls keep each side's share (mean over seeds within 3 standard errors)."""
+    y, x = (np.mgrid[0:128, 0:128] + 0.5) / 128
+    spot = 1 + np.where((x - 0.5) ** 2 + (y - 0.5) ** 2 < 0.02**2, 3000.0, 0.0)
+    step = np.where(x < 0.5, 1.0, 16.0)
+    for d, region in ((spot, spot > 100), (step, x < 0.5)):
+        share = []
+        for seed in range(12):
+            c = np.minimum((model.generate_density(d, m, seed=seed) * 128).astype(int), 127)
+            share.append(region[c[:, 1], c[:, 0]].mean())
+        want = d[region].sum() / d.sum()
+        assert abs(np.mean(share) - want) < max(3 * np.std(share) / np.sqrt(12), 0.01), (np.mean(share), want)

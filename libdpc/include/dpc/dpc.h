@@ -298,7 +298,8 @@ DPC_API dpc_status dpc_generate_size(const dpc_model *model, size_t count, size_
  * blue-2d, ...; others: DPC_ERROR_UNSUPPORTED). The model's input points are mapped through the
  * density's inverse CDF and every layer runs in units of the local spacing (h_ij, the harmonic
  * mean of the pair's spacings 1/sqrt(n_points * density)), with mirror edges at the square's
- * sides; no point ever lies in a zero-density cell. The output balance of a uniform model is not
+ * sides; no step crosses into a cell whose density differs more than 4 times (so strong edges
+ * keep their counts), and no point ever lies in a zero-density cell. The output balance of a uniform model is not
  * applied. A pure function of (model file, input kind, density, seed, n_points): the same bits
  * on every CPU ISA and thread count; it runs on the CPU whatever the model's backend.
  * docs/density.md states the definition and its measurements. */

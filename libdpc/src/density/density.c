@@ -13,6 +13,12 @@
 
 #define PARALLEL_MIN_POINTS 2048
 #define MAX_GRID 2048u /* cells per axis of the neighbour grid */
+/* A step is not taken into a cell whose density differs more than 4 times from the one it leaves
+ * (spacings: 2 times). Within smooth densities no step comes near that; at a strong edge it keeps
+ * each side's points on that side (the filters would let a dense side spread into a sparse one). */
+#define WALL_H 2.0f
+/* Local spacings are capped at the square's size; pairs see at most half of it (smin2). */
+#define H_CAP 1.0
 
 typedef struct density_map {
     uint32_t W, H;
@@ -67,18 +73,17 @@ dpc_status dpc_density_check(const dpc_model *model, const float *density, uint3
     for (size_t i = 0; i < cells; i++) {
         const float v = density[i];
         if (!(v >= 0.0f) || isinf(v))
-            return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "density value %g at cell (%zu, %zu): values must be finite and >= 0",
-                            (double)v, i % width, i / width);
+            return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
+                            "density value %g at cell (%zu, %zu): values must be finite and >= 0", (double)v, i % width,
+                            i / width);
         total += (double)v;
     }
     if (!(total > 0.0)) return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "density is zero everywhere");
     return DPC_OK;
 }
 
-/* The inverse CDF and the per-cell spacing for m points. h is capped so that no radius of the
- * model exceeds half the square (a cell so sparse holds a point or two at most). */
-static dpc_status map_init(density_map *d, const dpc_cascade *c, const float *density, uint32_t W, uint32_t H,
-                           size_t m) {
+/* The inverse CDF and the per-cell spacing for m points (at most H_CAP). */
+static dpc_status map_init(density_map *d, const float *density, uint32_t W, uint32_t H, size_t m) {
     memset(d, 0, sizeof *d);
     d->W = W;
     d->H = H;
@@ -106,10 +111,6 @@ static dpc_status map_init(density_map *d, const dpc_cascade *c, const float *de
     }
     for (uint32_t y = 1; y <= H; y++) d->row_cdf[y] /= total;
     d->row_cdf[H] = 1.0;
-    double rho_max = 0.0;
-    for (uint32_t l = 0; l < c->n_layers; l++)
-        if ((double)c->layers[l].radius[0] > rho_max) rho_max = (double)c->layers[l].radius[0];
-    const double h_cap = 0.5 / rho_max;
     const double per_cell = (double)W * (double)H / total;
     float h_max = 0.0f;
     for (size_t i = 0; i < (size_t)W * H; i++) {
@@ -117,7 +118,7 @@ static dpc_status map_init(density_map *d, const dpc_cascade *c, const float *de
         float h = 0.0f;
         if (rho > 0.0) {
             const double hd = 1.0 / sqrt((double)m * rho);
-            h = (float)(hd <= h_cap ? hd : h_cap);
+            h = (float)(hd <= H_CAP ? hd : H_CAP);
         }
         d->h[i] = h;
         if (h > h_max) h_max = h;
@@ -197,7 +198,10 @@ typedef struct layer_pass {
 static float span_gap(float a, float b, float lo, float hi) { return b < lo ? lo - b : a > hi ? a - hi : 0.0f; }
 
 /* The pair spacing's bound rho h_ij for h_j <= hc (h_ij grows with h_j), with a margin for rounding. */
-static float reach(float rho, float hi, float hc) { return rho * (2.0f * hi * hc / (hi + hc)) * 1.001f; }
+static float reach(float rho, float hi, float hc) {
+    const float r = rho * (2.0f * hi * hc / (hi + hc));
+    return (r < 0.5f ? r : 0.5f) * 1.001f;
+}
 
 /* The cells [g0, g1] of an axis of n holding originals in [lo, hi] (clipped to [0, 1]); 0 if none. */
 static int cell_span(float lo, float hi, uint32_t n, uint32_t *g0, uint32_t *g1) {
@@ -588,6 +592,7 @@ static dpc_status run_layers(const dpc_cascade *c, const density_map *map, dpc_i
         const float cut = L->eps * (p.job.umax / p.rho);
         p.job.cut2 = cut * cut;
         p.job.umax2 = p.job.umax * p.job.umax;
+        p.job.smin2 = 4.0f * p.job.umax2; /* d < 1/2 */
         p.job.qmax = (int32_t)L->bins - 2;
         p.kernel = pick_kernel(isa);
         p.scratch = w.scratch;
@@ -598,7 +603,9 @@ static dpc_status run_layers(const dpc_cascade *c, const density_map *map, dpc_i
             const float ny = reflect(sy[i] + w.delta[2 * i + 1]);
             if (nx != nx || ny != ny) continue; /* the step is not taken */
             const float h = cell_h(map, nx, ny);
-            if (h == 0.0f) continue; /* nor into a cell of zero density */
+            /* nor across a wall: into a cell whose density differs more than WALL times (a cell of
+             * zero density among them), so strong edges keep their counts */
+            if (!(h * WALL_H >= sh[i] && h <= sh[i] * WALL_H)) continue;
             sx[i] = nx;
             sy[i] = ny;
             sh[i] = h;
@@ -617,7 +624,7 @@ dpc_status dpc_density_generate(const dpc_model *model, const float *density, ui
                                 uint64_t seed, size_t m, float *out) {
     const dpc_cascade *c = &model->cascade;
     density_map map;
-    dpc_status st = map_init(&map, c, density, width, height, m);
+    dpc_status st = map_init(&map, density, width, height, m);
     if (st != DPC_OK) return st;
     dpc_input_fill(c, model->input, seed, m, out);
     for (size_t i = 0; i < m; i++) map_point(&map, out + 2 * i);

@@ -8,8 +8,10 @@
  *     sum_j h_ij g(d_ij / (rho h_ij)) delta_ij / d_ij,   h = (m rho(x))^(-1/2),
  *     h_ij = 2 h_i h_j / (h_i + h_j) (the harmonic mean: the pair's two terms are equal and
  *     opposite, and a sparse point does not push back the dense side of an edge),
- * with mirror edges: the square's edges reflect the set, and a point that would leave the square
- * or enter a zero-density cell stays where it is. Everything is float32 in one
+ * with mirror edges: the square's edges reflect the set. No pair farther apart than half the
+ * square interacts, and h is at most 1. A step that would leave the square is mirrored back; one
+ * that would end in a cell whose density differs more than 4 times from its start (a zero cell
+ * among them: a wall) is not taken. Everything is float32 in one
  * fixed order (double for the inverse CDF), the same bits for every CPU and thread count. */
 #ifndef DPC_DENSITY_DENSITY_H
 #define DPC_DENSITY_DENSITY_H

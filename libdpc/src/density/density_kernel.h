@@ -2,8 +2,9 @@
  * for any CPU (density_kernel.c: the scalar path) and for AVX2 and AVX-512, and chosen by the
  * model's ISA path; every path gives the same bits. For a few query points it adds the terms
  * of a chunk of candidates (already in the coordinates of their mirror image) to per-lane sums.
- * With t = c_j - x_i, a = 1/h_i + 1/h_j:
- *     window:  cut^2 < d2 (a c2)^2 < umax^2,   d2 = tx tx + ty ty,
+ * With t = c_j - x_i, a = 1/h_i + 1/h_j (= 2 / h_ij), s = a c2:
+ *     window:  cut^2 < d2 max(s s, smin2) < umax^2,   d2 = tx tx + ty ty (smin2 = 4 umax^2:
+ *              no pair farther than half the square),
  *     term:    k = 2 g(u) / (a d),   d = sqrt(d2), u = (d c2) a,
  *              g(u) = w[q] + (u' - q) dw[q],  u' = min(u, umax), q = min(trunc(u'), qmax),
  *     sums:    the terms in the window, in chunk order, go to lanes 0, 1, .., 7, 0, 1, ..: the
@@ -21,7 +22,7 @@
 
 typedef struct dpc_density_job {
     const float *w, *dw; /* the kernel table and its slopes, qmax + 2 entries */
-    float c2, cut2, umax, umax2;
+    float c2, cut2, umax, umax2, smin2;
     int32_t qmax;
 } dpc_density_job;
 

@@ -43,6 +43,7 @@ static inline vf8 add_lanes(vf8 s, vf v) {
 void KERNEL(const dpc_density_job *job, const float *cx, const float *cy, const float *ca, uint32_t n, const float *q,
             unsigned nq, float *acc, float *scratch) {
     const vf c2 = vsplat(job->c2), cut2 = vsplat(job->cut2), umax = vsplat(job->umax), umax2 = vsplat(job->umax2);
+    const vf smin2 = vsplat(job->smin2);
     const vf two = vsplat(2.0f), zero = vsplat(0.0f), one = vsplat(1.0f);
 #if VW == 16
     const vi iota = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15};
@@ -61,8 +62,8 @@ void KERNEL(const dpc_density_job *job, const float *cx, const float *cy, const 
         for (uint32_t o = 0; o < n; o += VW) {
             const vf tx = VLOAD(cx + o) - X, ty = VLOAD(cy + o) - Y;
             const vf d2 = tx * tx + ty * ty;
-            const vf a = VLOAD(ca + o) + A, s = a * c2;
-            const mask_t in = WINDOW(d2 * (s * s), cut2, umax2);
+            const vf a = VLOAD(ca + o) + A, s = a * c2, s2 = s * s;
+            const mask_t in = WINDOW(d2 * vselect(s2 < smin2, smin2, s2), cut2, umax2);
             m += PACK3(in, tx, ty, a, dtx + m, dty + m, da + m);
         }
         /* (2) the terms. Lanes of the last vector beyond m compute a finite k from d = a = 1 and
