@@ -1,6 +1,8 @@
 """Blue noise that follows a density: dpc.density.as_density and Model.generate_density
 (docs/density.md): where the points go, their spacing, determinism and bad input."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from PIL import Image
@@ -178,3 +180,19 @@ def test_strong_edges_keep_their_counts_at_small_counts(model, m):
             share.append(region[c[:, 1], c[:, 0]].mean())
         want = d[region].sum() / d.sum()
         assert abs(np.mean(share) - want) < max(3 * np.std(share) / np.sqrt(12), 0.01), (np.mean(share), want)
+
+
+@pytest.mark.parametrize("seed", [0, 4])
+def test_libdpc_matches_the_float64_reference_of_the_definition(seed):
+    """lab/density/reference.py writes docs/density.md's definition in float64 numpy; libdpc's
+    float32 engine (mirror images, harmonic pair spacing, walls) agrees to float rounding on the
+    4-layer test model, across a wall and the square's sides."""
+    from lab.density import reference
+
+    y, x = (np.mgrid[0:64, 0:64] + 0.5) / 64
+    d = (0.3 + x + 0.5 * y) * np.where((x > 0.7) & (y < 0.3), 8.0, 1.0)
+    path = Path(__file__).resolve().parents[2] / "tests" / "data" / "model_2d.onnx"
+    want = reference.generate(path, d, 1500, seed=seed)
+    got = dpc.load(path).generate_density(d, 1500, seed=seed).astype(np.float64)
+    assert np.abs(got - want).max() < 1e-5
+    assert np.abs(want - reference.input_points(dpc.load(path), d, seed, 1500)).max() > 1e-3  # it moved

@@ -1,0 +1,130 @@
+"""Why the density generator is defined as it is (docs/density.md, "Definition"): the float64
+reference (lab/density/reference.py) run with each choice varied, on a ramp, a 1 : 16 step and a
+bright spot. Writes docs/reports/density-design.md.
+
+    python -m lab.density.design
+"""
+
+from __future__ import annotations
+
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+from lab.density import reference
+
+REPO = Path(__file__).resolve().parents[2]
+OUT = REPO / "docs" / "reports" / "density-design.md"
+MODEL = "bnot-2d-stratified"
+G = 128
+
+
+def densities():
+    y, x = (np.mgrid[0:G, 0:G] + 0.5) / G
+    spot = (x - 0.5) ** 2 + (y - 0.5) ** 2 < 0.03**2
+    return {
+        "ramp 0.1 + x": (0.1 + x, x < 0.5),
+        "step 1 : 16": (np.where(x < 0.5, 1.0, 16.0), x < 0.5),
+        "spot 3000 : 1": (1.0 + np.where(spot, 3000.0, 0.0), spot),
+    }
+
+
+def count_error(p, d, k, rng, windows=3000):
+    """Mean squared count error over mean expected count in square windows of about k expected
+    points (white noise: 1), windows inside the square."""
+    m = len(p)
+    mass = d / d.sum()
+    sat = np.zeros((G + 1, G + 1))
+    sat[1:, 1:] = mass.cumsum(0).cumsum(1)
+
+    def F(x, y):
+        gx, gy = x * G, y * G
+        i, j = min(int(gx), G - 1), min(int(gy), G - 1)
+        fx, fy = gx - i, gy - j
+        return (
+            sat[j, i] * (1 - fx) * (1 - fy)
+            + sat[j, i + 1] * fx * (1 - fy)
+            + sat[j + 1, i] * (1 - fx) * fy
+            + sat[j + 1, i + 1] * fx * fy
+        )
+
+    err, exp = [], []
+    for c in rng.random((windows, 2)):
+        a = np.sqrt(k / (m * d[min(int(c[1] * G), G - 1), min(int(c[0] * G), G - 1)] / d.mean()))
+        x0, y0 = c - a / 2
+        if x0 < 0 or y0 < 0 or x0 + a > 1 or y0 + a > 1:
+            continue
+        e = m * (F(x0 + a, y0 + a) - F(x0, y0 + a) - F(x0 + a, y0) + F(x0, y0))
+        n = np.sum((p[:, 0] >= x0) & (p[:, 0] < x0 + a) & (p[:, 1] >= y0) & (p[:, 1] < y0 + a))
+        err.append((n - e) ** 2)
+        exp.append(e)
+    return float(np.mean(err) / np.mean(exp))
+
+
+def share(p, region):
+    c = np.minimum((p * G).astype(int), G - 1)
+    return float(region[c[:, 1], c[:, 0]].mean())
+
+
+def main() -> None:
+    t0 = time.time()
+    dens = densities()
+    lines = [
+        "# Density generator: the design's choices, measured",
+        "",
+        "> Measurements, not the manual: made by `python -m lab.density.design` "
+        f"({platform.processor() or platform.machine()}), on the float64 reference of the definition "
+        "(lab/density/reference.py, which libdpc matches to float rounding: tests/python/test_density.py) "
+        f"with model {MODEL}. The definition itself: [density.md](../density.md).",
+        "",
+        "## The pair's spacing",
+        "",
+        "Count error in windows of about 16 expected points (white noise = 1; uniform blue noise about "
+        "0.08), 1,024 points, mean of 3 seeds, without walls, so that only the pair's spacing differs:",
+        "",
+        "| pair spacing h_ij | " + " | ".join(list(dens)[:2]) + " |",
+        "|---|---|---|",
+    ]
+    for pair in ("own", "arithmetic", "geometric", "harmonic"):
+        row = []
+        for name in list(dens)[:2]:
+            d = dens[name][0]
+            errs = [
+                count_error(
+                    reference.generate(MODEL, d, 1024, s, pair=pair, walls=False), d, 16, np.random.default_rng(s)
+                )
+                for s in range(3)
+            ]
+            row.append(f"{np.mean(errs):.3f}")
+        label = {"own": "h_i (each point its own)", "arithmetic": "(h_i + h_j) / 2"}.get(pair, pair)
+        label = {"geometric": "sqrt(h_i h_j)", "harmonic": "2 h_i h_j / (h_i + h_j) (dpc)"}.get(pair, label)
+        lines.append(f"| {label} | " + " | ".join(row) + " |")
+        print(lines[-1], flush=True)
+    lines += [
+        "",
+        "## Walls",
+        "",
+        "The share of the points in the left half (ramp, step) or in the spot, against the density's "
+        "share; mean of 8 seeds ± its standard error, harmonic pair spacing:",
+        "",
+        "| density | points | density's share | without walls | with walls (dpc) |",
+        "|---|---|---|---|---|",
+    ]
+    for name, (d, region) in dens.items():
+        want = d[region].sum() / d.sum()
+        for m in (64, 1024):
+            cells = []
+            for walls in (False, True):
+                s = [share(reference.generate(MODEL, d, m, k, walls=walls), region) for k in range(8)]
+                cells.append(f"{np.mean(s):.3f} ± {np.std(s) / np.sqrt(8):.3f}")
+            lines.append(f"| {name} | {m:,} | {want:.3f} | " + " | ".join(cells) + " |")
+            print(lines[-1], flush=True)
+    lines += ["", f"Run time: {time.time() - t0:.0f} s.", ""]
+    OUT.write_text("\n".join(lines))
+    print(f"wrote {OUT.relative_to(REPO)}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,121 @@
+"""The density generator's definition (docs/density.md) in float64 numpy, written from the page,
+not from libdpc: the parity test holds libdpc's float32 engine to it, and the design study
+(lab/density/design.py) varies its choices (the pair's mean spacing, the walls) to show why they
+are what they are.
+
+    points = filter(model, density, input_points(model, density, seed, m), pair=..., walls=...)
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+import dpc
+from dpc.model_file import read_model
+
+WALL = 4.0  # density ratio a step may not cross
+H_CAP = 1.0
+
+PAIR_MEANS = {
+    "own": lambda hi, hj: np.full_like(hj, hi),  # each point's own spacing: not symmetric
+    "arithmetic": lambda hi, hj: 0.5 * (hi + hj),
+    "geometric": lambda hi, hj: np.sqrt(hi * hj),
+    "harmonic": lambda hi, hj: 2.0 * hi * hj / (hi + hj),
+}
+
+
+def spacing_grid(density, m: int) -> np.ndarray:
+    """h per cell: (m rho)^(-1/2) with rho the density over its mean (float32, as libdpc), 0 where
+    the density is zero, at most H_CAP."""
+    d = np.asarray(density, dtype=np.float64)
+    rho = d * d.size / d.sum()
+    with np.errstate(divide="ignore"):
+        h = np.where(rho > 0, np.minimum(1.0 / np.sqrt(m * rho), H_CAP), 0.0)
+    return h.astype(np.float32)
+
+
+def cell_of(v, n: int):
+    return np.minimum((np.asarray(v, dtype=np.float64) * n).astype(np.int64), n - 1)
+
+
+def input_points(model: dpc.Model, density, seed: int, m: int) -> np.ndarray:
+    """The model's input (uniform or stratified) through the density's inverse CDF: the row by
+    the second coordinate, the cell within the row by the first, fractions kept."""
+    d = np.asarray(density, dtype=np.float64)
+    H, W = d.shape
+    u = (dpc.stratified(seed, m, 2) if model.input == "stratified" else dpc.uniform(seed, m, 2)).astype(np.float64)
+    rows = d.sum(1)
+    rcdf = np.concatenate([[0.0], np.cumsum(rows)]) / rows.sum()
+    rcdf[-1] = 1.0
+    r = np.searchsorted(rcdf, u[:, 1], side="right") - 1
+    fy = (u[:, 1] - rcdf[r]) / (rcdf[r + 1] - rcdf[r])
+    ccdf = np.concatenate([np.zeros((H, 1)), np.cumsum(d, 1)], 1)
+    ccdf = ccdf / np.where(ccdf[:, -1:] > 0, ccdf[:, -1:], 1.0)
+    ccdf[rows > 0, -1] = 1.0
+    c = np.array([np.searchsorted(ccdf[ri], ui, side="right") - 1 for ri, ui in zip(r, u[:, 0])])
+    fx = (u[:, 0] - ccdf[r, c]) / (ccdf[r, c + 1] - ccdf[r, c])
+    p = np.stack([(c + fx) / W, (r + fy) / H], 1).astype(np.float32)
+    for k, (cell, n) in enumerate(((c, W), (r, H))):  # rounding to float32 must keep the cell
+        v = p[:, k]
+        v[:] = np.where(cell_of(v, n) > cell, np.nextafter(v, np.float32(0)), v)
+        v[:] = np.where(cell_of(v, n) < cell, np.nextafter(v, np.float32(1)), v)
+    return p.astype(np.float64)
+
+
+def _images(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The set and its mirror images at the square's sides: (9 m, 2) coordinates and the index of
+    the point each image shows."""
+    xs = (p[:, 0], -p[:, 0], 2.0 - p[:, 0])
+    ys = (p[:, 1], -p[:, 1], 2.0 - p[:, 1])
+    pts = np.concatenate([np.stack([x, y], 1) for y in ys for x in xs])
+    return pts, np.tile(np.arange(len(p)), 9)
+
+
+def layer(p, hcell, spec_layer, pair: str = "harmonic", walls: bool = True):
+    """One layer: every point's step, then the steps taken (mirrored at the sides; none across a
+    wall or into a zero cell)."""
+    Hc, Wc = hcell.shape
+    h = hcell[cell_of(p[:, 1], Hc), cell_of(p[:, 0], Wc)].astype(np.float64)
+    rho = spec_layer.radius[0]
+    w = spec_layer.kernels[0].astype(np.float64)
+    b = len(w)
+    mean = PAIR_MEANS[pair]
+    imgs, owner = _images(p)
+    tree = cKDTree(imgs)
+    reach = np.minimum(rho * np.maximum(2.0 * h, h.max()) if pair != "harmonic" else rho * 2.0 * h, 0.5)
+    lists = tree.query_ball_point(p, reach)
+    step = np.zeros_like(p)
+    for i, nb in enumerate(lists):
+        nb = np.asarray(nb, dtype=np.int64)
+        if not len(nb):
+            continue
+        delta = imgs[nb] - p[i]
+        d = np.sqrt((delta**2).sum(1))
+        hij = mean(h[i], h[owner[nb]])
+        u = d * (b - 1) / (rho * hij)
+        ok = (u < b - 1) & (d > spec_layer.eps * hij) & (d < 0.5)
+        q = np.minimum(np.floor(u[ok]).astype(np.int64), b - 2)
+        g = w[q] + (u[ok] - q) * (w[q + 1] - w[q])
+        step[i] = ((hij[ok] * g / d[ok])[:, None] * delta[ok]).sum(0)
+    new = p + step
+    new = np.where(new < 0, -new, np.where(new >= 1, 2.0 - new, new))
+    inside = np.all((new >= 0) & (new < 1), axis=1)
+    nc = np.clip(new, 0, np.nextafter(1.0, 0))
+    hn = hcell[cell_of(nc[:, 1], Hc), cell_of(nc[:, 0], Wc)].astype(np.float64)
+    if walls:
+        ok = inside & (hn * np.sqrt(WALL) >= h) & (hn <= h * np.sqrt(WALL))
+    else:
+        ok = inside & (hn > 0)
+    return np.where(ok[:, None], new, p)
+
+
+def generate(model_path, density, m: int, seed: int = 0, *, pair: str = "harmonic", walls: bool = True):
+    """The points of dpc_generate_density in float64, with the design's choices as options."""
+    model = dpc.load(model_path)
+    spec = read_model(dpc.model_path(model_path))
+    p = input_points(model, density, seed, m)
+    hcell = spacing_grid(density, m)
+    for spec_layer in spec.layers:
+        p = layer(p, hcell, spec_layer, pair, walls)
+    return p
