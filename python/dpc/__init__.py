@@ -10,6 +10,7 @@ Arrays follow scipy.stats.qmc: C-contiguous ``(m, n)`` points in [0, 1), batches
 
 from . import (
     density,  # densities for Model.generate_density (arrays, functions, images), docs/density.md
+    importance,  # importance sampling a 2-D density with dpc's sets: points and their pdf
     masks,  # blue-noise threshold masks (and their designer, dpc.masks.design), docs/masks.md
     stratify,  # progressive sequences: (0,2)-stratification, joint relaxation; docs/progressive.md
     training,  # the float64 layer ops (dpc_layer_forward / _backward)
@@ -77,6 +78,7 @@ __all__ = [
     "Input",
     "training",
     "density",
+    "importance",
     "mask_design",
     "masks",
     "stratify",
