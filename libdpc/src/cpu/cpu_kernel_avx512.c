@@ -4,36 +4,10 @@
  * cpuid reports AVX-512F (cpu_dispatch.c). The same code with generic primitives is compiled
  * for every CPU as dpc_block_packed16 (tests/c/cpu_kernel_packed16.c, in the kernel tests
  * only), which they compare with the scalar path on machines without AVX-512. */
-#include <immintrin.h>
-
 #include "cpu/cpu_kernels.h"
-
-#define VW 16
-typedef float vf __attribute__((vector_size(64)));
-typedef int32_t vi __attribute__((vector_size(64)));
+#include "cpu/cpu_tables_avx512.h"
 
 #define FMA(a, b, c) ((vf)_mm512_fmadd_ps((__m512)(a), (__m512)(b), (__m512)(c)))
-
-typedef struct table_regs {
-    __m512 lo, hi;
-    const float *w;
-    int small;
-} table_regs;
-
-static inline void load_table(table_regs *T, const float *src, int bins) {
-    T->w = src;
-    T->small = bins <= 32;
-    const int n = T->small ? bins : 0; /* the tail beyond `bins` is never selected */
-    const __mmask16 m_lo = (__mmask16)(n >= 16 ? 0xffff : (1u << n) - 1);
-    const __mmask16 m_hi = (__mmask16)(n <= 16 ? 0 : n >= 32 ? 0xffff : (1u << (n - 16)) - 1);
-    T->lo = _mm512_maskz_loadu_ps(m_lo, src);
-    T->hi = _mm512_maskz_loadu_ps(m_hi, src + 16);
-}
-
-static inline vf lookup16(const table_regs *T, vi b) {
-    const __m512i bi = (__m512i)b;
-    return (vf)(T->small ? _mm512_permutex2var_ps(T->lo, bi, T->hi) : _mm512_i32gather_ps(bi, T->w, 4));
-}
 
 #define KERNEL dpc_block_avx512
 #define LIST_KERNEL dpc_list_avx512

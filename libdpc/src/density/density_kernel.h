@@ -29,16 +29,14 @@ typedef struct dpc_density_job {
 /* Query p is q[4p], q[4p+1], q[4p+2] = x, y, 1/h; its lane sums acc[16p .. 16p+7] (x) and
  * acc[16p+8 .. 16p+15] (y) are added to. The chunk is cx, cy, ca[0 .. n) (x, y, 1/h), n a
  * multiple of 16 (padding out of every window). scratch: 3 * DPC_DENSITY_DENSE floats. */
-typedef void (*dpc_density_fn)(const dpc_density_job *job, const float *cx, const float *cy, const float *ca,
-                               uint32_t n, const float *q, unsigned nq, float *acc, float *scratch);
-
-void dpc_density_kernel_generic(const dpc_density_job *job, const float *cx, const float *cy, const float *ca,
+typedef void dpc_density_kernel(const dpc_density_job *job, const float *cx, const float *cy, const float *ca,
                                 uint32_t n, const float *q, unsigned nq, float *acc, float *scratch);
+typedef dpc_density_kernel *dpc_density_fn;
+
+dpc_density_kernel dpc_density_kernel_generic;
 #if defined(DPC_HAVE_AVX2)
-void dpc_density_kernel_avx2(const dpc_density_job *job, const float *cx, const float *cy, const float *ca, uint32_t n,
-                             const float *q, unsigned nq, float *acc, float *scratch);
-void dpc_density_kernel_avx512(const dpc_density_job *job, const float *cx, const float *cy, const float *ca,
-                               uint32_t n, const float *q, unsigned nq, float *acc, float *scratch);
+dpc_density_kernel dpc_density_kernel_avx2;
+dpc_density_kernel dpc_density_kernel_avx512;
 #endif
 
 #endif
