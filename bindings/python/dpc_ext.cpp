@@ -263,8 +263,8 @@ class Model {
         const float *d = density.data();
         float *o = out.mutable_data();
         call([&] {
-            return dpc_generate_density(model_.get(), d, static_cast<uint32_t>(w), static_cast<uint32_t>(h), seed,
-                                        m, o);
+            return dpc_generate_density(model_.get(), d, static_cast<uint32_t>(w), static_cast<uint32_t>(h), seed, m,
+                                        o);
         });
         return out;
     }
