@@ -9,24 +9,12 @@ import numpy as np
 import pytest
 
 import dpc
-from dpc.cli import main
 from dpc.density import as_density
 from dpc.pointio import read_points
+from test_cli import _one_line_error, run  # the CLI tests' helpers
 
 N = 1000
 MODEL = "bnot-2d-stratified"
-
-
-def run(capsys, *args):
-    rc = main(list(map(str, args)))
-    out, err = capsys.readouterr()
-    return rc, out, err
-
-
-def _one_line_error(err):
-    lines = [ln for ln in err.splitlines() if ln.strip()]
-    assert len(lines) == 1 and lines[0].startswith("dpc: error: "), err
-    assert "Traceback" not in err
 
 
 def _save(path, grey, alpha=None):

@@ -20,15 +20,7 @@ static inline vf fma_lanes(vf a, vf b, vf c) {
     return r;
 }
 
-typedef struct table_regs {
-    const float *w;
-} table_regs;
-
-static inline vf lookup_lanes(const table_regs *t, vi b) {
-    vf r;
-    for (int l = 0; l < VW; l++) r[l] = t->w[b[l]];
-    return r;
-}
+#include "cpu/cpu_tables_portable.h"
 
 #define FMA(a, b, c) fma_lanes(a, b, c)
 #define LOAD_TABLE(T, src, n) ((T)->w = (src), (void)(n))

@@ -61,15 +61,7 @@ static inline vf sqrt_lanes(vf x) {
 #define WINDOW(v, lo, hi) (((v) > (lo)) & ((v) < (hi)))
 #endif
 
-typedef struct table_regs {
-    const float *w;
-} table_regs;
-
-static inline vf lookup_lanes(const table_regs *t, vi b) {
-    vf r;
-    for (int l = 0; l < VW; l++) r[l] = t->w[b[l]];
-    return r;
-}
+#include "cpu/cpu_tables_portable.h"
 
 /* Every lane stored, the pointer moved past the lanes of m only. */
 static inline uint32_t pack_lanes(vi m, vf tx, vf ty, vf a, float *px, float *py, float *pa) {
