@@ -7,12 +7,12 @@ bright spot. Writes docs/reports/density-design.md.
 
 from __future__ import annotations
 
-import platform
 import time
 from pathlib import Path
 
 import numpy as np
 
+from lab.common import report_header
 from lab.density import reference
 
 REPO = Path(__file__).resolve().parents[2]
@@ -74,10 +74,10 @@ def main() -> None:
     lines = [
         "# Density generator: the design's choices, measured",
         "",
-        "> Measurements, not the manual: made by `python -m lab.density.design` "
-        f"({platform.processor() or platform.machine()}), on the float64 reference of the definition "
-        "(lab/density/reference.py, which libdpc matches to float rounding: tests/python/test_density.py) "
-        f"with model {MODEL}. The definition itself: [density.md](../density.md).",
+        *report_header("python -m lab.density.design"),
+        "On the float64 reference of the definition (lab/density/reference.py, which libdpc matches to "
+        f"float rounding: tests/python/test_density.py) with model {MODEL}. The definition itself: "
+        "[density.md](../density.md).",
         "",
         "## The pair's spacing",
         "",
