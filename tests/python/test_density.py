@@ -196,3 +196,12 @@ def test_libdpc_matches_the_float64_reference_of_the_definition(seed):
     got = dpc.load(path).generate_density(d, 1500, seed=seed).astype(np.float64)
     assert np.abs(got - want).max() < 1e-5
     assert np.abs(want - reference.input_points(dpc.load(path), d, seed, 1500)).max() > 1e-3  # it moved
+
+
+def test_a_vulkan_model_follows_a_density_on_the_cpu_with_the_same_bits():
+    try:
+        gpu = dpc.load("bnot-2d", backend="vulkan")
+    except dpc.UnsupportedError as e:
+        pytest.skip(f"no Vulkan device: {e}")
+    d = np.array([[1.0, 2.0], [3.0, 4.0]])
+    np.testing.assert_array_equal(gpu.generate_density(d, 2000, 1), dpc.load("bnot-2d").generate_density(d, 2000, 1))
