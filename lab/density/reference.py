@@ -12,6 +12,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 import dpc
+from dpc.importance import warp_to_density
 from dpc.model_file import read_model
 
 WALL = 4.0  # density ratio a step may not cross
@@ -42,25 +43,8 @@ def cell_of(v, n: int):
 def input_points(model: dpc.Model, density, seed: int, m: int) -> np.ndarray:
     """The model's input (uniform or stratified) through the density's inverse CDF: the row by
     the second coordinate, the cell within the row by the first, fractions kept."""
-    d = np.asarray(density, dtype=np.float64)
-    H, W = d.shape
     u = (dpc.stratified(seed, m, 2) if model.input == "stratified" else dpc.uniform(seed, m, 2)).astype(np.float64)
-    rows = d.sum(1)
-    rcdf = np.concatenate([[0.0], np.cumsum(rows)]) / rows.sum()
-    rcdf[-1] = 1.0
-    r = np.searchsorted(rcdf, u[:, 1], side="right") - 1
-    fy = (u[:, 1] - rcdf[r]) / (rcdf[r + 1] - rcdf[r])
-    ccdf = np.concatenate([np.zeros((H, 1)), np.cumsum(d, 1)], 1)
-    ccdf = ccdf / np.where(ccdf[:, -1:] > 0, ccdf[:, -1:], 1.0)
-    ccdf[rows > 0, -1] = 1.0
-    c = np.array([np.searchsorted(ccdf[ri], ui, side="right") - 1 for ri, ui in zip(r, u[:, 0])])
-    fx = (u[:, 0] - ccdf[r, c]) / (ccdf[r, c + 1] - ccdf[r, c])
-    p = np.stack([(c + fx) / W, (r + fy) / H], 1).astype(np.float32)
-    for k, (cell, n) in enumerate(((c, W), (r, H))):  # rounding to float32 must keep the cell
-        v = p[:, k]
-        v[:] = np.where(cell_of(v, n) > cell, np.nextafter(v, np.float32(0)), v)
-        v[:] = np.where(cell_of(v, n) < cell, np.nextafter(v, np.float32(1)), v)
-    return p.astype(np.float64)
+    return warp_to_density(density, u).astype(np.float64)  # the package's copy of that map
 
 
 def _images(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -8,6 +8,7 @@
 #include "common/error.h"
 #include "common/threads.h"
 #include "cpu/cpu_cascade.h"
+#include "cpu/cpu_grid.h"
 #include "density/density_kernel.h"
 #include "model/input.h"
 
@@ -406,7 +407,7 @@ typedef struct workspace {
     float *x[2], *y[2], *h[2]; /* the points in the order of the last sort, and the next sort's */
     uint32_t *id[2];           /* their index in the caller's order */
     float *a, *delta, *hmax, *leaf_hmax, *scratch;
-    uint32_t *cell, *start, *kdiv, *leaf_off, *leaf_start;
+    uint32_t *cell, *perm, *start, *kdiv, *leaf_off, *leaf_start;
 } workspace;
 
 static void workspace_free(workspace *w) {
@@ -417,6 +418,7 @@ static void workspace_free(workspace *w) {
     free(w->leaf_hmax);
     free(w->scratch);
     free(w->cell);
+    free(w->perm);
     free(w->start);
     free(w->kdiv);
     free(w->leaf_off);
@@ -465,9 +467,8 @@ static void make_leaves(workspace *w, uint32_t G, size_t m, float *x, float *y, 
             continue;
         }
         const uint32_t gx = (uint32_t)(c % G), gy = (uint32_t)(c / G), n = G * k, kk = k * k;
-        uint32_t *cnt = w->leaf_start + L; /* counts, then starts */
+        uint32_t *ls = w->leaf_start + L;
         float *lh = w->leaf_hmax + L;
-        memset(cnt, 0, (kk + 1) * sizeof(uint32_t));
         memset(lh, 0, kk * sizeof(float));
         for (uint32_t i = s0; i < s1; i++) {
             uint32_t lx = cell_of(x[i], n), ly = cell_of(y[i], n);
@@ -475,17 +476,15 @@ static void make_leaves(workspace *w, uint32_t G, size_t m, float *x, float *y, 
             ly = ly < gy * k ? 0 : ly - gy * k < k ? ly - gy * k : k - 1;
             const uint32_t leaf = ly * k + lx;
             w->cell[i] = leaf;
-            cnt[leaf + 1]++;
             if (h[i] > lh[leaf]) lh[leaf] = h[i];
         }
-        cnt[0] = s0;
-        for (uint32_t q = 0; q < kk; q++) cnt[q + 1] += cnt[q];
-        for (uint32_t i = s0; i < s1; i++) {
-            const uint32_t at = cnt[w->cell[i]]++;
-            tx[at] = x[i], ty[at] = y[i], th[at] = h[i], tid[at] = id[i];
+        uint32_t *perm = w->perm + s0; /* offsets from s0 */
+        dpc_grid_sort(w->cell + s0, s1 - s0, kk, ls, perm);
+        for (uint32_t q = 0; q <= kk; q++) ls[q] += s0;
+        for (uint32_t t = s0; t < s1; t++) {
+            const uint32_t i = s0 + perm[t - s0];
+            tx[t] = x[i], ty[t] = y[i], th[t] = h[i], tid[t] = id[i];
         }
-        for (uint32_t q = kk; q > 0; q--) cnt[q] = cnt[q - 1];
-        cnt[0] = s0;
         memcpy(x + s0, tx + s0, (s1 - s0) * sizeof(float));
         memcpy(y + s0, ty + s0, (s1 - s0) * sizeof(float));
         memcpy(h + s0, th + s0, (s1 - s0) * sizeof(float));
@@ -521,13 +520,14 @@ static dpc_status run_layers(const dpc_cascade *c, const density_map *map, dpc_i
     w.delta = (float *)malloc(2 * m * sizeof(float));
     w.scratch = (float *)calloc((size_t)threads * SLOT_FLOATS, sizeof(float));
     w.cell = (uint32_t *)malloc(m * sizeof(uint32_t));
+    w.perm = (uint32_t *)malloc(m * sizeof(uint32_t));
     w.start = (uint32_t *)calloc(max_cells + 1, sizeof(uint32_t));
     w.hmax = (float *)malloc(max_cells * sizeof(float));
     w.kdiv = (uint32_t *)malloc(max_cells * sizeof(uint32_t));
     w.leaf_off = (uint32_t *)malloc((max_cells + 1) * sizeof(uint32_t));
     w.leaf_start = (uint32_t *)malloc((max_leaves + 1) * sizeof(uint32_t));
     w.leaf_hmax = (float *)malloc(max_leaves * sizeof(float));
-    if (!ok || !w.a || !w.delta || !w.scratch || !w.cell || !w.start || !w.hmax || !w.kdiv || !w.leaf_off ||
+    if (!ok || !w.a || !w.delta || !w.scratch || !w.cell || !w.perm || !w.start || !w.hmax || !w.kdiv || !w.leaf_off ||
         !w.leaf_start || !w.leaf_hmax) {
         workspace_free(&w);
         return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory for %zu points", m);
@@ -550,24 +550,20 @@ static dpc_status run_layers(const dpc_cascade *c, const density_map *map, dpc_i
         float *sx = w.x[(l + 1) & 1], *sy = w.y[(l + 1) & 1], *sh = w.h[(l + 1) & 1];
         uint32_t *sid = w.id[(l + 1) & 1];
         /* the points' grid cells; a stable counting sort by cell */
-        memset(w.start, 0, (cells + 1) * sizeof(uint32_t));
         memset(w.hmax, 0, cells * sizeof(float));
         for (size_t i = 0; i < m; i++) {
             const uint32_t cell = cell_of(py[i], G) * G + cell_of(px[i], G);
             w.cell[i] = cell;
-            w.start[cell + 1]++;
             if (ph[i] > w.hmax[cell]) w.hmax[cell] = ph[i];
         }
-        for (size_t k = 0; k < cells; k++) w.start[k + 1] += w.start[k];
-        for (size_t i = 0; i < m; i++) {
-            const uint32_t at = w.start[w.cell[i]]++;
-            sx[at] = px[i];
-            sy[at] = py[i];
-            sh[at] = ph[i];
-            sid[at] = pid[i];
+        dpc_grid_sort(w.cell, m, cells, w.start, w.perm);
+        for (size_t s = 0; s < m; s++) {
+            const uint32_t i = w.perm[s];
+            sx[s] = px[i];
+            sy[s] = py[i];
+            sh[s] = ph[i];
+            sid[s] = pid[i];
         }
-        for (size_t k = cells; k > 0; k--) w.start[k] = w.start[k - 1];
-        w.start[0] = 0;
         make_leaves(&w, G, m, sx, sy, sh, sid, px, py, ph, pid);
         for (size_t i = 0; i < m; i++) w.a[i] = 1.0f / sh[i];
         layer_pass p;
