@@ -1,6 +1,6 @@
 """Why the density generator is defined as it is (docs/density.md, "Definition"): the float64
-reference (lab/density/reference.py) run with each choice varied, on a ramp, a 1 : 16 step and a
-bright spot. Writes docs/reports/density-design.md.
+reference (lab/density/reference.py) run with each choice varied, on a ramp, 1 : 8 and 1 : 16
+steps and a bright spot. Writes docs/reports/density-design.md.
 
     python -m lab.density.design
 """
@@ -19,6 +19,7 @@ REPO = Path(__file__).resolve().parents[2]
 OUT = REPO / "docs" / "reports" / "density-design.md"
 MODEL = "bnot-2d-stratified"
 G = 128
+MIRROR_M, MIRROR_SEEDS = 2048, 3
 
 
 def densities():
@@ -120,6 +121,35 @@ def main() -> None:
                 s = [share(reference.generate(MODEL, d, m, k, walls=walls), region) for k in range(8)]
                 cells.append(f"{np.mean(s):.3f} ± {np.std(s) / np.sqrt(8):.3f}")
             lines.append(f"| {name} | {m:,} | {want:.3f} | " + " | ".join(cells) + " |")
+            print(lines[-1], flush=True)
+    lines += [
+        "",
+        "## Walls as mirrors",
+        "",
+        "Walls that only stop steps, against walls that are also mirrors (dpc), on 1 : 8 and 1 : 16 "
+        f"steps at x = 1/2 ({MIRROR_M:,} points, mean of {MIRROR_SEEDS} seeds): the count in the strip one "
+        "local hexagonal spacing wide on each side of the edge over its expectation (1 = no seam), and "
+        "the count error in windows of about 16 expected points:",
+        "",
+        "| step | walls | sparse strip | dense strip | count error k = 16 |",
+        "|---|---|---|---|---|",
+    ]
+    y, x = (np.mgrid[0:G, 0:G] + 0.5) / G
+    for ratio in (8.0, 16.0):
+        d = np.where(x < 0.5, 1.0, ratio)
+        rho = (2.0 / (1.0 + ratio), 2.0 * ratio / (1.0 + ratio))
+        hexes = [np.sqrt(2.0 / (np.sqrt(3.0) * MIRROR_M * r)) for r in rho]
+        for mirror in (False, True):
+            lo = hi = 0.0
+            errs = []
+            for k in range(MIRROR_SEEDS):
+                p = reference.generate(MODEL, d, MIRROR_M, k, mirror=mirror)
+                lo += np.sum((p[:, 0] >= 0.5 - hexes[0]) & (p[:, 0] < 0.5)) / (MIRROR_M * rho[0] * hexes[0])
+                hi += np.sum((p[:, 0] >= 0.5) & (p[:, 0] < 0.5 + hexes[1])) / (MIRROR_M * rho[1] * hexes[1])
+                errs.append(count_error(p, d, 16, np.random.default_rng(k)))
+            kind = "stop steps and mirror (dpc)" if mirror else "stop steps"
+            strips = f"{lo / MIRROR_SEEDS:.2f} | {hi / MIRROR_SEEDS:.2f}"
+            lines.append(f"| 1 : {ratio:.0f} | {kind} | {strips} | {np.mean(errs):.3f} |")
             print(lines[-1], flush=True)
     lines += ["", f"Run time: {time.time() - t0:.0f} s.", ""]
     OUT.write_text("\n".join(lines))

@@ -15,7 +15,9 @@ import dpc
 from dpc.importance import warp_to_density
 from dpc.model_file import read_model
 
-WALL = 4.0  # density ratio a step may not cross
+WALL = 4.0  # density ratio a step may not cross, and that makes a wall
+WALL_H = np.sqrt(WALL)  # the same for spacings
+WALL_REACH = 2.0  # a point nearer a wall of its own than this many spacings sees mirror images
 H_CAP = 1.0
 
 PAIR_MEANS = {
@@ -47,6 +49,55 @@ def input_points(model: dpc.Model, density, seed: int, m: int) -> np.ndarray:
     return warp_to_density(density, u).astype(np.float64)  # the package's copy of that map
 
 
+def own(hi, hj):
+    """Spacings hj that a point of spacing hi (> 0) sees as its own side: within WALL_H times."""
+    return (hj > 0) & (hj * WALL_H >= hi) & (hj <= hi * WALL_H)
+
+
+def wall_segments(hcell: np.ndarray) -> np.ndarray:
+    """The walls: boundaries between 4-neighbour cells whose spacings differ more than WALL_H
+    times or of which one is zero, as rows (x0, y0, x1, y1, h of the cell left / below, h right /
+    above)."""
+    Hc, Wc = hcell.shape
+    h = hcell.astype(np.float64)
+    rows = []
+    for a, b, vertical in ((h[:, :-1], h[:, 1:], True), (h[:-1, :], h[1:, :], False)):
+        divided = np.where((a > 0) & (b > 0), ~own(a, b), (a > 0) != (b > 0))
+        r, c = np.nonzero(divided)
+        if vertical:
+            x = (c + 1) / Wc
+            rows.append(np.stack([x, r / Hc, x, (r + 1) / Hc, a[r, c], b[r, c]], axis=1))
+        else:
+            y = (r + 1) / Hc
+            rows.append(np.stack([c / Wc, y, (c + 1) / Wc, y, a[r, c], b[r, c]], axis=1))
+    return np.concatenate(rows)
+
+
+def nearest_walls(p: np.ndarray, h: np.ndarray, segs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per point, the nearest point of its own walls (those with exactly one side its own) closer
+    than WALL_REACH h (at most 1/2), and the unit normal from it to the point; NaN where none."""
+    w = np.full_like(p, np.nan)
+    n = np.full_like(p, np.nan)
+    if not len(segs):
+        return w, n
+    reach = np.minimum(WALL_REACH * h, 0.5)
+    for i in range(len(p)):
+        mine = own(h[i], segs[:, 4]) != own(h[i], segs[:, 5])
+        s = segs[mine]
+        q = np.stack([np.clip(p[i, 0], s[:, 0], s[:, 2]), np.clip(p[i, 1], s[:, 1], s[:, 3])], axis=1)
+        d = np.sqrt(((q - p[i]) ** 2).sum(1))
+        if not len(d) or d.min() >= reach[i]:
+            continue
+        k = int(np.argmin(d))
+        w[i] = q[k]
+        if d[k] > 0:
+            n[i] = (p[i] - q[k]) / d[k]
+        else:  # on the wall: towards the side of its own spacing
+            sign = -1.0 if own(h[i], s[k, 4]) else 1.0
+            n[i] = (sign, 0.0) if s[k, 0] == s[k, 2] else (0.0, sign)
+    return w, n
+
+
 def _images(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The set and its mirror images at the square's sides: (9 m, 2) coordinates and the index of
     the point each image shows."""
@@ -56,9 +107,10 @@ def _images(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return pts, np.tile(np.arange(len(p)), 9)
 
 
-def layer(p, hcell, spec_layer, pair: str = "harmonic", walls: bool = True):
+def layer(p, hcell, spec_layer, pair: str = "harmonic", walls: bool = True, segs: np.ndarray | None = None):
     """One layer: every point's step, then the steps taken (mirrored at the sides; none across a
-    wall or into a zero cell)."""
+    wall or into a zero cell). walls: pairs of spacings more than WALL_H apart see the smaller one,
+    and steps do not cross walls; segs: the walls (wall_segments) when they also mirror."""
     Hc, Wc = hcell.shape
     h = hcell[cell_of(p[:, 1], Hc), cell_of(p[:, 0], Wc)].astype(np.float64)
     rho = spec_layer.radius[0]
@@ -69,19 +121,39 @@ def layer(p, hcell, spec_layer, pair: str = "harmonic", walls: bool = True):
     tree = cKDTree(imgs)
     reach = np.minimum(rho * np.maximum(2.0 * h, h.max()) if pair != "harmonic" else rho * 2.0 * h, 0.5)
     lists = tree.query_ball_point(p, reach)
+    mirror = walls and segs is not None and len(segs) > 0
+    if mirror:
+        wall, normal = nearest_walls(p, h, segs)
     step = np.zeros_like(p)
+
+    def terms(delta, hij):
+        d = np.sqrt((delta**2).sum(1))
+        u = d * (b - 1) / (rho * hij)
+        ok = (u < b - 1) & (d > spec_layer.eps * hij) & (d < 0.5)
+        q = np.minimum(np.floor(u[ok]).astype(np.int64), b - 2)
+        g = w[q] + (u[ok] - q) * (w[q + 1] - w[q])
+        return ((hij[ok] * g / d[ok])[:, None] * delta[ok]).sum(0), ok
+
     for i, nb in enumerate(lists):
         nb = np.asarray(nb, dtype=np.int64)
         if not len(nb):
             continue
         delta = imgs[nb] - p[i]
-        d = np.sqrt((delta**2).sum(1))
-        hij = mean(h[i], h[owner[nb]])
-        u = d * (b - 1) / (rho * hij)
-        ok = (u < b - 1) & (d > spec_layer.eps * hij) & (d < 0.5)
-        q = np.minimum(np.floor(u[ok]).astype(np.int64), b - 2)
-        g = w[q] + (u[ok] - q) * (w[q + 1] - w[q])
-        step[i] = ((hij[ok] * g / d[ok])[:, None] * delta[ok]).sum(0)
+        hj = h[owner[nb]]
+        hij = mean(h[i], hj)
+        same = own(h[i], hj)
+        if walls:  # spacings more than WALL_H apart: the smaller spacing, and no mirror image
+            hij = np.where(same, hij, np.minimum(h[i], hj))
+        step[i], ok = terms(delta, hij)
+        if mirror and not np.isnan(wall[i, 0]):
+            # the mirror images of its own side's pairs across the wall's line, and its own image
+            n = normal[i]
+            D = (p[i] - wall[i]) @ n
+            e = delta @ n + D
+            keep = ok & same & (e > 0)
+            img = delta[keep] - 2.0 * e[keep][:, None] * n
+            mine = np.vstack([img, -2.0 * D * n[None, :]])
+            step[i] += terms(mine, np.append(hij[keep], h[i]))[0]
     new = p + step
     new = np.where(new < 0, -new, np.where(new >= 1, 2.0 - new, new))
     inside = np.all((new >= 0) & (new < 1), axis=1)
@@ -94,12 +166,16 @@ def layer(p, hcell, spec_layer, pair: str = "harmonic", walls: bool = True):
     return np.where(ok[:, None], new, p)
 
 
-def generate(model_path, density, m: int, seed: int = 0, *, pair: str = "harmonic", walls: bool = True):
-    """The points of dpc_generate_density in float64, with the design's choices as options."""
+def generate(
+    model_path, density, m: int, seed: int = 0, *, pair: str = "harmonic", walls: bool = True, mirror: bool = True
+):
+    """The points of dpc_generate_density in float64, with the design's choices as options
+    (mirror: walls are mirrors, as well as stopping steps)."""
     model = dpc.load(model_path)
     spec = read_model(dpc.model_path(model_path))
     p = input_points(model, density, seed, m)
     hcell = spacing_grid(density, m)
+    segs = wall_segments(hcell) if walls and mirror else None
     for spec_layer in spec.layers:
-        p = layer(p, hcell, spec_layer, pair, walls)
+        p = layer(p, hcell, spec_layer, pair, walls, segs)
     return p

@@ -182,15 +182,43 @@ def test_strong_edges_keep_their_counts_at_small_counts(model, m):
         assert abs(np.mean(share) - want) < max(3 * np.std(share) / np.sqrt(12), 0.01), (np.mean(share), want)
 
 
+@pytest.mark.parametrize("ratio", [8.0, 16.0])
+def test_a_strong_edge_leaves_no_seam(model, ratio):
+    """A 1 : 8 and a 1 : 16 step: the strips one local hexagonal spacing wide on either side of
+    the edge hold their expected counts (a wall is a mirror: without it the sparse side lines up
+    along the edge, 1.3-1.4 times its count)."""
+    y, x = (np.mgrid[0:128, 0:128] + 0.5) / 128
+    d = np.where(x < 0.5, 1.0, ratio)
+    m, seeds = 4096, 6
+    rho_lo, rho_hi = 2.0 / (1.0 + ratio), 2.0 * ratio / (1.0 + ratio)
+    hex_lo, hex_hi = (np.sqrt(2.0 / (np.sqrt(3.0) * m * r)) for r in (rho_lo, rho_hi))
+    lo = hi = 0
+    for seed in range(seeds):
+        p = model.generate_density(d, m, seed=seed).astype(np.float64)
+        lo += np.sum((p[:, 0] >= 0.5 - hex_lo) & (p[:, 0] < 0.5))
+        hi += np.sum((p[:, 0] >= 0.5) & (p[:, 0] < 0.5 + hex_hi))
+    assert 0.85 < lo / (seeds * m * rho_lo * hex_lo) < 1.15
+    assert 0.85 < hi / (seeds * m * rho_hi * hex_hi) < 1.15
+
+
+def _parity_densities():
+    y, x = (np.mgrid[0:64, 0:64] + 0.5) / 64
+    return {
+        "ramp with an 8x block": (0.3 + x + 0.5 * y) * np.where((x > 0.7) & (y < 0.3), 8.0, 1.0),
+        "steep, no wall": np.exp(5.0 * x),  # neighbours within 4x, pairs in reach more than 2x apart
+        "zero disc, 1:16 step": np.where((x - 0.3) ** 2 + (y - 0.5) ** 2 < 0.04, 0.0, np.where(x < 0.6, 1.0, 16.0)),
+    }
+
+
+@pytest.mark.parametrize("name", list(_parity_densities()))
 @pytest.mark.parametrize("seed", [0, 4])
-def test_libdpc_matches_the_float64_reference_of_the_definition(seed):
+def test_libdpc_matches_the_float64_reference_of_the_definition(seed, name):
     """lab/density/reference.py writes docs/density.md's definition in float64 numpy; libdpc's
-    float32 engine (mirror images, harmonic pair spacing, walls) agrees to float rounding on the
-    4-layer test model, across a wall and the square's sides."""
+    float32 engine (mirror images at the sides and walls, harmonic or smaller pair spacing, steps
+    stopped at walls) agrees to float rounding on the 4-layer test model."""
     from lab.density import reference
 
-    y, x = (np.mgrid[0:64, 0:64] + 0.5) / 64
-    d = (0.3 + x + 0.5 * y) * np.where((x > 0.7) & (y < 0.3), 8.0, 1.0)
+    d = _parity_densities()[name]
     path = Path(__file__).resolve().parents[2] / "tests" / "data" / "model_2d.onnx"
     want = reference.generate(path, d, 1500, seed=seed)
     got = dpc.load(path).generate_density(d, 1500, seed=seed).astype(np.float64)

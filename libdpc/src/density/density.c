@@ -10,14 +10,11 @@
 #include "cpu/cpu_cascade.h"
 #include "cpu/cpu_grid.h"
 #include "density/density_kernel.h"
+#include "density/walls.h"
 #include "model/input.h"
 
 #define PARALLEL_MIN_POINTS 2048
 #define MAX_GRID 2048u /* cells per axis of the neighbour grid */
-/* A step is not taken into a cell whose density differs more than 4 times from the one it leaves
- * (spacings: 2 times). Within smooth densities no step comes near that; at a strong edge it keeps
- * each side's points on that side (the filters would let a dense side spread into a sparse one). */
-#define WALL_H 2.0f
 /* Local spacings are capped at the square's size; pairs see at most half of it (smin2). */
 #define H_CAP 1.0
 
@@ -27,12 +24,19 @@ typedef struct density_map {
     double *col_cdf; /* H * (W + 1): per row, the row's mass left of each cell, total 1 */
     float *h;        /* per cell: the local spacing (m rho)^(-1/2); 0 where rho = 0 */
     float h_max;
+    dpc_walls walls;
+    /* per cell, where the density has walls: a lower bound of the distance from any point of the
+     * cell to its nearest wall of the cell's own (INFINITY: none within the reach of any layer);
+     * NAN until a point comes there (filled before each layer, walls_ahead) */
+    float *wall_gap;
 } density_map;
 
 static void map_free(density_map *d) {
     free(d->row_cdf);
     free(d->col_cdf);
     free(d->h);
+    free(d->wall_gap);
+    dpc_walls_free(&d->walls);
 }
 
 /* The cell holding a coordinate: floor(x * n), exact in double for float x and n < 2^29. */
@@ -41,8 +45,40 @@ static uint32_t cell_of(float x, uint32_t n) {
     return c < n ? c : n - 1;
 }
 
-static float cell_h(const density_map *d, float x, float y) {
-    return d->h[(size_t)cell_of(y, d->H) * d->W + cell_of(x, d->W)];
+static size_t cell_index(const density_map *d, float x, float y) {
+    return (size_t)cell_of(y, d->H) * d->W + cell_of(x, d->W);
+}
+
+static float cell_h(const density_map *d, float x, float y) { return d->h[cell_index(d, x, y)]; }
+
+/* A point closer than WALL_REACH h to a wall of its own sees the mirror images, across the wall's
+ * line at its nearest point, of its candidates on its side, as the square's sides mirror the set:
+ * the rows of points beside a wall see it as the continuation of their side. */
+#define WALL_REACH 2.0
+
+static double wall_reach(float h) {
+    const double r = WALL_REACH * (double)h;
+    return r < 0.5 ? r : 0.5;
+}
+
+/* Fill wall_gap for the cells of the points (x, y)[0 .. m) that lack it: the distance from the
+ * cell's centre to its nearest own wall less half the cell's diagonal, searched within the wall
+ * reach plus that half. A pure function of the cell, so the order of filling changes nothing. */
+static void walls_ahead(density_map *d, const float *x, const float *y, size_t m) {
+    if (!d->wall_gap) return;
+    const double half = 0.5 * sqrt(1.0 / ((double)d->W * d->W) + 1.0 / ((double)d->H * d->H));
+    for (size_t i = 0; i < m; i++) {
+        const size_t c = cell_index(d, x[i], y[i]);
+        if (d->wall_gap[c] == d->wall_gap[c]) continue;
+        const double cx = ((double)(c % d->W) + 0.5) / d->W, cy = ((double)(c / d->W) + 0.5) / d->H;
+        double wx, wy, nx, ny;
+        float gap = INFINITY;
+        if (dpc_walls_nearest(&d->walls, cx, cy, d->h[c], wall_reach(d->h[c]) + half, &wx, &wy, &nx, &ny)) {
+            const double g = sqrt((cx - wx) * (cx - wx) + (cy - wy) * (cy - wy)) - half;
+            gap = g > 0.0 ? (float)(g * (1.0 - 1e-6)) : 0.0f;
+        }
+        d->wall_gap[c] = gap;
+    }
 }
 
 dpc_status dpc_density_check(const dpc_model *model, const float *density, uint32_t width, uint32_t height) {
@@ -125,6 +161,21 @@ static dpc_status map_init(density_map *d, const float *density, uint32_t W, uin
         if (h > h_max) h_max = h;
     }
     d->h_max = h_max;
+    /* buckets of the walls about 2 mean spacings wide */
+    const double b = floor(sqrt((double)m) / 2.0);
+    const dpc_status st = dpc_walls_init(&d->walls, d->h, W, H, b < 1.0 ? 1u : b > 512.0 ? 512u : (uint32_t)b);
+    if (st != DPC_OK) {
+        map_free(d);
+        return st;
+    }
+    if (d->walls.n) {
+        d->wall_gap = (float *)malloc((size_t)W * H * sizeof(float));
+        if (!d->wall_gap) {
+            map_free(d);
+            return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory for a %u x %u density", W, H);
+        }
+        for (size_t i = 0; i < (size_t)W * H; i++) d->wall_gap[i] = NAN;
+    }
     return DPC_OK;
 }
 
@@ -185,6 +236,7 @@ typedef struct layer_pass {
     const uint32_t *leaf_off;       /* per cell: its first leaf (G * G + 1) */
     const uint32_t *leaf_start;     /* per leaf: its first point (n_leaves + 1) */
     const float *leaf_hmax;         /* per leaf: the largest h of its points */
+    const density_map *map;
     uint32_t G, n_leaves;
     float rho, h_max;
     dpc_density_job job;
@@ -193,7 +245,7 @@ typedef struct layer_pass {
     float *delta;   /* m x 2, sorted order */
 } layer_pass;
 
-#define SLOT_FLOATS (3u * (RUN_CAP + 16u) + 4u * GROUP_MAX + 16u * GROUP_MAX + 3u * DPC_DENSITY_DENSE)
+#define SLOT_FLOATS (3u * (RUN_CAP + 16u) + (DPC_DENSITY_QUERY + 16u) * GROUP_MAX + 6u * DPC_DENSITY_DENSE)
 
 /* The distance from the span [a, b] to the span [lo, hi] (0 where they meet). */
 static float span_gap(float a, float b, float lo, float hi) { return b < lo ? lo - b : a > hi ? a - hi : 0.0f; }
@@ -237,13 +289,25 @@ typedef struct group {
     float *dense;         /* the kernel's scratch */
     uint32_t r0, r1;      /* the range waiting to be appended */
     float ax, bx, ay, by; /* the image it is seen through */
+    float amin, amax;     /* the queries' smallest and largest 1/h */
+    int walled;           /* a query has a wall */
 } group;
 
-/* Pad the chunk to whole vectors (far away: out of every window) and add its terms. */
+/* Pad the chunk to whole vectors (far away: out of every window) and add its terms. The kernel
+ * tests pairs for spacings more than WALL_H apart only where one may be: where the chunk's 1/h
+ * and the queries' are not within WALL_H of each other (the same float products as the kernel's
+ * test, so skipping it changes no bit), or a query has a wall. */
 static void flush(const layer_pass *p, group *g) {
     uint32_t n = g->n;
+    float cmin = INFINITY, cmax = 0.0f;
+    for (uint32_t j = 0; j < n; j++) {
+        cmin = g->ca[j] < cmin ? g->ca[j] : cmin;
+        cmax = g->ca[j] > cmax ? g->ca[j] : cmax;
+    }
     for (; n % 16u; n++) g->cx[n] = FAR_AWAY, g->cy[n] = FAR_AWAY, g->ca[n] = 0.0f;
-    p->kernel(&p->job, g->cx, g->cy, g->ca, n, g->q, g->nq, g->acc, g->dense);
+    dpc_density_job job = p->job;
+    job.walls = g->walled || !(cmax <= g->amin * WALL_H && g->amax <= cmin * WALL_H);
+    p->kernel(&job, g->cx, g->cy, g->ca, n, g->q, g->nq, g->acc, g->dense);
     g->n = 0;
 }
 
@@ -318,31 +382,34 @@ static void scan_leaves(const layer_pass *p, group *g, uint32_t gx, uint32_t gy,
     }
 }
 
-/* The sorted points [s0, s1) (one leaf's, at most GROUP_MAX) as one group. */
-static void run_group(const layer_pass *p, float *slot, uint32_t s0, uint32_t s1) {
-    group g;
-    g.cx = slot;
-    g.cy = slot + (RUN_CAP + 16);
-    g.ca = slot + 2 * (RUN_CAP + 16);
-    g.q = slot + 3 * (RUN_CAP + 16);
-    g.acc = g.q + 4 * GROUP_MAX;
-    g.dense = g.acc + 16 * GROUP_MAX;
-    g.n = 0;
-    g.nq = s1 - s0;
-    float box[4] = {p->sx[s0], p->sx[s0], p->sy[s0], p->sy[s0]}, hq = 0.0f; /* x0, x1, y0, y1 */
-    for (unsigned k = 0; k < g.nq; k++) {
-        const uint32_t i = s0 + k;
-        g.q[4 * k] = p->sx[i];
-        g.q[4 * k + 1] = p->sy[i];
-        g.q[4 * k + 2] = p->sa[i];
-        g.q[4 * k + 3] = 0.0f;
-        box[0] = p->sx[i] < box[0] ? p->sx[i] : box[0];
-        box[1] = p->sx[i] > box[1] ? p->sx[i] : box[1];
-        box[2] = p->sy[i] < box[2] ? p->sy[i] : box[2];
-        box[3] = p->sy[i] > box[3] ? p->sy[i] : box[3];
-        hq = p->sh[i] > hq ? p->sh[i] : hq;
+/* The factor k of one term (density_kernel.h) for t = (tx, ty) and a, 0 outside the window: the
+ * kernel's float operations in its order, on one value. */
+static float own_term(const dpc_density_job *job, float tx, float ty, float a) {
+    const float d2 = tx * tx + ty * ty, s = a * job->c2, s2 = s * s;
+    const float v = d2 * (s2 < job->smin2 ? job->smin2 : s2);
+    if (!(v > job->cut2 && v < job->umax2)) return 0.0f;
+    const float d = sqrtf(d2), u = (d * job->c2) * a;
+    const float uc = u < job->umax ? u : job->umax;
+    int32_t b = (int32_t)uc;
+    b = b < job->qmax ? b : job->qmax;
+    const float f = uc - (float)b;
+    const float g = job->w[b] + f * job->dw[b];
+    return (2.0f * g) / (a * d);
+}
+
+/* Add to the lane sums of the group's queries the terms of every candidate within reach of their
+ * bounding box (hq: their largest h): the runs of each mirror image of the set in turn. */
+static void gather(const layer_pass *p, group *g, float hq) {
+    float box[4] = {g->q[0], g->q[0], g->q[1], g->q[1]}; /* x0, x1, y0, y1 */
+    for (unsigned k = 1; k < g->nq; k++) {
+        const float qx = g->q[DPC_DENSITY_QUERY * k], qy = g->q[DPC_DENSITY_QUERY * k + 1];
+        box[0] = qx < box[0] ? qx : box[0];
+        box[1] = qx > box[1] ? qx : box[1];
+        box[2] = qy < box[2] ? qy : box[2];
+        box[3] = qy > box[3] ? qy : box[3];
     }
-    memset(g.acc, 0, 16 * g.nq * sizeof(float));
+    memset(g->acc, 0, 16 * g->nq * sizeof(float));
+    g->n = 0;
     const uint32_t G = p->G;
     const float inv_g = 1.0f / (float)G;
     const float R = reach(p->rho, hq, p->h_max);
@@ -351,32 +418,77 @@ static void run_group(const layer_pass *p, float *slot, uint32_t s0, uint32_t s1
         uint32_t gy0, gy1, gx0, gx1;
         image_span(iy, box[2], box[3], R, &ylo, &yhi);
         if (!cell_span(ylo, yhi, G, &gy0, &gy1)) continue;
-        g.ay = img_off[iy], g.by = img_sgn[iy];
+        g->ay = img_off[iy], g->by = img_sgn[iy];
         for (int ix = 0; ix < 3; ix++) {
             image_span(ix, box[0], box[1], R, &xlo, &xhi);
             if (!cell_span(xlo, xhi, G, &gx0, &gx1)) continue;
-            g.ax = img_off[ix], g.bx = img_sgn[ix];
-            g.r0 = g.r1 = 0;
+            g->ax = img_off[ix], g->bx = img_sgn[ix];
+            g->r0 = g->r1 = 0;
             for (uint32_t gy = gy0; gy <= gy1; gy++) {
-                const float gap_y = image_gap(g.ay, g.by, gy, inv_g, box[2], box[3]);
+                const float gap_y = image_gap(g->ay, g->by, gy, inv_g, box[2], box[3]);
                 const uint32_t *st = p->start + (size_t)gy * G;
                 const float *hm = p->hmax + (size_t)gy * G;
                 for (uint32_t gx = gx0; gx <= gx1; gx++) {
                     if (st[gx] == st[gx + 1]) continue;
-                    const float gap_x = image_gap(g.ax, g.bx, gx, inv_g, box[0], box[1]);
+                    const float gap_x = image_gap(g->ax, g->bx, gx, inv_g, box[0], box[1]);
                     const float Rc = reach(p->rho, hq, hm[gx]);
                     if (!(gap_x * gap_x + gap_y * gap_y < Rc * Rc)) continue; /* no point of it in reach */
-                    if (p->kdiv[(size_t)gy * G + gx] == 1) add_range(p, &g, st[gx], st[gx + 1]);
-                    else scan_leaves(p, &g, gx, gy, box, hq, xlo, xhi, ylo, yhi);
+                    if (p->kdiv[(size_t)gy * G + gx] == 1) add_range(p, g, st[gx], st[gx + 1]);
+                    else scan_leaves(p, g, gx, gy, box, hq, xlo, xhi, ylo, yhi);
                 }
             }
-            append(p, &g);
+            append(p, g);
         }
     }
-    if (g.n) flush(p, &g);
+    if (g->n) flush(p, g);
+}
+
+/* The sorted points [s0, s1) (one leaf's, at most GROUP_MAX) as one group; a point near a wall of
+ * its own adds the mirror images (the kernel those of its candidates, here its own). */
+static void run_group(const layer_pass *p, float *slot, uint32_t s0, uint32_t s1) {
+    group g;
+    g.cx = slot;
+    g.cy = slot + (RUN_CAP + 16);
+    g.ca = slot + 2 * (RUN_CAP + 16);
+    g.q = slot + 3 * (RUN_CAP + 16);
+    g.acc = g.q + DPC_DENSITY_QUERY * GROUP_MAX;
+    g.dense = g.acc + 16 * GROUP_MAX;
+    g.nq = s1 - s0;
+    float hq = 0.0f;
+    memset(g.q, 0, DPC_DENSITY_QUERY * g.nq * sizeof(float));
     for (unsigned k = 0; k < g.nq; k++) {
-        p->delta[2 * (size_t)(s0 + k)] = lane_tree(g.acc + 16 * k);
-        p->delta[2 * (size_t)(s0 + k) + 1] = lane_tree(g.acc + 16 * k + 8);
+        const uint32_t i = s0 + k;
+        float *q = g.q + DPC_DENSITY_QUERY * k;
+        q[0] = p->sx[i], q[1] = p->sy[i], q[2] = p->sa[i];
+        hq = p->sh[i] > hq ? p->sh[i] : hq;
+        /* its nearest wall, if closer than WALL_REACH h: the kernel adds the mirror images */
+        if (!p->map->wall_gap) continue;
+        const double x = p->sx[i], y = p->sy[i], far = wall_reach(p->sh[i]);
+        if ((double)p->map->wall_gap[cell_index(p->map, p->sx[i], p->sy[i])] >= far) continue; /* none near */
+        double wx, wy, nx, ny;
+        if (!dpc_walls_nearest(&p->map->walls, x, y, p->sh[i], far, &wx, &wy, &nx, &ny)) continue;
+        q[3] = 1.0f, q[4] = (float)nx, q[5] = (float)ny;
+        q[6] = (float)((x - wx) * nx + (y - wy) * ny); /* the distance to the mirror's line */
+    }
+    g.amin = INFINITY, g.amax = 0.0f, g.walled = 0;
+    for (unsigned k = 0; k < g.nq; k++) {
+        const float *q = g.q + DPC_DENSITY_QUERY * k;
+        g.amin = q[2] < g.amin ? q[2] : g.amin;
+        g.amax = q[2] > g.amax ? q[2] : g.amax;
+        g.walled |= q[3] != 0.0f;
+    }
+    gather(p, &g, hq);
+    for (unsigned k = 0; k < g.nq; k++) {
+        const float *q = g.q + DPC_DENSITY_QUERY * k;
+        float *d = p->delta + 2 * (size_t)(s0 + k);
+        d[0] = lane_tree(g.acc + 16 * k);
+        d[1] = lane_tree(g.acc + 16 * k + 8);
+        if (q[3] != 0.0f) { /* the point's own mirror image, at t = -2 D n */
+            const float f = q[6] + q[6], tx = 0.0f - f * q[4], ty = 0.0f - f * q[5];
+            const float k_own = own_term(&p->job, tx, ty, q[2] + q[2]);
+            d[0] = d[0] + k_own * tx;
+            d[1] = d[1] + k_own * ty;
+        }
     }
 }
 
@@ -495,7 +607,7 @@ static void make_leaves(workspace *w, uint32_t G, size_t m, float *x, float *y, 
     w->leaf_start[L] = (uint32_t)m;
 }
 
-static dpc_status run_layers(const dpc_cascade *c, const density_map *map, dpc_isa isa, unsigned threads, size_t m,
+static dpc_status run_layers(const dpc_cascade *c, density_map *map, dpc_isa isa, unsigned threads, size_t m,
                              float *x) {
     uint32_t G_max = 1;
     for (uint32_t l = 0; l < c->n_layers; l++) {
@@ -565,6 +677,7 @@ static dpc_status run_layers(const dpc_cascade *c, const density_map *map, dpc_i
             sid[s] = pid[i];
         }
         make_leaves(&w, G, m, sx, sy, sh, sid, px, py, ph, pid);
+        walls_ahead(map, sx, sy, m);
         for (size_t i = 0; i < m; i++) w.a[i] = 1.0f / sh[i];
         layer_pass p;
         p.sx = sx;
@@ -577,6 +690,7 @@ static dpc_status run_layers(const dpc_cascade *c, const density_map *map, dpc_i
         p.leaf_off = w.leaf_off;
         p.leaf_start = w.leaf_start;
         p.leaf_hmax = w.leaf_hmax;
+        p.map = map;
         p.G = G;
         p.n_leaves = w.leaf_off[cells];
         p.rho = L->radius[0];
@@ -590,6 +704,8 @@ static dpc_status run_layers(const dpc_cascade *c, const density_map *map, dpc_i
         p.job.umax2 = p.job.umax * p.job.umax;
         p.job.smin2 = 4.0f * p.job.umax2; /* d < 1/2 */
         p.job.qmax = (int32_t)L->bins - 2;
+        p.job.walls = 1; /* set per chunk (flush) */
+        p.job.wall_ratio = WALL_H;
         p.kernel = pick_kernel(isa);
         p.scratch = w.scratch;
         p.delta = w.delta;
@@ -601,7 +717,7 @@ static dpc_status run_layers(const dpc_cascade *c, const density_map *map, dpc_i
             const float h = cell_h(map, nx, ny);
             /* nor across a wall: into a cell whose density differs more than WALL times (a cell of
              * zero density among them), so strong edges keep their counts */
-            if (!(h * WALL_H >= sh[i] && h <= sh[i] * WALL_H)) continue;
+            if (!dpc_wall_compatible(sh[i], h)) continue;
             sx[i] = nx;
             sy[i] = ny;
             sh[i] = h;

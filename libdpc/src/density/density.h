@@ -7,12 +7,16 @@
  * row), so they follow it exactly and keep their strata. Each layer then moves point i by
  *     sum_j h_ij g(d_ij / (rho h_ij)) delta_ij / d_ij,   h = (m rho(x))^(-1/2),
  *     h_ij = 2 h_i h_j / (h_i + h_j) (the harmonic mean: the pair's two terms are equal and
- *     opposite, and a sparse point does not push back the dense side of an edge),
+ *     opposite, and a sparse point does not push back the dense side of an edge), or
+ *     h_ij = min(h_i, h_j) where the two differ more than 2 times,
  * with mirror edges: the square's edges reflect the set. No pair farther apart than half the
- * square interacts, and h is at most 1. A step that would leave the square is mirrored back; one
- * that would end in a cell whose density differs more than 4 times from its start (a zero cell
- * among them: a wall) is not taken. Everything is float32 in one
- * fixed order (double for the inverse CDF), the same bits for every CPU and thread count. */
+ * square interacts, and h is at most 1. Walls (walls.h: cell boundaries where the density changes
+ * more than 4 times, or to zero) are mirrors too: a point within 2 h of one of its own also sees
+ * the mirror images, across the wall's line at its nearest point, of itself and of its pairs of
+ * its own spacing on its side. A step that would leave the square is mirrored back; one that
+ * would end in a cell whose density differs more than 4 times from its start (a zero cell among
+ * them) is not taken. Everything is float32 in one fixed order (double for the inverse CDF), the
+ * same bits for every CPU and thread count. */
 #ifndef DPC_DENSITY_DENSITY_H
 #define DPC_DENSITY_DENSITY_H
 

@@ -7,11 +7,16 @@
  *              no pair farther than half the square),
  *     term:    k = 2 g(u) / (a d),   d = sqrt(d2), u = (d c2) a,
  *              g(u) = w[q] + (u' - q) dw[q],  u' = min(u, umax), q = min(trunc(u'), qmax),
- *     sums:    the terms in the window, in chunk order, go to lanes 0, 1, .., 7, 0, 1, ..: the
- *              lane of the r-th one is r mod 8, and each lane adds k tx (and k ty) in order.
- * The caller adds the 8 lane sums in the tree (l, l + 4), (l, l + 2), (0, 1). Every step is an
- * IEEE float32 operation (sqrt and division correctly rounded; a multiply then an add, never an
- * FMA) or an exact integer one, in this order, on every path. */
+ *     sums:    the candidates in the window, in chunk order, go to lanes 0, 1, .., 7, 0, 1, ..:
+ *              the lane of the r-th one is r mod 8, and each lane adds k tx (and k ty) in order.
+ * With walls (job->walls), a pair whose 1/h differ more than W = wall_ratio times (big > W small)
+ * has a = 2 big (the smaller spacing): its term is that of a and 0 outside the window at a. And a
+ * query with a wall (plane != 0) then adds the terms of the mirror images t' = t - 2 e n,
+ * e = t . n + D, of the window's candidates with e > 0 whose 1/h are within W of its own, in the
+ * window at the pair's a: in chunk order, to lanes 0, 1, .. again. The caller adds the 8 lane sums
+ * in the tree (l, l + 4), (l, l + 2), (0, 1). Every step is an IEEE float32 operation (sqrt and
+ * division correctly rounded; a multiply then an add, never an FMA) or an exact integer one, in
+ * this order, on every path. */
 #ifndef DPC_DENSITY_KERNEL_H
 #define DPC_DENSITY_KERNEL_H
 
@@ -19,16 +24,21 @@
 
 #define DPC_DENSITY_CHUNK 1024u /* candidates per chunk at most; chunks are padded to a multiple of 16 */
 #define DPC_DENSITY_DENSE (DPC_DENSITY_CHUNK + 32u) /* floats per stream of the kernels' scratch */
+#define DPC_DENSITY_QUERY 8u                        /* floats per query */
 
 typedef struct dpc_density_job {
     const float *w, *dw; /* the kernel table and its slopes, qmax + 2 entries */
     float c2, cut2, umax, umax2, smin2;
     int32_t qmax;
+    int walls;        /* test pairs for spacings more than wall_ratio apart (density.c: when one may be) */
+    float wall_ratio; /* WALL_H (walls.h) */
 } dpc_density_job;
 
-/* Query p is q[4p], q[4p+1], q[4p+2] = x, y, 1/h; its lane sums acc[16p .. 16p+7] (x) and
- * acc[16p+8 .. 16p+15] (y) are added to. The chunk is cx, cy, ca[0 .. n) (x, y, 1/h), n a
- * multiple of 16 (padding out of every window). scratch: 3 * DPC_DENSITY_DENSE floats. */
+/* Query p is q[8p .. 8p+7] = x, y, 1/h, plane, nx, ny, D, unused (plane != 0: a wall, the line
+ * t . n + D = 0 through its nearest point, n the unit normal to the query's side); its lane sums
+ * acc[16p .. 16p+7] (x) and acc[16p+8 .. 16p+15] (y) are added to. The chunk is cx, cy, ca[0 .. n)
+ * (x, y, 1/h), n a multiple of 16 (padding out of every window). scratch: 6 * DPC_DENSITY_DENSE
+ * floats. */
 typedef void dpc_density_kernel(const dpc_density_job *job, const float *cx, const float *cy, const float *ca,
                                 uint32_t n, const float *q, unsigned nq, float *acc, float *scratch);
 typedef dpc_density_kernel *dpc_density_fn;

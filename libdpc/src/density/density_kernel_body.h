@@ -1,6 +1,6 @@
 /* The density kernel (density_kernel.h) on VW-lane vectors, written once for every ISA path:
  * per query, (1) the window test on VW candidates at a time, the candidates in the window packed
- * in order into dense streams (tx, ty, a); (2) the terms of VW packed candidates at a time, each
+ * in order into dense streams (tx, ty, 1/h_j); (2) the terms of VW packed candidates at a time, each
  * lane doing the float operations density_kernel.h lists, added to the 8 lane sums: packed
  * candidate r to lane r mod 8, in order (with 16 lanes, the low 8 products first, then the high
  * 8). The packing changes which register lane computes a term, not the term, nor the order of
@@ -40,50 +40,122 @@ static inline vf8 add_lanes(vf8 s, vf v) {
 #endif
 }
 
+/* The window of query (X, Y, A) over the chunk, at the pair spacing 2 / (cj + A): the candidates
+ * in it packed in order into (dtx, dty, dc) (dc: their 1/h, cj), their count returned. */
+static inline __attribute__((always_inline)) uint32_t window(const float *cx, const float *cy, const float *ca,
+                                                             uint32_t n, vf X, vf Y, vf A, vf c2, vf smin2, vf cut2,
+                                                             vf umax2, float *dtx, float *dty, float *dc) {
+    uint32_t m = 0;
+    for (uint32_t o = 0; o < n; o += VW) {
+        const vf tx = VLOAD(cx + o) - X, ty = VLOAD(cy + o) - Y;
+        const vf d2 = tx * tx + ty * ty;
+        const vf cj = VLOAD(ca + o);
+        const vf a = cj + A, s = a * c2, s2 = s * s;
+        m += PACK3(WINDOW(d2 * vselect(s2 < smin2, smin2, s2), cut2, umax2), tx, ty, cj, dtx + m, dty + m, dc + m);
+    }
+    return m;
+}
+
+/* The pair's a = 1/h_i + 1/h_j, or, where the spacings differ more than WR times (walls), at the
+ * smaller spacing: 2 max(cj, A); *own: the lanes that are not so. */
+static inline __attribute__((always_inline)) vf pair_a(const int walls, vf cj, vf A, vf WR, vi *own) {
+    const vf a = cj + A;
+    if (!walls) {
+        *own = visplat(-1);
+        return a;
+    }
+    const vi up = cj > A;
+    const vf big = vselect(up, cj, A), small = vselect(up, A, cj);
+    *own = big <= small * WR;
+    return vselect(*own, a, big + big);
+}
+
+/* The mirror images, across the line t . n + D = 0 (n = (NX, NY), D >= 0 the query's distance to
+ * it), of the packed candidates (tx, ty, cj)[0 .. m) of its own spacing on its side
+ * (t . n + D > 0), packed in order into (itx, ity, ic) where in the window:
+ * t' = t - 2 (t . n + D) n. An image is never nearer than its candidate, so the packed
+ * candidates hold every image in reach but the query's own (t = 0: density.c adds it). Returns
+ * their count. */
+static inline __attribute__((always_inline)) uint32_t images(const float *dtx, const float *dty, const float *dc,
+                                                             uint32_t m, vi iota, vf A, vf WR, vf NX, vf NY, vf D,
+                                                             vf c2, vf smin2, vf cut2, vf umax2, float *itx, float *ity,
+                                                             float *ic) {
+    uint32_t k = 0;
+    const vf zero = vsplat(0.0f);
+    for (uint32_t r = 0; r < m; r += VW) {
+        const vi live = VLIVE(iota, (int32_t)(m - r));
+        const vf tx = VLOAD(dtx + r), ty = VLOAD(dty + r), cj = VLOAD(dc + r);
+        vi own;
+        const vf a = pair_a(1, cj, A, WR, &own);
+        const vf e = tx * NX + ty * NY + D, f = e + e;
+        const vf jx = tx - f * NX, jy = ty - f * NY;
+        const vf s = a * c2, s2 = s * s;
+        const vf v = vselect(live & own & (e > zero), (jx * jx + jy * jy) * vselect(s2 < smin2, smin2, s2), umax2);
+        k += PACK3(WINDOW(v, cut2, umax2), jx, jy, cj, itx + k, ity + k, ic + k);
+    }
+    return k;
+}
+
+/* Add the terms of the packed candidates (tx, ty, cj)[0 .. m) to the lane sums (sx, sy). With
+ * walls, a pair of spacings more than WR apart (pair_a) is tested again against the window at its
+ * smaller spacing, and its term is 0 outside. Lanes of the last vector beyond m compute a finite k
+ * from d = 1, cj = 1 and add k * 0 (+0 or -0), which changes no sum; so do pairs out of the window. */
+static inline __attribute__((always_inline)) void
+terms(const int walls, const float *dtx, const float *dty, const float *dc, uint32_t m, vi iota, vf A, vf WR, vf c2,
+      vf smin2, vf cut2, vf umax, vf umax2, vi qmax, const table_regs *w_t, const table_regs *dw_t, vf8 *sx, vf8 *sy) {
+    const vf two = vsplat(2.0f), zero = vsplat(0.0f), one = vsplat(1.0f);
+    for (uint32_t r = 0; r < m; r += VW) {
+        const vi live = VLIVE(iota, (int32_t)(m - r));
+        const vf tx = vselect(live, VLOAD(dtx + r), zero), ty = vselect(live, VLOAD(dty + r), zero);
+        vi own;
+        const vf a = pair_a(walls, vselect(live, VLOAD(dc + r), one), A, WR, &own);
+        const vf d2 = vselect(live, tx * tx + ty * ty, one); /* d2 again: the same operations */
+        const vf d = VSQRT(d2);
+        const vf u = (d * c2) * a;
+        const vf uc = VMIN(u, umax);
+        const vi b = VIMIN(__builtin_convertvector(uc, vi), qmax);
+        const vf f = uc - __builtin_convertvector(b, vf);
+        const vf g = LOOKUP(w_t, b) + f * LOOKUP(dw_t, b);
+        vf k = (two * g) / (a * d);
+        if (walls) {
+            const vf s = a * c2, s2 = s * s, v = d2 * vselect(s2 < smin2, smin2, s2);
+            k = vselect(own | ((v > cut2) & (v < umax2)), k, zero);
+        }
+        *sx = add_lanes(*sx, k * tx);
+        *sy = add_lanes(*sy, k * ty);
+    }
+}
+
 void KERNEL(const dpc_density_job *job, const float *cx, const float *cy, const float *ca, uint32_t n, const float *q,
             unsigned nq, float *acc, float *scratch) {
     const vf c2 = vsplat(job->c2), cut2 = vsplat(job->cut2), umax = vsplat(job->umax), umax2 = vsplat(job->umax2);
-    const vf smin2 = vsplat(job->smin2);
-    const vf two = vsplat(2.0f), zero = vsplat(0.0f), one = vsplat(1.0f);
+    const vf smin2 = vsplat(job->smin2), WR = vsplat(job->wall_ratio);
 #if VW == 16
     const vi iota = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15};
 #else
     const vi iota = {0, 1, 2, 3, 4, 5, 6, 7};
 #endif
     const vi qmax = visplat(job->qmax);
-    float *dtx = scratch, *dty = scratch + DPC_DENSITY_DENSE, *da = scratch + 2 * DPC_DENSITY_DENSE;
+    float *dtx = scratch, *dty = scratch + DPC_DENSITY_DENSE, *dc = scratch + 2 * DPC_DENSITY_DENSE;
+    float *itx = dc + DPC_DENSITY_DENSE, *ity = itx + DPC_DENSITY_DENSE, *ic = ity + DPC_DENSITY_DENSE;
     table_regs w_t, dw_t;
     LOAD_TABLE(&w_t, job->w, job->qmax + 2);
     LOAD_TABLE(&dw_t, job->dw, job->qmax + 2);
     for (unsigned p = 0; p < nq; p++) {
-        const vf X = vsplat(q[4 * p]), Y = vsplat(q[4 * p + 1]), A = vsplat(q[4 * p + 2]);
-        /* (1) the window, packed */
-        uint32_t m = 0;
-        for (uint32_t o = 0; o < n; o += VW) {
-            const vf tx = VLOAD(cx + o) - X, ty = VLOAD(cy + o) - Y;
-            const vf d2 = tx * tx + ty * ty;
-            const vf a = VLOAD(ca + o) + A, s = a * c2, s2 = s * s;
-            const mask_t in = WINDOW(d2 * vselect(s2 < smin2, smin2, s2), cut2, umax2);
-            m += PACK3(in, tx, ty, a, dtx + m, dty + m, da + m);
-        }
-        /* (2) the terms. Lanes of the last vector beyond m compute a finite k from d = a = 1 and
-         * add k * 0 (+0 or -0), which changes no sum. */
+        const float *qp = q + DPC_DENSITY_QUERY * p;
+        const vf X = vsplat(qp[0]), Y = vsplat(qp[1]), A = vsplat(qp[2]);
         vf8 sx, sy;
         memcpy(&sx, acc + 16 * p, sizeof sx);
         memcpy(&sy, acc + 16 * p + 8, sizeof sy);
-        for (uint32_t r = 0; r < m; r += VW) {
-            const vi live = VLIVE(iota, (int32_t)(m - r));
-            const vf tx = vselect(live, VLOAD(dtx + r), zero), ty = vselect(live, VLOAD(dty + r), zero);
-            const vf a = vselect(live, VLOAD(da + r), one);
-            const vf d = VSQRT(vselect(live, tx * tx + ty * ty, one)); /* d2 again: the same operations */
-            const vf u = (d * c2) * a;
-            const vf uc = VMIN(u, umax);
-            const vi b = VIMIN(__builtin_convertvector(uc, vi), qmax);
-            const vf f = uc - __builtin_convertvector(b, vf);
-            const vf g = LOOKUP(&w_t, b) + f * LOOKUP(&dw_t, b);
-            const vf k = (two * g) / (a * d);
-            sx = add_lanes(sx, k * tx);
-            sy = add_lanes(sy, k * ty);
+        /* (1) the window, packed; (2) the terms: the candidates', then their mirror images' */
+        const uint32_t m = window(cx, cy, ca, n, X, Y, A, c2, smin2, cut2, umax2, dtx, dty, dc);
+        if (job->walls)
+            terms(1, dtx, dty, dc, m, iota, A, WR, c2, smin2, cut2, umax, umax2, qmax, &w_t, &dw_t, &sx, &sy);
+        else terms(0, dtx, dty, dc, m, iota, A, WR, c2, smin2, cut2, umax, umax2, qmax, &w_t, &dw_t, &sx, &sy);
+        if (job->walls && qp[3] != 0.0f) {
+            const vf NX = vsplat(qp[4]), NY = vsplat(qp[5]), D = vsplat(qp[6]);
+            const uint32_t k = images(dtx, dty, dc, m, iota, A, WR, NX, NY, D, c2, smin2, cut2, umax2, itx, ity, ic);
+            terms(0, itx, ity, ic, k, iota, A, WR, c2, smin2, cut2, umax, umax2, qmax, &w_t, &dw_t, &sx, &sy);
         }
         memcpy(acc + 16 * p, &sx, sizeof sx);
         memcpy(acc + 16 * p + 8, &sy, sizeof sy);
