@@ -3,8 +3,8 @@ one thread, per ISA path; writes the section "Density" of docs/performance.md.
 
     python bench/bench_density.py [--quick]
 
-Model bnot-2d-stratified; densities on 256 x 256 cells: a ramp (0.1 + x), a Gaussian bump and a
-1 : 16 step. The uniform set and each density's set alternate, round after round, so that a
+Model bnot-2d-stratified; densities on 256 x 256 cells: a ramp (0.1 + x), a Gaussian bump, a
+1 : 16 step (one wall) and a photograph (walls everywhere). The uniform set and each density's set alternate, round after round, so that a
 busy machine slows both alike; medians over the rounds. The goal: a density set within 2x the
 time of a uniform set of the same size.
 """
@@ -24,12 +24,24 @@ import dpc
 MODEL = "bnot-2d-stratified"
 
 
+def photo() -> np.ndarray:
+    """Grace Hopper (matplotlib's sample photograph, public domain), 512 x 512 averaged to 256 x
+    256, dark is dense: the density of the density study (lab/density/field.py), all edges."""
+    import matplotlib.cbook as cbook
+    from PIL import Image
+
+    with Image.open(cbook.get_sample_data("grace_hopper.jpg", asfileobj=False)) as img:
+        tone = dpc.density.image_tone(np.asarray(img.convert("RGB"))).astype(np.float64)
+    return 1.0 - tone[44:556].reshape(256, 2, 256, 2).mean(axis=(1, 3))
+
+
 def densities() -> dict[str, np.ndarray]:
     y, x = (np.mgrid[0:256, 0:256] + 0.5) / 256
     return {
         "ramp": 0.1 + x,
         "bump": 0.05 + np.exp(-((x - 0.5) ** 2 + (y - 0.5) ** 2) / (2 * 0.15**2)),
         "step 1 : 16": np.where(x < 0.5, 1.0, 16.0),
+        "photograph": photo(),
     }
 
 

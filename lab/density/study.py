@@ -605,7 +605,7 @@ def main() -> None:
     photo_sets = {m: results[m]["photo"]["first"]["dpc"] for m in cfg["counts"]}
     figs.append(gallery(model, fields()[3], cfg["gallery"], photo_sets, figs_dir))
     m0 = min(cfg["counts"])
-    for fname in ("ramp", "step"):
+    for fname in ("ramp", "step", "photo"):
         field = {f.name: f for f in fields()}[fname]
         figs.append(side_by_side(field, results[m0][fname]["first"], m0, figs_dir))
     for p in figs:

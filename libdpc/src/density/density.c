@@ -289,14 +289,11 @@ typedef struct group {
     float *dense;         /* the kernel's scratch */
     uint32_t r0, r1;      /* the range waiting to be appended */
     float ax, bx, ay, by; /* the image it is seen through */
-    float amin, amax;     /* the queries' smallest and largest 1/h */
-    int walled;           /* a query has a wall */
 } group;
 
-/* Pad the chunk to whole vectors (far away: out of every window) and add its terms. The kernel
- * tests pairs for spacings more than WALL_H apart only where one may be: where the chunk's 1/h
- * and the queries' are not within WALL_H of each other (the same float products as the kernel's
- * test, so skipping it changes no bit), or a query has a wall. */
+/* Pad the chunk to whole vectors (far away: out of every window) and add its terms; the chunk's
+ * range of 1/h lets the kernel pass over the test for pairs of spacings more than WALL_H apart
+ * where there can be none. */
 static void flush(const layer_pass *p, group *g) {
     uint32_t n = g->n;
     float cmin = INFINITY, cmax = 0.0f;
@@ -306,7 +303,7 @@ static void flush(const layer_pass *p, group *g) {
     }
     for (; n % 16u; n++) g->cx[n] = FAR_AWAY, g->cy[n] = FAR_AWAY, g->ca[n] = 0.0f;
     dpc_density_job job = p->job;
-    job.walls = g->walled || !(cmax <= g->amin * WALL_H && g->amax <= cmin * WALL_H);
+    job.cmin = cmin, job.cmax = cmax;
     p->kernel(&job, g->cx, g->cy, g->ca, n, g->q, g->nq, g->acc, g->dense);
     g->n = 0;
 }
@@ -469,13 +466,6 @@ static void run_group(const layer_pass *p, float *slot, uint32_t s0, uint32_t s1
         if (!dpc_walls_nearest(&p->map->walls, x, y, p->sh[i], far, &wx, &wy, &nx, &ny)) continue;
         q[3] = 1.0f, q[4] = (float)nx, q[5] = (float)ny;
         q[6] = (float)((x - wx) * nx + (y - wy) * ny); /* the distance to the mirror's line */
-    }
-    g.amin = INFINITY, g.amax = 0.0f, g.walled = 0;
-    for (unsigned k = 0; k < g.nq; k++) {
-        const float *q = g.q + DPC_DENSITY_QUERY * k;
-        g.amin = q[2] < g.amin ? q[2] : g.amin;
-        g.amax = q[2] > g.amax ? q[2] : g.amax;
-        g.walled |= q[3] != 0.0f;
     }
     gather(p, &g, hq);
     for (unsigned k = 0; k < g.nq; k++) {
@@ -704,7 +694,7 @@ static dpc_status run_layers(const dpc_cascade *c, density_map *map, dpc_isa isa
         p.job.umax2 = p.job.umax * p.job.umax;
         p.job.smin2 = 4.0f * p.job.umax2; /* d < 1/2 */
         p.job.qmax = (int32_t)L->bins - 2;
-        p.job.walls = 1; /* set per chunk (flush) */
+        p.job.walls = 1;
         p.job.wall_ratio = WALL_H;
         p.kernel = pick_kernel(isa);
         p.scratch = w.scratch;

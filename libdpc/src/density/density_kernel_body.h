@@ -149,10 +149,11 @@ void KERNEL(const dpc_density_job *job, const float *cx, const float *cy, const 
         memcpy(&sy, acc + 16 * p + 8, sizeof sy);
         /* (1) the window, packed; (2) the terms: the candidates', then their mirror images' */
         const uint32_t m = window(cx, cy, ca, n, X, Y, A, c2, smin2, cut2, umax2, dtx, dty, dc);
-        if (job->walls)
-            terms(1, dtx, dty, dc, m, iota, A, WR, c2, smin2, cut2, umax, umax2, qmax, &w_t, &dw_t, &sx, &sy);
+        const float aw = qp[2] * job->wall_ratio;
+        const int mixed = job->walls && !(job->cmax <= aw && qp[2] <= job->cmin * job->wall_ratio);
+        if (mixed) terms(1, dtx, dty, dc, m, iota, A, WR, c2, smin2, cut2, umax, umax2, qmax, &w_t, &dw_t, &sx, &sy);
         else terms(0, dtx, dty, dc, m, iota, A, WR, c2, smin2, cut2, umax, umax2, qmax, &w_t, &dw_t, &sx, &sy);
-        if (job->walls && qp[3] != 0.0f) {
+        if (qp[3] != 0.0f) {
             const vf NX = vsplat(qp[4]), NY = vsplat(qp[5]), D = vsplat(qp[6]);
             const uint32_t k = images(dtx, dty, dc, m, iota, A, WR, NX, NY, D, c2, smin2, cut2, umax2, itx, ity, ic);
             terms(0, itx, ity, ic, k, iota, A, WR, c2, smin2, cut2, umax, umax2, qmax, &w_t, &dw_t, &sx, &sy);
