@@ -297,10 +297,11 @@ DPC_API dpc_status dpc_generate_size(const dpc_model *model, size_t count, size_
  * a 2-D set model whose layers filter the plane as a whole (bnot-2d, bnot-2d-stratified,
  * blue-2d, ...; others: DPC_ERROR_UNSUPPORTED). The model's input points are mapped through the
  * density's inverse CDF and every layer runs in units of the local spacing (h_ij, the harmonic
- * mean of the pair's spacings 1/sqrt(n_points * density)), with mirror edges at the square's
- * sides; no step crosses into a cell whose density differs more than 4 times (so strong edges
- * keep their counts), and no point ever lies in a zero-density cell. The output balance of a uniform model is not
- * applied. A pure function of (model file, input kind, density, seed, n_points): the same bits
+ * mean of the pair's spacings 1/sqrt(n_points * density), or the smaller one where they differ
+ * more than 2 times), with mirror edges at the square's sides. Walls, the cell boundaries where
+ * the density changes more than 4 times or to zero, are mirrors too (no seam along strong
+ * edges), and no step crosses one (so strong edges keep their counts): no point ever lies in a
+ * zero-density cell. The output balance of a uniform model is not applied. A pure function of (model file, input kind, density, seed, n_points): the same bits
  * on every CPU ISA and thread count; it runs on the CPU whatever the model's backend.
  * docs/density.md states the definition and its measurements. */
 #define DPC_DENSITY_MAX_CELLS (1u << 24)

@@ -25,9 +25,9 @@ typedef struct density_map {
     float *h;        /* per cell: the local spacing (m rho)^(-1/2); 0 where rho = 0 */
     float h_max;
     dpc_walls walls;
-    /* per cell, where the density has walls: a lower bound of the distance from any point of the
-     * cell to its nearest wall of the cell's own (INFINITY: none within the reach of any layer);
-     * NAN until a point comes there (filled before each layer, walls_ahead) */
+    /* per cell, where the density has more than a few walls: a lower bound of the distance from
+     * any point of the cell to its nearest wall of the cell's own (INFINITY: none within the wall
+     * reach); NAN until a point comes there (filled before each layer, walls_ahead) */
     float *wall_gap;
 } density_map;
 
@@ -168,7 +168,7 @@ static dpc_status map_init(density_map *d, const float *density, uint32_t W, uin
         map_free(d);
         return st;
     }
-    if (d->walls.n) {
+    if (d->walls.n > DPC_WALLS_FEW) { /* a few walls are cheaper to scan than to look up */
         d->wall_gap = (float *)malloc((size_t)W * H * sizeof(float));
         if (!d->wall_gap) {
             map_free(d);
@@ -291,6 +291,9 @@ typedef struct group {
     float ax, bx, ay, by; /* the image it is seen through */
 } group;
 
+typedef float v8 __attribute__((vector_size(32)));
+typedef int32_t v8i __attribute__((vector_size(32)));
+
 /* Pad the chunk to whole vectors (far away: out of every window) and add its terms; the chunk's
  * range of 1/h lets the kernel pass over the test for pairs of spacings more than WALL_H apart
  * where there can be none. */
@@ -307,8 +310,6 @@ static void flush(const layer_pass *p, group *g) {
     p->kernel(&job, g->cx, g->cy, g->ca, n, g->q, g->nq, g->acc, g->dense);
     g->n = 0;
 }
-
-typedef float v8 __attribute__((vector_size(32)));
 
 /* Append the waiting range of sorted points, seen through its image, to the chunk. */
 static void append(const layer_pass *p, group *g) {
@@ -459,9 +460,10 @@ static void run_group(const layer_pass *p, float *slot, uint32_t s0, uint32_t s1
         q[0] = p->sx[i], q[1] = p->sy[i], q[2] = p->sa[i];
         hq = p->sh[i] > hq ? p->sh[i] : hq;
         /* its nearest wall, if closer than WALL_REACH h: the kernel adds the mirror images */
-        if (!p->map->wall_gap) continue;
+        if (!p->map->walls.n) continue;
         const double x = p->sx[i], y = p->sy[i], far = wall_reach(p->sh[i]);
-        if ((double)p->map->wall_gap[cell_index(p->map, p->sx[i], p->sy[i])] >= far) continue; /* none near */
+        const float *gap = p->map->wall_gap;
+        if (gap && (double)gap[cell_index(p->map, p->sx[i], p->sy[i])] >= far) continue; /* none near */
         double wx, wy, nx, ny;
         if (!dpc_walls_nearest(&p->map->walls, x, y, p->sh[i], far, &wx, &wy, &nx, &ny)) continue;
         q[3] = 1.0f, q[4] = (float)nx, q[5] = (float)ny;

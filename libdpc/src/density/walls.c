@@ -85,6 +85,7 @@ dpc_status dpc_walls_init(dpc_walls *w, const float *h, uint32_t W, uint32_t H, 
     memset(w, 0, sizeof *w);
     const uint32_t n = walk(w, h, W, H, NULL);
     if (n == 0) return DPC_OK;
+    if (n <= DPC_WALLS_FEW) B = 1; /* a few segments: one bucket, scanned whole */
     w->B = B;
     w->seg = (double *)malloc((size_t)n * 4 * sizeof(double));
     w->side = (float *)malloc((size_t)n * 2 * sizeof(float));

@@ -37,7 +37,9 @@ typedef struct dpc_walls {
     float *span;               /* per bucket: the spacings [lo, hi] its segments can be walls of (lo > hi: none) */
 } dpc_walls;
 
-/* The walls of a W x H grid of spacings h (0: zero density); B buckets per axis. */
+/* The walls of a W x H grid of spacings h (0: zero density); B buckets per axis (1 for at most
+ * DPC_WALLS_FEW segments). */
+#define DPC_WALLS_FEW 32u
 dpc_status dpc_walls_init(dpc_walls *w, const float *h, uint32_t W, uint32_t H, uint32_t B);
 void dpc_walls_free(dpc_walls *w);
 
