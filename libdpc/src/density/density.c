@@ -25,17 +25,12 @@ typedef struct density_map {
     float *h;        /* per cell: the local spacing (m rho)^(-1/2); 0 where rho = 0 */
     float h_max;
     dpc_walls walls;
-    /* per cell, where the density has more than a few walls: a lower bound of the distance from
-     * any point of the cell to its nearest wall of the cell's own (INFINITY: none within the wall
-     * reach); NAN until a point comes there (filled before each layer, walls_ahead) */
-    float *wall_gap;
 } density_map;
 
 static void map_free(density_map *d) {
     free(d->row_cdf);
     free(d->col_cdf);
     free(d->h);
-    free(d->wall_gap);
     dpc_walls_free(&d->walls);
 }
 
@@ -59,26 +54,6 @@ static float cell_h(const density_map *d, float x, float y) { return d->h[cell_i
 static double wall_reach(float h) {
     const double r = WALL_REACH * (double)h;
     return r < 0.5 ? r : 0.5;
-}
-
-/* Fill wall_gap for the cells of the points (x, y)[0 .. m) that lack it: the distance from the
- * cell's centre to its nearest own wall less half the cell's diagonal, searched within the wall
- * reach plus that half. A pure function of the cell, so the order of filling changes nothing. */
-static void walls_ahead(density_map *d, const float *x, const float *y, size_t m) {
-    if (!d->wall_gap) return;
-    const double half = 0.5 * sqrt(1.0 / ((double)d->W * d->W) + 1.0 / ((double)d->H * d->H));
-    for (size_t i = 0; i < m; i++) {
-        const size_t c = cell_index(d, x[i], y[i]);
-        if (d->wall_gap[c] == d->wall_gap[c]) continue;
-        const double cx = ((double)(c % d->W) + 0.5) / d->W, cy = ((double)(c / d->W) + 0.5) / d->H;
-        double wx, wy, nx, ny;
-        float gap = INFINITY;
-        if (dpc_walls_nearest(&d->walls, cx, cy, d->h[c], wall_reach(d->h[c]) + half, &wx, &wy, &nx, &ny)) {
-            const double g = sqrt((cx - wx) * (cx - wx) + (cy - wy) * (cy - wy)) - half;
-            gap = g > 0.0 ? (float)(g * (1.0 - 1e-6)) : 0.0f;
-        }
-        d->wall_gap[c] = gap;
-    }
 }
 
 dpc_status dpc_density_check(const dpc_model *model, const float *density, uint32_t width, uint32_t height) {
@@ -161,22 +136,17 @@ static dpc_status map_init(density_map *d, const float *density, uint32_t W, uin
         if (h > h_max) h_max = h;
     }
     d->h_max = h_max;
-    /* buckets of the walls about 2 mean spacings wide */
-    const double b = floor(sqrt((double)m) / 2.0);
-    const dpc_status st = dpc_walls_init(&d->walls, d->h, W, H, b < 1.0 ? 1u : b > 512.0 ? 512u : (uint32_t)b);
-    if (st != DPC_OK) {
-        map_free(d);
-        return st;
-    }
-    if (d->walls.n > DPC_WALLS_FEW) { /* a few walls are cheaper to scan than to look up */
-        d->wall_gap = (float *)malloc((size_t)W * H * sizeof(float));
-        if (!d->wall_gap) {
-            map_free(d);
-            return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory for a %u x %u density", W, H);
-        }
-        for (size_t i = 0; i < (size_t)W * H; i++) d->wall_gap[i] = NAN;
-    }
-    return DPC_OK;
+    /* buckets of the walls about a mean spacing wide, the distance field's cells a quarter of it */
+    const double b = floor(sqrt((double)m)), e = floor(4.0 * sqrt((double)m));
+    const dpc_status st = dpc_walls_init(&d->walls, d->h, W, H,
+                                         b < 1.0     ? 1u
+                                         : b > 512.0 ? 512u
+                                                     : (uint32_t)b,
+                                         e < 16.0     ? 16u
+                                         : e > 2048.0 ? 2048u
+                                                      : (uint32_t)e);
+    if (st != DPC_OK) map_free(d);
+    return st;
 }
 
 /* The first index k in [1, n] with cdf[k] > u (cdf[0] <= u < cdf[n] = 1): the cell k - 1 has mass. */
@@ -462,8 +432,7 @@ static void run_group(const layer_pass *p, float *slot, uint32_t s0, uint32_t s1
         /* its nearest wall, if closer than WALL_REACH h: the kernel adds the mirror images */
         if (!p->map->walls.n) continue;
         const double x = p->sx[i], y = p->sy[i], far = wall_reach(p->sh[i]);
-        const float *gap = p->map->wall_gap;
-        if (gap && (double)gap[cell_index(p->map, p->sx[i], p->sy[i])] >= far) continue; /* none near */
+        if (dpc_walls_far(&p->map->walls, p->sx[i], p->sy[i], far)) continue; /* none near */
         double wx, wy, nx, ny;
         if (!dpc_walls_nearest(&p->map->walls, x, y, p->sh[i], far, &wx, &wy, &nx, &ny)) continue;
         q[3] = 1.0f, q[4] = (float)nx, q[5] = (float)ny;
@@ -599,7 +568,7 @@ static void make_leaves(workspace *w, uint32_t G, size_t m, float *x, float *y, 
     w->leaf_start[L] = (uint32_t)m;
 }
 
-static dpc_status run_layers(const dpc_cascade *c, density_map *map, dpc_isa isa, unsigned threads, size_t m,
+static dpc_status run_layers(const dpc_cascade *c, const density_map *map, dpc_isa isa, unsigned threads, size_t m,
                              float *x) {
     uint32_t G_max = 1;
     for (uint32_t l = 0; l < c->n_layers; l++) {
@@ -669,7 +638,6 @@ static dpc_status run_layers(const dpc_cascade *c, density_map *map, dpc_isa isa
             sid[s] = pid[i];
         }
         make_leaves(&w, G, m, sx, sy, sh, sid, px, py, ph, pid);
-        walls_ahead(map, sx, sy, m);
         for (size_t i = 0; i < m; i++) w.a[i] = 1.0f / sh[i];
         layer_pass p;
         p.sx = sx;

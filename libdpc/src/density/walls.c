@@ -13,6 +13,7 @@ void dpc_walls_free(dpc_walls *w) {
     free(w->start);
     free(w->at);
     free(w->span);
+    free(w->gap);
     memset(w, 0, sizeof *w);
 }
 
@@ -81,7 +82,70 @@ static void seg_buckets(const double *s, uint32_t B, uint32_t *bx0, uint32_t *bx
     *by0 = bucket_of(s[1], B), *by1 = bucket_of(s[3], B);
 }
 
-dpc_status dpc_walls_init(dpc_walls *w, const float *h, uint32_t W, uint32_t H, uint32_t B) {
+/* The squared distance transform of one line of n samples (f: 0 or INFINITY in, squared distances
+ * out, in sample units), by the lower envelope of parabolas (Felzenszwalb and Huttenlocher 2012);
+ * v, z: room for n and n + 1. */
+static void edt_line(float *f, size_t stride, uint32_t n, float *d, uint32_t *v, float *z) {
+    int64_t k = -1;
+    for (uint32_t q = 0; q < n; q++) {
+        const float fq = f[q * stride];
+        if (fq == INFINITY) continue;
+        float sq = -INFINITY;
+        while (k >= 0) {
+            const uint32_t r = v[k];
+            sq = ((fq + (float)q * (float)q) - (f[r * stride] + (float)r * (float)r)) / (2.0f * (float)(q - r));
+            if (sq > z[k]) break;
+            k--;
+        }
+        k++;
+        v[k] = q;
+        z[k] = k == 0 ? -INFINITY : sq;
+        z[k + 1] = INFINITY;
+    }
+    if (k < 0) return; /* no sample: all stay infinite */
+    k = 0;
+    for (uint32_t q = 0; q < n; q++) {
+        while (z[k + 1] < (float)q) k++;
+        const float t = (float)q - (float)v[k];
+        d[q] = t * t + f[v[k] * stride];
+    }
+    for (uint32_t q = 0; q < n; q++) f[q * stride] = d[q];
+}
+
+/* The distance field: E x E cells marked where a segment passes, their Euclidean distance
+ * transform between centres, less the diagonal (a point and a wall point each lie within half
+ * a diagonal of their cells' centres). */
+static int make_gap(dpc_walls *w, uint32_t E) {
+    const size_t cells = (size_t)E * E;
+    w->gap = (float *)malloc(cells * sizeof(float));
+    float *d = (float *)malloc(((size_t)E + 1) * sizeof(float) * 2);
+    uint32_t *v = (uint32_t *)malloc(((size_t)E + 1) * sizeof(uint32_t));
+    if (!w->gap || !d || !v) {
+        free(d), free(v);
+        return 0;
+    }
+    float *g = w->gap;
+    for (size_t c = 0; c < cells; c++) g[c] = INFINITY;
+    for (uint32_t i = 0; i < w->n; i++) {
+        const double *s = w->seg + 4 * (size_t)i;
+        const uint32_t x0 = bucket_of(s[0], E), x1 = bucket_of(s[2], E), y0 = bucket_of(s[1], E),
+                       y1 = bucket_of(s[3], E);
+        for (uint32_t y = y0; y <= y1; y++)
+            for (uint32_t x = x0; x <= x1; x++) g[(size_t)y * E + x] = 0.0f;
+    }
+    for (uint32_t x = 0; x < E; x++) edt_line(g + x, E, E, d, v, d + E + 1);             /* columns */
+    for (uint32_t y = 0; y < E; y++) edt_line(g + (size_t)y * E, 1, E, d, v, d + E + 1); /* rows */
+    const float diag = sqrtf(2.0f);
+    for (size_t c = 0; c < cells; c++) {
+        const float r = g[c] == INFINITY ? INFINITY : sqrtf(g[c]) - diag;
+        g[c] = r > 0.0f ? r / (float)E * (1.0f - 1e-6f) : 0.0f; /* a little low: a bound */
+    }
+    free(d), free(v);
+    w->E = E;
+    return 1;
+}
+
+dpc_status dpc_walls_init(dpc_walls *w, const float *h, uint32_t W, uint32_t H, uint32_t B, uint32_t E) {
     memset(w, 0, sizeof *w);
     const uint32_t n = walk(w, h, W, H, NULL);
     if (n == 0) return DPC_OK;
@@ -137,6 +201,7 @@ dpc_status dpc_walls_init(dpc_walls *w, const float *h, uint32_t W, uint32_t H, 
         }
         w->span[2 * b] = lo, w->span[2 * b + 1] = hi;
     }
+    if (n > DPC_WALLS_FEW && !make_gap(w, E)) goto oom;
     return DPC_OK;
 oom:
     dpc_walls_free(w);
@@ -157,7 +222,7 @@ static void scan_bucket(const dpc_walls *w, size_t b, float x, float y, float h,
         const float cx = x < e->x0 ? e->x0 : x > e->x1 ? e->x1 : x; /* the closest point */
         const float cy = y < e->y0 ? e->y0 : y > e->y1 ? e->y1 : y;
         const float d2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
-        if (d2 < *best) *best = d2, *found = e->id, *fx = cx, *fy = cy;
+        if (d2 < *best || (d2 == *best && e->id < *found)) *best = d2, *found = e->id, *fx = cx, *fy = cy;
     }
 }
 
@@ -180,7 +245,7 @@ int dpc_walls_nearest(const dpc_walls *w, double x, double y, float h, double R,
     for (int64_t r = 0;; r++) {
         if (r > 0) {
             const double gap = (double)(r - 1) * inv_b + edge;
-            if (gap * gap >= (double)best) break;
+            if (gap * gap > (double)best) break; /* (equal: a tie may follow) */
         }
         if (bx - r < bx0 && bx + r > bx1 && by - r < by0 && by + r > by1) break; /* beyond reach */
         for (int64_t qy = by - r; qy <= by + r; qy++) {

@@ -35,18 +35,30 @@ typedef struct dpc_walls {
     uint32_t *start;           /* per bucket (row-major, B * B + 1): its entries at[start[b] .. start[b+1]) */
     struct dpc_wall_entry *at; /* a segment's copy per bucket it touches */
     float *span;               /* per bucket: the spacings [lo, hi] its segments can be walls of (lo > hi: none) */
+    uint32_t E;                /* cells per axis of the distance field */
+    float *gap;                /* E x E: a lower bound of the distance from any point of the cell to any wall */
 } dpc_walls;
 
 /* The walls of a W x H grid of spacings h (0: zero density); B buckets per axis (1 for at most
- * DPC_WALLS_FEW segments). */
+ * DPC_WALLS_FEW segments, which have no distance field); E cells per axis of the distance field. */
 #define DPC_WALLS_FEW 32u
-dpc_status dpc_walls_init(dpc_walls *w, const float *h, uint32_t W, uint32_t H, uint32_t B);
+dpc_status dpc_walls_init(dpc_walls *w, const float *h, uint32_t W, uint32_t H, uint32_t B, uint32_t E);
+
+/* No wall (of any spacing) lies within R of (x, y) in [0,1)^2: known from the distance field. */
+static inline int dpc_walls_far(const dpc_walls *w, float x, float y, double R) {
+    if (!w->gap) return 0;
+    uint32_t cx = (uint32_t)((double)x * w->E), cy = (uint32_t)((double)y * w->E);
+    cx = cx < w->E ? cx : w->E - 1;
+    cy = cy < w->E ? cy : w->E - 1;
+    return (double)w->gap[(size_t)cy * w->E + cx] >= R;
+}
 void dpc_walls_free(dpc_walls *w);
 
 /* The nearest point of a wall of a point at (x, y) with spacing h (> 0) closer than R: 1 and the
  * point (wx, wy) and the unit normal (nx, ny) pointing to the point's side; 0 when there is none.
  * Buckets are searched in square rings around the point's, each row by row, until no closer one
- * can follow; ties go to the first segment found. */
+ * can follow; of equally near segments, the first in the walk (vertical ones column by column,
+ * then horizontal ones row by row). */
 int dpc_walls_nearest(const dpc_walls *w, double x, double y, float h, double R, double *wx, double *wy, double *nx,
                       double *ny);
 
