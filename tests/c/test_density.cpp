@@ -66,17 +66,29 @@ TEST(Density, ZeroRegionsOfAFineGridStayEmpty) {
 }
 
 TEST(Density, SameBitsOnEveryIsaThreadCountAndRun) {
-    const std::vector<float> d = {0.2f, 1.0f, 3.0f, 0.5f, 0.0f, 2.0f};
+    // a few walls (scanned whole) and many (a checkerboard with zero blocks and 1 : 9 steps:
+    // buckets and the distance field), each point near one adding its mirror images
+    std::vector<float> many((size_t)40 * 24);
+    for (uint32_t y = 0; y < 24; y++)
+        for (uint32_t x = 0; x < 40; x++)
+            many[(size_t)y * 40 + x] = ((x / 4 + y / 3) % 3 == 0) ? 0.0f : ((x / 4 + y / 3) % 3 == 1) ? 1.0f : 9.0f;
+    const struct {
+        std::vector<float> d;
+        uint32_t w, h;
+    } cases[] = {{{0.2f, 1.0f, 3.0f, 0.5f, 0.0f, 2.0f}, 3, 2}, {many, 40, 24}};
     const size_t n = 5000; // above the engine's parallel threshold, so threads split the work
-    ModelPtr ref_model = load(model_path("model_2d"), DPC_ISA_SCALAR, 1);
-    const std::vector<float> ref = density_points(ref_model.get(), d, 3, 2, 11, n);
-    EXPECT_EQ(ref, density_points(ref_model.get(), d, 3, 2, 11, n)) << "run to run";
-    EXPECT_NE(ref, density_points(ref_model.get(), d, 3, 2, 12, n)) << "another seed";
-    for (dpc_isa isa : {DPC_ISA_SCALAR, DPC_ISA_AVX2, DPC_ISA_AVX512}) {
-        if (!dpc_isa_supported(isa)) continue;
-        for (uint32_t threads : {1u, 2u, 3u}) {
-            ModelPtr m = load(model_path("model_2d"), isa, threads);
-            EXPECT_EQ(ref, density_points(m.get(), d, 3, 2, 11, n)) << "isa " << isa << ", threads " << threads;
+    for (const auto &c : cases) {
+        ModelPtr ref_model = load(model_path("model_2d"), DPC_ISA_SCALAR, 1);
+        const std::vector<float> ref = density_points(ref_model.get(), c.d, c.w, c.h, 11, n);
+        EXPECT_EQ(ref, density_points(ref_model.get(), c.d, c.w, c.h, 11, n)) << "run to run";
+        EXPECT_NE(ref, density_points(ref_model.get(), c.d, c.w, c.h, 12, n)) << "another seed";
+        for (dpc_isa isa : {DPC_ISA_SCALAR, DPC_ISA_AVX2, DPC_ISA_AVX512}) {
+            if (!dpc_isa_supported(isa)) continue;
+            for (uint32_t threads : {1u, 2u, 3u}) {
+                ModelPtr m = load(model_path("model_2d"), isa, threads);
+                EXPECT_EQ(ref, density_points(m.get(), c.d, c.w, c.h, 11, n))
+                    << c.w << " x " << c.h << ", isa " << isa << ", threads " << threads;
+            }
         }
     }
 }
