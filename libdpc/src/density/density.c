@@ -261,25 +261,15 @@ typedef struct group {
     float ax, bx, ay, by; /* the image it is seen through */
 } group;
 
-typedef float v8 __attribute__((vector_size(32)));
-typedef int32_t v8i __attribute__((vector_size(32)));
-
-/* Pad the chunk to whole vectors (far away: out of every window) and add its terms; the chunk's
- * range of 1/h lets the kernel pass over the test for pairs of spacings more than WALL_H apart
- * where there can be none. */
+/* Pad the chunk to whole vectors (far away: out of every window) and add its terms. */
 static void flush(const layer_pass *p, group *g) {
     uint32_t n = g->n;
-    float cmin = INFINITY, cmax = 0.0f;
-    for (uint32_t j = 0; j < n; j++) {
-        cmin = g->ca[j] < cmin ? g->ca[j] : cmin;
-        cmax = g->ca[j] > cmax ? g->ca[j] : cmax;
-    }
     for (; n % 16u; n++) g->cx[n] = FAR_AWAY, g->cy[n] = FAR_AWAY, g->ca[n] = 0.0f;
-    dpc_density_job job = p->job;
-    job.cmin = cmin, job.cmax = cmax;
-    p->kernel(&job, g->cx, g->cy, g->ca, n, g->q, g->nq, g->acc, g->dense);
+    p->kernel(&p->job, g->cx, g->cy, g->ca, n, g->q, g->nq, g->acc, g->dense);
     g->n = 0;
 }
+
+typedef float v8 __attribute__((vector_size(32)));
 
 /* Append the waiting range of sorted points, seen through its image, to the chunk. */
 static void append(const layer_pass *p, group *g) {

@@ -30,11 +30,9 @@ typedef struct dpc_density_job {
     const float *w, *dw; /* the kernel table and its slopes, qmax + 2 entries */
     float c2, cut2, umax, umax2, smin2;
     int32_t qmax;
-    int walls;        /* pairs of spacings more than wall_ratio apart see the smaller one */
+    int walls;        /* pairs of spacings more than wall_ratio apart see the smaller one (a query
+                         whose window has none skips the test: the same bits) */
     float wall_ratio; /* WALL_H (walls.h) */
-    float cmin, cmax; /* the chunk's smallest and largest 1/h: a query whose 1/h is within
-                         wall_ratio of both (the same float products as the pair test) has no such
-                         pair, and its terms are computed without the test, to the same bits */
 } dpc_density_job;
 
 /* Query p is q[8p .. 8p+7] = x, y, 1/h, plane, nx, ny, D, unused (plane != 0: a wall, the line

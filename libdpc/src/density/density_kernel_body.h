@@ -96,6 +96,25 @@ static inline __attribute__((always_inline)) uint32_t images(const float *dtx, c
     return k;
 }
 
+/* Every packed candidate's 1/h (dc[0 .. m)) is within wr of the query's, a (aw = a wr): the same
+ * float products as pair_a's test, so that terms without it give the same bits. */
+static inline __attribute__((always_inline)) int all_own(const float *dc, uint32_t m, vi iota, float a, float aw,
+                                                         float wr) {
+    vf lo = vsplat(a), hi = vsplat(a);
+    for (uint32_t r = 0; r < m; r += VW) {
+        const vi live = VLIVE(iota, (int32_t)(m - r));
+        const vf c = VLOAD(dc + r);
+        lo = vselect(live & (c < lo), c, lo);
+        hi = vselect(live & (c > hi), c, hi);
+    }
+    float cmin = a, cmax = a;
+    for (int l = 0; l < VW; l++) {
+        cmin = lo[l] < cmin ? lo[l] : cmin;
+        cmax = hi[l] > cmax ? hi[l] : cmax;
+    }
+    return cmax <= aw && a <= cmin * wr;
+}
+
 /* Add the terms of the packed candidates (tx, ty, cj)[0 .. m) to the lane sums (sx, sy). With
  * walls, a pair of spacings more than WR apart (pair_a) is tested again against the window at its
  * smaller spacing, and its term is 0 outside. Lanes of the last vector beyond m compute a finite k
@@ -149,8 +168,7 @@ void KERNEL(const dpc_density_job *job, const float *cx, const float *cy, const 
         memcpy(&sy, acc + 16 * p + 8, sizeof sy);
         /* (1) the window, packed; (2) the terms: the candidates', then their mirror images' */
         const uint32_t m = window(cx, cy, ca, n, X, Y, A, c2, smin2, cut2, umax2, dtx, dty, dc);
-        const float aw = qp[2] * job->wall_ratio;
-        const int mixed = job->walls && !(job->cmax <= aw && qp[2] <= job->cmin * job->wall_ratio);
+        const int mixed = job->walls && !all_own(dc, m, iota, qp[2], qp[2] * job->wall_ratio, job->wall_ratio);
         if (mixed) terms(1, dtx, dty, dc, m, iota, A, WR, c2, smin2, cut2, umax, umax2, qmax, &w_t, &dw_t, &sx, &sy);
         else terms(0, dtx, dty, dc, m, iota, A, WR, c2, smin2, cut2, umax, umax2, qmax, &w_t, &dw_t, &sx, &sy);
         if (qp[3] != 0.0f) {

@@ -201,7 +201,7 @@ dpc_status dpc_walls_init(dpc_walls *w, const float *h, uint32_t W, uint32_t H, 
         }
         w->span[2 * b] = lo, w->span[2 * b + 1] = hi;
     }
-    if (n > DPC_WALLS_FEW && !make_gap(w, E)) goto oom;
+    if (!make_gap(w, E)) goto oom;
     return DPC_OK;
 oom:
     dpc_walls_free(w);

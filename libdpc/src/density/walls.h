@@ -40,7 +40,7 @@ typedef struct dpc_walls {
 } dpc_walls;
 
 /* The walls of a W x H grid of spacings h (0: zero density); B buckets per axis (1 for at most
- * DPC_WALLS_FEW segments, which have no distance field); E cells per axis of the distance field. */
+ * DPC_WALLS_FEW segments); E cells per axis of the distance field. */
 #define DPC_WALLS_FEW 32u
 dpc_status dpc_walls_init(dpc_walls *w, const float *h, uint32_t W, uint32_t H, uint32_t B, uint32_t E);
 
