@@ -199,13 +199,13 @@ static void map_point(const density_map *d, float *p) {
 #define FAR_AWAY 1.0e4f /* the padding's coordinates: beyond every reach */
 
 typedef struct layer_pass {
-    const float *sx, *sy, *sa, *sh; /* sorted: x, y, 1/h, h (readable 16 floats past m) */
-    const uint32_t *start;          /* G * G + 1 cell starts */
-    const float *hmax;              /* per cell: the largest h of its points */
-    const uint32_t *kdiv;           /* per cell: k, leaves per axis */
-    const uint32_t *leaf_off;       /* per cell: its first leaf (G * G + 1) */
-    const uint32_t *leaf_start;     /* per leaf: its first point (n_leaves + 1) */
-    const float *leaf_hmax;         /* per leaf: the largest h of its points */
+    const float *sx, *sy, *sa, *sh;     /* sorted: x, y, 1/h, h (readable 16 floats past m) */
+    const uint32_t *start;              /* G * G + 1 cell starts */
+    const float *hmax, *hmin;           /* per cell: the largest and smallest h of its points */
+    const uint32_t *kdiv;               /* per cell: k, leaves per axis */
+    const uint32_t *leaf_off;           /* per cell: its first leaf (G * G + 1) */
+    const uint32_t *leaf_start;         /* per leaf: its first point (n_leaves + 1) */
+    const float *leaf_hmax, *leaf_hmin; /* per leaf: the largest and smallest h of its points */
     const density_map *map;
     uint32_t G, n_leaves;
     float rho, h_max;
@@ -259,14 +259,23 @@ typedef struct group {
     float *dense;         /* the kernel's scratch */
     uint32_t r0, r1;      /* the range waiting to be appended */
     float ax, bx, ay, by; /* the image it is seen through */
+    float qlo, qhi;       /* the queries' smallest and largest h */
+    float wlo, whi;       /* the waiting range's */
+    float clo, chi;       /* the chunk's */
 } group;
 
-/* Pad the chunk to whole vectors (far away: out of every window) and add its terms. */
+/* Pad the chunk to whole vectors (far away: out of every window) and add its terms. Where the
+ * chunk's spacings and the queries' are all within WALL_H of each other (with a margin for the
+ * kernel's rounding of 1/h), no pair sees the smaller spacing, and the kernel skips that test. */
 static void flush(const layer_pass *p, group *g) {
     uint32_t n = g->n;
     for (; n % 16u; n++) g->cx[n] = FAR_AWAY, g->cy[n] = FAR_AWAY, g->ca[n] = 0.0f;
-    p->kernel(&p->job, g->cx, g->cy, g->ca, n, g->q, g->nq, g->acc, g->dense);
+    const float wh = WALL_H * (1.0f - 0x1p-16f);
+    dpc_density_job job = p->job;
+    job.walls = !(g->chi <= wh * g->qlo && g->qhi <= wh * g->clo);
+    p->kernel(&job, g->cx, g->cy, g->ca, n, g->q, g->nq, g->acc, g->dense);
     g->n = 0;
+    g->clo = INFINITY, g->chi = 0.0f;
 }
 
 typedef float v8 __attribute__((vector_size(32)));
@@ -278,6 +287,8 @@ static void append(const layer_pass *p, group *g) {
     const v8 oxv = (v8){0} + g->ax, sxv = (v8){0} + g->bx, oyv = (v8){0} + g->ay, syv = (v8){0} + g->by;
     while (j0 < j1) {
         if (g->n == RUN_CAP) flush(p, g);
+        g->clo = g->wlo < g->clo ? g->wlo : g->clo;
+        g->chi = g->whi > g->chi ? g->whi : g->chi;
         const uint32_t len = j1 - j0 < RUN_CAP - g->n ? j1 - j0 : RUN_CAP - g->n;
         /* whole vectors of 8: the sorted arrays are readable, and the chunk writable, 16 floats
          * past their ends; what lies past the range is overwritten before the kernel reads it */
@@ -297,15 +308,20 @@ static void append(const layer_pass *p, group *g) {
         j0 += len;
     }
     g->r0 = g->r1 = j1;
+    g->wlo = INFINITY, g->whi = 0.0f;
 }
 
-/* Add the sorted points [a, b) to the run: one range with the waiting one where they touch. */
-static void add_range(const layer_pass *p, group *g, uint32_t a, uint32_t b) {
+/* Add the sorted points [a, b) (spacings within [lo, hi]) to the run: one range with the waiting
+ * one where they touch. */
+static void add_range(const layer_pass *p, group *g, uint32_t a, uint32_t b, float lo, float hi) {
     if (a != g->r1) {
         append(p, g);
         g->r0 = a;
+        g->wlo = INFINITY, g->whi = 0.0f;
     }
     g->r1 = b;
+    g->wlo = lo < g->wlo ? lo : g->wlo;
+    g->whi = hi > g->whi ? hi : g->whi;
 }
 
 /* The sum of lane sums l[0 .. 8) in the canonical tree. */
@@ -335,7 +351,7 @@ static void scan_leaves(const layer_pass *p, group *g, uint32_t gx, uint32_t gy,
             if (a == b) continue;
             const float gap_x = image_gap(g->ax, g->bx, gx * k + lx, inv_n, box[0], box[1]);
             const float Rc = reach(p->rho, hq, p->leaf_hmax[leaf]);
-            if (gap_x * gap_x + gap_y * gap_y < Rc * Rc) add_range(p, g, a, b);
+            if (gap_x * gap_x + gap_y * gap_y < Rc * Rc) add_range(p, g, a, b, p->leaf_hmin[leaf], p->leaf_hmax[leaf]);
         }
     }
 }
@@ -368,6 +384,7 @@ static void gather(const layer_pass *p, group *g, float hq) {
     }
     memset(g->acc, 0, 16 * g->nq * sizeof(float));
     g->n = 0;
+    g->wlo = g->clo = INFINITY, g->whi = g->chi = 0.0f;
     const uint32_t G = p->G;
     const float inv_g = 1.0f / (float)G;
     const float R = reach(p->rho, hq, p->h_max);
@@ -391,7 +408,8 @@ static void gather(const layer_pass *p, group *g, float hq) {
                     const float gap_x = image_gap(g->ax, g->bx, gx, inv_g, box[0], box[1]);
                     const float Rc = reach(p->rho, hq, hm[gx]);
                     if (!(gap_x * gap_x + gap_y * gap_y < Rc * Rc)) continue; /* no point of it in reach */
-                    if (p->kdiv[(size_t)gy * G + gx] == 1) add_range(p, g, st[gx], st[gx + 1]);
+                    if (p->kdiv[(size_t)gy * G + gx] == 1)
+                        add_range(p, g, st[gx], st[gx + 1], p->hmin[(size_t)gy * G + gx], hm[gx]);
                     else scan_leaves(p, g, gx, gy, box, hq, xlo, xhi, ylo, yhi);
                 }
             }
@@ -412,13 +430,14 @@ static void run_group(const layer_pass *p, float *slot, uint32_t s0, uint32_t s1
     g.acc = g.q + DPC_DENSITY_QUERY * GROUP_MAX;
     g.dense = g.acc + 16 * GROUP_MAX;
     g.nq = s1 - s0;
-    float hq = 0.0f;
+    float hq = 0.0f, hlo = INFINITY;
     memset(g.q, 0, DPC_DENSITY_QUERY * g.nq * sizeof(float));
     for (unsigned k = 0; k < g.nq; k++) {
         const uint32_t i = s0 + k;
         float *q = g.q + DPC_DENSITY_QUERY * k;
         q[0] = p->sx[i], q[1] = p->sy[i], q[2] = p->sa[i];
         hq = p->sh[i] > hq ? p->sh[i] : hq;
+        hlo = p->sh[i] < hlo ? p->sh[i] : hlo;
         /* its nearest wall, if closer than WALL_REACH h: the kernel adds the mirror images */
         if (!p->map->walls.n) continue;
         const double x = p->sx[i], y = p->sy[i], far = wall_reach(p->sh[i]);
@@ -428,6 +447,7 @@ static void run_group(const layer_pass *p, float *slot, uint32_t s0, uint32_t s1
         q[3] = 1.0f, q[4] = (float)nx, q[5] = (float)ny;
         q[6] = (float)((x - wx) * nx + (y - wy) * ny); /* the distance to the mirror's line */
     }
+    g.qlo = hlo, g.qhi = hq;
     gather(p, &g, hq);
     for (unsigned k = 0; k < g.nq; k++) {
         const float *q = g.q + DPC_DENSITY_QUERY * k;
@@ -469,7 +489,7 @@ static float reflect(float v) {
 typedef struct workspace {
     float *x[2], *y[2], *h[2]; /* the points in the order of the last sort, and the next sort's */
     uint32_t *id[2];           /* their index in the caller's order */
-    float *a, *delta, *hmax, *leaf_hmax, *scratch;
+    float *a, *delta, *hmax, *hmin, *leaf_hmax, *leaf_hmin, *scratch;
     uint32_t *cell, *perm, *start, *kdiv, *leaf_off, *leaf_start;
 } workspace;
 
@@ -478,7 +498,9 @@ static void workspace_free(workspace *w) {
     free(w->a);
     free(w->delta);
     free(w->hmax);
+    free(w->hmin);
     free(w->leaf_hmax);
+    free(w->leaf_hmin);
     free(w->scratch);
     free(w->cell);
     free(w->perm);
@@ -526,13 +548,16 @@ static void make_leaves(workspace *w, uint32_t G, size_t m, float *x, float *y, 
         w->leaf_off[c] = L;
         if (k == 1) {
             w->leaf_start[L] = s0;
+            w->leaf_hmin[L] = w->hmin[c];
             w->leaf_hmax[L++] = w->hmax[c];
             continue;
         }
         const uint32_t gx = (uint32_t)(c % G), gy = (uint32_t)(c / G), n = G * k, kk = k * k;
         uint32_t *ls = w->leaf_start + L;
         float *lh = w->leaf_hmax + L;
+        float *ll = w->leaf_hmin + L;
         memset(lh, 0, kk * sizeof(float));
+        for (uint32_t q = 0; q < kk; q++) ll[q] = INFINITY;
         for (uint32_t i = s0; i < s1; i++) {
             uint32_t lx = cell_of(x[i], n), ly = cell_of(y[i], n);
             lx = lx < gx * k ? 0 : lx - gx * k < k ? lx - gx * k : k - 1;
@@ -540,6 +565,7 @@ static void make_leaves(workspace *w, uint32_t G, size_t m, float *x, float *y, 
             const uint32_t leaf = ly * k + lx;
             w->cell[i] = leaf;
             if (h[i] > lh[leaf]) lh[leaf] = h[i];
+            if (h[i] < ll[leaf]) ll[leaf] = h[i];
         }
         uint32_t *perm = w->perm + s0; /* offsets from s0 */
         dpc_grid_sort(w->cell + s0, s1 - s0, kk, ls, perm);
@@ -586,12 +612,14 @@ static dpc_status run_layers(const dpc_cascade *c, const density_map *map, dpc_i
     w.perm = (uint32_t *)malloc(m * sizeof(uint32_t));
     w.start = (uint32_t *)calloc(max_cells + 1, sizeof(uint32_t));
     w.hmax = (float *)malloc(max_cells * sizeof(float));
+    w.hmin = (float *)malloc(max_cells * sizeof(float));
     w.kdiv = (uint32_t *)malloc(max_cells * sizeof(uint32_t));
     w.leaf_off = (uint32_t *)malloc((max_cells + 1) * sizeof(uint32_t));
     w.leaf_start = (uint32_t *)malloc((max_leaves + 1) * sizeof(uint32_t));
     w.leaf_hmax = (float *)malloc(max_leaves * sizeof(float));
-    if (!ok || !w.a || !w.delta || !w.scratch || !w.cell || !w.perm || !w.start || !w.hmax || !w.kdiv || !w.leaf_off ||
-        !w.leaf_start || !w.leaf_hmax) {
+    w.leaf_hmin = (float *)malloc(max_leaves * sizeof(float));
+    if (!ok || !w.a || !w.delta || !w.scratch || !w.cell || !w.perm || !w.start || !w.hmax || !w.hmin || !w.kdiv ||
+        !w.leaf_off || !w.leaf_start || !w.leaf_hmax || !w.leaf_hmin) {
         workspace_free(&w);
         return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory for %zu points", m);
     }
@@ -614,10 +642,12 @@ static dpc_status run_layers(const dpc_cascade *c, const density_map *map, dpc_i
         uint32_t *sid = w.id[(l + 1) & 1];
         /* the points' grid cells; a stable counting sort by cell */
         memset(w.hmax, 0, cells * sizeof(float));
+        for (size_t c2 = 0; c2 < cells; c2++) w.hmin[c2] = INFINITY;
         for (size_t i = 0; i < m; i++) {
             const uint32_t cell = cell_of(py[i], G) * G + cell_of(px[i], G);
             w.cell[i] = cell;
             if (ph[i] > w.hmax[cell]) w.hmax[cell] = ph[i];
+            if (ph[i] < w.hmin[cell]) w.hmin[cell] = ph[i];
         }
         dpc_grid_sort(w.cell, m, cells, w.start, w.perm);
         for (size_t s = 0; s < m; s++) {
@@ -636,10 +666,12 @@ static dpc_status run_layers(const dpc_cascade *c, const density_map *map, dpc_i
         p.sh = sh;
         p.start = w.start;
         p.hmax = w.hmax;
+        p.hmin = w.hmin;
         p.kdiv = w.kdiv;
         p.leaf_off = w.leaf_off;
         p.leaf_start = w.leaf_start;
         p.leaf_hmax = w.leaf_hmax;
+        p.leaf_hmin = w.leaf_hmin;
         p.map = map;
         p.G = G;
         p.n_leaves = w.leaf_off[cells];
