@@ -4,9 +4,9 @@ one thread, per ISA path; writes the section "Density" of docs/performance.md.
     python bench/bench_density.py [--quick]
 
 Model bnot-2d-stratified; densities on 256 x 256 cells: a ramp (0.1 + x), a Gaussian bump, a
-1 : 16 step (one wall) and a photograph (walls everywhere). The uniform set and each density's set alternate, round after round, so that a
-busy machine slows both alike; medians over the rounds. The goal: a density set within 2x the
-time of a uniform set of the same size.
+1 : 16 step (one wall) and a photograph (walls everywhere). The uniform set and each density's set
+alternate, round after round, so that a busy machine slows both alike; medians over the rounds. The
+goal: a density set within 2x the time of a uniform set of the same size.
 """
 
 from __future__ import annotations
