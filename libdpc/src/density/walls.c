@@ -82,6 +82,28 @@ static void seg_buckets(const double *s, uint32_t B, uint32_t *bx0, uint32_t *bx
     *by0 = bucket_of(s[1], B), *by1 = bucket_of(s[3], B);
 }
 
+/* Every segment into the buckets it touches (a row or a column of them): counted into
+ * start[b + 1] when fill is NULL, else its entry stored at at[fill[b]++]. Returns the entries. */
+static size_t place(dpc_walls *w, uint32_t B, uint32_t *fill) {
+    size_t entries = 0;
+    for (uint32_t i = 0; i < w->n; i++) {
+        uint32_t bx0, bx1, by0, by1;
+        const double *sg = w->seg + 4 * (size_t)i;
+        seg_buckets(sg, B, &bx0, &bx1, &by0, &by1);
+        const float s0 = w->side[2 * (size_t)i], s1 = w->side[2 * (size_t)i + 1];
+        const dpc_wall_entry e = {
+            (float)sg[0], (float)sg[1], (float)sg[2], (float)sg[3], s0, s1, s0 * WALL_H, s1 * WALL_H, i};
+        for (uint32_t by = by0; by <= by1; by++)
+            for (uint32_t bx = bx0; bx <= bx1; bx++) {
+                const size_t b = (size_t)by * B + bx;
+                if (fill) w->at[fill[b]++] = e;
+                else w->start[b + 1]++;
+            }
+        entries += (size_t)(bx1 - bx0 + 1) * (by1 - by0 + 1);
+    }
+    return entries;
+}
+
 /* The squared distance transform of one line of n samples (f: 0 or INFINITY in, squared distances
  * out, in sample units), by the lower envelope of parabolas (Felzenszwalb and Huttenlocher 2012);
  * v, z: room for n and n + 1. */
@@ -157,14 +179,7 @@ dpc_status dpc_walls_init(dpc_walls *w, const float *h, uint32_t W, uint32_t H, 
     if (!w->seg || !w->side || !w->start) goto oom;
     w->n = n;
     walk(w, h, W, H, store);
-    size_t entries = 0;
-    for (uint32_t i = 0; i < n; i++) { /* counts, then starts */
-        uint32_t bx0, bx1, by0, by1;
-        seg_buckets(w->seg + 4 * (size_t)i, B, &bx0, &bx1, &by0, &by1);
-        for (uint32_t by = by0; by <= by1; by++)
-            for (uint32_t bx = bx0; bx <= bx1; bx++) w->start[(size_t)by * B + bx + 1]++;
-        entries += (size_t)(bx1 - bx0 + 1) * (by1 - by0 + 1);
-    }
+    const size_t entries = place(w, B, NULL); /* counts, then starts */
     if (entries > UINT32_MAX) goto oom;
     for (size_t b = 0; b < (size_t)B * B; b++) w->start[b + 1] += w->start[b];
     w->at = (dpc_wall_entry *)malloc((entries ? entries : 1) * sizeof(dpc_wall_entry));
@@ -174,17 +189,7 @@ dpc_status dpc_walls_init(dpc_walls *w, const float *h, uint32_t W, uint32_t H, 
         goto oom;
     }
     memcpy(fill, w->start, (size_t)B * B * sizeof(uint32_t));
-    for (uint32_t i = 0; i < n; i++) {
-        uint32_t bx0, bx1, by0, by1;
-        seg_buckets(w->seg + 4 * (size_t)i, B, &bx0, &bx1, &by0, &by1);
-        for (uint32_t by = by0; by <= by1; by++)
-            for (uint32_t bx = bx0; bx <= bx1; bx++) {
-                const double *sg = w->seg + 4 * (size_t)i;
-                const float s0 = w->side[2 * (size_t)i], s1 = w->side[2 * (size_t)i + 1];
-                w->at[fill[(size_t)by * B + bx]++] = (dpc_wall_entry){
-                    (float)sg[0], (float)sg[1], (float)sg[2], (float)sg[3], s0, s1, s0 * WALL_H, s1 * WALL_H, i};
-            }
-    }
+    place(w, B, fill);
     free(fill);
     w->span = (float *)malloc((size_t)B * B * 2 * sizeof(float));
     if (!w->span) goto oom;
