@@ -372,8 +372,9 @@ static float own_term(const dpc_density_job *job, float tx, float ty, float a) {
 }
 
 /* Add to the lane sums of the group's queries the terms of every candidate within reach of their
- * bounding box (hq: their largest h): the runs of each mirror image of the set in turn. */
-static void gather(const layer_pass *p, group *g, float hq) {
+ * bounding box: the runs of each mirror image of the set in turn. */
+static void gather(const layer_pass *p, group *g) {
+    const float hq = g->qhi;
     float box[4] = {g->q[0], g->q[0], g->q[1], g->q[1]}; /* x0, x1, y0, y1 */
     for (unsigned k = 1; k < g->nq; k++) {
         const float qx = g->q[DPC_DENSITY_QUERY * k], qy = g->q[DPC_DENSITY_QUERY * k + 1];
@@ -448,7 +449,7 @@ static void run_group(const layer_pass *p, float *slot, uint32_t s0, uint32_t s1
         q[6] = (float)((x - wx) * nx + (y - wy) * ny); /* the distance to the mirror's line */
     }
     g.qlo = hlo, g.qhi = hq;
-    gather(p, &g, hq);
+    gather(p, &g);
     for (unsigned k = 0; k < g.nq; k++) {
         const float *q = g.q + DPC_DENSITY_QUERY * k;
         float *d = p->delta + 2 * (size_t)(s0 + k);
@@ -686,8 +687,6 @@ static dpc_status run_layers(const dpc_cascade *c, const density_map *map, dpc_i
         p.job.umax2 = p.job.umax * p.job.umax;
         p.job.smin2 = 4.0f * p.job.umax2; /* d < 1/2 */
         p.job.qmax = (int32_t)L->bins - 2;
-        p.job.walls = 1;
-        p.job.wall_ratio = WALL_H;
         p.kernel = pick_kernel(isa);
         p.scratch = w.scratch;
         p.delta = w.delta;

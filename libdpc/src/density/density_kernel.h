@@ -9,7 +9,7 @@
  *              g(u) = w[q] + (u' - q) dw[q],  u' = min(u, umax), q = min(trunc(u'), qmax),
  *     sums:    the candidates in the window, in chunk order, go to lanes 0, 1, .., 7, 0, 1, ..:
  *              the lane of the r-th one is r mod 8, and each lane adds k tx (and k ty) in order.
- * With walls (job->walls), a pair whose 1/h differ more than W = wall_ratio times (big > W small)
+ * With walls (job->walls), a pair whose 1/h differ more than W = WALL_H times (big > W small)
  * has a = 2 big (the smaller spacing): its term is that of a and 0 outside the window at a. And a
  * query with a wall (plane != 0) then adds the terms of the mirror images t' = t - 2 e n,
  * e = t . n + D, of the window's candidates with e > 0 whose 1/h are within W of its own, in the
@@ -30,9 +30,7 @@ typedef struct dpc_density_job {
     const float *w, *dw; /* the kernel table and its slopes, qmax + 2 entries */
     float c2, cut2, umax, umax2, smin2;
     int32_t qmax;
-    int walls;        /* pairs of spacings more than wall_ratio apart see the smaller one (a query
-                         whose window has none skips the test: the same bits) */
-    float wall_ratio; /* WALL_H (walls.h) */
+    int walls; /* pairs of spacings more than WALL_H (walls.h) apart see the smaller one */
 } dpc_density_job;
 
 /* Query p is q[8p .. 8p+7] = x, y, 1/h, plane, nx, ny, D, unused (plane != 0: a wall, the line

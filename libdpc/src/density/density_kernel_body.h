@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "density/density_kernel.h"
+#include "density/walls.h"
 
 typedef float vf8 __attribute__((vector_size(32)));
 
@@ -40,6 +41,13 @@ static inline vf8 add_lanes(vf8 s, vf v) {
 #endif
 }
 
+/* The window's value d2 max(s s, smin2), s = a c2 (density_kernel.h): in the window when in
+ * (cut2, umax2). */
+static inline vf window_value(vf d2, vf a, vf c2, vf smin2) {
+    const vf s = a * c2, s2 = s * s;
+    return d2 * vselect(s2 < smin2, smin2, s2);
+}
+
 /* The window of query (X, Y, A) over the chunk, at the pair spacing 2 / (cj + A): the candidates
  * in it packed in order into (dtx, dty, dc) (dc: their 1/h, cj), their count returned. */
 static inline __attribute__((always_inline)) uint32_t window(const float *cx, const float *cy, const float *ca,
@@ -50,8 +58,7 @@ static inline __attribute__((always_inline)) uint32_t window(const float *cx, co
         const vf tx = VLOAD(cx + o) - X, ty = VLOAD(cy + o) - Y;
         const vf d2 = tx * tx + ty * ty;
         const vf cj = VLOAD(ca + o);
-        const vf a = cj + A, s = a * c2, s2 = s * s;
-        m += PACK3(WINDOW(d2 * vselect(s2 < smin2, smin2, s2), cut2, umax2), tx, ty, cj, dtx + m, dty + m, dc + m);
+        m += PACK3(WINDOW(window_value(d2, cj + A, c2, smin2), cut2, umax2), tx, ty, cj, dtx + m, dty + m, dc + m);
     }
     return m;
 }
@@ -89,30 +96,10 @@ static inline __attribute__((always_inline)) uint32_t images(const float *dtx, c
         const vf a = pair_a(1, cj, A, WR, &own);
         const vf e = tx * NX + ty * NY + D, f = e + e;
         const vf jx = tx - f * NX, jy = ty - f * NY;
-        const vf s = a * c2, s2 = s * s;
-        const vf v = vselect(live & own & (e > zero), (jx * jx + jy * jy) * vselect(s2 < smin2, smin2, s2), umax2);
+        const vf v = vselect(live & own & (e > zero), window_value(jx * jx + jy * jy, a, c2, smin2), umax2);
         k += PACK3(WINDOW(v, cut2, umax2), jx, jy, cj, itx + k, ity + k, ic + k);
     }
     return k;
-}
-
-/* Every packed candidate's 1/h (dc[0 .. m)) is within wr of the query's, a (aw = a wr): the same
- * float products as pair_a's test, so that terms without it give the same bits. */
-static inline __attribute__((always_inline)) int all_own(const float *dc, uint32_t m, vi iota, float a, float aw,
-                                                         float wr) {
-    vf lo = vsplat(a), hi = vsplat(a);
-    for (uint32_t r = 0; r < m; r += VW) {
-        const vi live = VLIVE(iota, (int32_t)(m - r));
-        const vf c = VLOAD(dc + r);
-        lo = vselect(live & (c < lo), c, lo);
-        hi = vselect(live & (c > hi), c, hi);
-    }
-    float cmin = a, cmax = a;
-    for (int l = 0; l < VW; l++) {
-        cmin = lo[l] < cmin ? lo[l] : cmin;
-        cmax = hi[l] > cmax ? hi[l] : cmax;
-    }
-    return cmax <= aw && a <= cmin * wr;
 }
 
 /* Add the terms of the packed candidates (tx, ty, cj)[0 .. m) to the lane sums (sx, sy). With
@@ -137,7 +124,7 @@ terms(const int walls, const float *dtx, const float *dty, const float *dc, uint
         const vf g = LOOKUP(w_t, b) + f * LOOKUP(dw_t, b);
         vf k = (two * g) / (a * d);
         if (walls) {
-            const vf s = a * c2, s2 = s * s, v = d2 * vselect(s2 < smin2, smin2, s2);
+            const vf v = window_value(d2, a, c2, smin2);
             k = vselect(own | ((v > cut2) & (v < umax2)), k, zero);
         }
         *sx = add_lanes(*sx, k * tx);
@@ -148,7 +135,7 @@ terms(const int walls, const float *dtx, const float *dty, const float *dc, uint
 void KERNEL(const dpc_density_job *job, const float *cx, const float *cy, const float *ca, uint32_t n, const float *q,
             unsigned nq, float *acc, float *scratch) {
     const vf c2 = vsplat(job->c2), cut2 = vsplat(job->cut2), umax = vsplat(job->umax), umax2 = vsplat(job->umax2);
-    const vf smin2 = vsplat(job->smin2), WR = vsplat(job->wall_ratio);
+    const vf smin2 = vsplat(job->smin2), WR = vsplat(WALL_H);
 #if VW == 16
     const vi iota = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15};
 #else
@@ -168,8 +155,8 @@ void KERNEL(const dpc_density_job *job, const float *cx, const float *cy, const 
         memcpy(&sy, acc + 16 * p + 8, sizeof sy);
         /* (1) the window, packed; (2) the terms: the candidates', then their mirror images' */
         const uint32_t m = window(cx, cy, ca, n, X, Y, A, c2, smin2, cut2, umax2, dtx, dty, dc);
-        const int mixed = job->walls && !all_own(dc, m, iota, qp[2], qp[2] * job->wall_ratio, job->wall_ratio);
-        if (mixed) terms(1, dtx, dty, dc, m, iota, A, WR, c2, smin2, cut2, umax, umax2, qmax, &w_t, &dw_t, &sx, &sy);
+        if (job->walls)
+            terms(1, dtx, dty, dc, m, iota, A, WR, c2, smin2, cut2, umax, umax2, qmax, &w_t, &dw_t, &sx, &sy);
         else terms(0, dtx, dty, dc, m, iota, A, WR, c2, smin2, cut2, umax, umax2, qmax, &w_t, &dw_t, &sx, &sy);
         if (qp[3] != 0.0f) {
             const vf NX = vsplat(qp[4]), NY = vsplat(qp[5]), D = vsplat(qp[6]);

@@ -196,9 +196,9 @@ dpc_status dpc_walls_init(dpc_walls *w, const float *h, uint32_t W, uint32_t H, 
     for (size_t b = 0; b < (size_t)B * B; b++) {
         float lo = INFINITY, hi = 0.0f;
         for (uint32_t k = w->start[b]; k < w->start[b + 1]; k++) {
-            const float *sd = w->side + 2 * (size_t)w->at[k].id;
-            const float s_min = sd[0] == 0.0f ? sd[1] : sd[1] == 0.0f ? sd[0] : sd[0] < sd[1] ? sd[0] : sd[1];
-            const float s_max = sd[0] > sd[1] ? sd[0] : sd[1];
+            const float s0 = w->at[k].s0, s1 = w->at[k].s1;
+            const float s_min = s0 == 0.0f ? s1 : s1 == 0.0f ? s0 : s0 < s1 ? s0 : s1;
+            const float s_max = s0 > s1 ? s0 : s1;
             /* h sees a side s when s / WALL_H <= h <= s WALL_H (a margin of 2^-20 for rounding) */
             const float a = s_min / WALL_H * (1.0f - 0x1p-20f), c = s_max * WALL_H * (1.0f + 0x1p-20f);
             lo = a < lo ? a : lo;
