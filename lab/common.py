@@ -76,6 +76,108 @@ def scene_dict(mi, name: str, width: int) -> dict:
                 "emitter": {"type": "area", "radiance": {"type": "rgb", "value": 2.0}},
             },
         }
+    T = mi.ScalarTransform4f
+    if name == "hidden-light":
+        # the Cornell box lit only by a small emitter under the ceiling that faces up: everything
+        # the camera sees is light that bounced at least twice
+        d = mi.cornell_box()
+        d["sensor"]["film"] = film
+        d["integrator"] = {"type": "path", "max_depth": 6}
+        d["light"]["to_world"] = T().translate([0.0, 0.9, 0.0]).rotate([1, 0, 0], -90).scale([0.12, 0.12, 1])
+        d["light"]["emitter"]["radiance"]["value"] = [150.0, 120.0, 90.0]
+        d["baffle"] = {
+            "type": "rectangle",
+            "to_world": T().translate([0.0, 0.88, 0.0]).rotate([1, 0, 0], 90).scale([0.3, 0.3, 1]),
+            "bsdf": {"type": "diffuse"},
+        }
+        return d
+    if name == "aliasing":
+        # what the camera sees is emission (no light sampling): the pixel footprint is the only
+        # integral; a checkerboard of 1/8-pixel squares at the horizon and thin bright rods
+        rods = {
+            f"rod{k}": {
+                "type": "cylinder",
+                "p0": [-0.95 + 0.25 * k, -0.5, 0.3],
+                "p1": [-0.75 + 0.25 * k, 1.0, -0.3],
+                "radius": 0.0015 + 0.0012 * k,
+                "emitter": {"type": "area", "radiance": {"type": "rgb", "value": 1.5}},
+            }
+            for k in range(8)
+        }
+        return {
+            "type": "scene",
+            "integrator": {"type": "path", "max_depth": 1},
+            "sensor": {
+                "type": "perspective",
+                "fov": 45,
+                "to_world": T().look_at(origin=[0, 0.35, 2.5], target=[0, -0.15, 0], up=[0, 1, 0]),
+                "film": film,
+            },
+            "ground": {
+                "type": "rectangle",
+                "to_world": T().translate([0, -0.5, -6]).rotate([1, 0, 0], -90).scale([8, 8, 1]),
+                "emitter": {
+                    "type": "area",
+                    "radiance": {
+                        "type": "checkerboard",
+                        "color0": 0.05,
+                        "color1": 1.0,
+                        "to_uv": mi.ScalarTransform3f().scale([120, 120]),
+                    },
+                },
+            },
+            **rods,
+        }
+    if name == "ao-env":
+        # visibility under a uniform sky, BSDF sampling only (ambient occlusion's integrand)
+        return {
+            "type": "scene",
+            "integrator": {"type": "direct", "emitter_samples": 0, "bsdf_samples": 1},
+            "sensor": {
+                "type": "perspective",
+                "fov": 40,
+                "to_world": T().look_at(origin=[0, -2.2, 2.6], target=[0, 0, 0.3], up=[0, 0, 1]),
+                "film": film,
+            },
+            "sky": {"type": "constant", "radiance": {"type": "rgb", "value": 1.0}},
+            "floor": {"type": "rectangle", "to_world": T().scale([4, 4, 1]), "bsdf": {"type": "diffuse"}},
+            "ball": {"type": "sphere", "center": [-0.5, 0.2, 0.45], "radius": 0.45, "bsdf": {"type": "diffuse"}},
+            "box": {
+                "type": "cube",
+                "to_world": T().translate([0.55, 0.1, 0.3]).rotate([0, 0, 1], 25).scale([0.3, 0.3, 0.3]),
+                "bsdf": {"type": "diffuse"},
+            },
+            "slab": {
+                "type": "cube",
+                "to_world": T().translate([0.0, 0.9, 0.05]).scale([1.2, 0.08, 0.05]),
+                "bsdf": {"type": "diffuse"},
+            },
+        }
+    if name == "glossy":
+        # a rough metal floor reflecting a bright rectangle light and a dim sky (light and BSDF
+        # sampling, combined by MIS)
+        return {
+            "type": "scene",
+            "integrator": {"type": "direct"},
+            "sensor": {
+                "type": "perspective",
+                "fov": 40,
+                "to_world": T().look_at(origin=[0, -3.0, 1.2], target=[0, 0.5, 0.2], up=[0, 0, 1]),
+                "film": film,
+            },
+            "sky": {"type": "constant", "radiance": {"type": "rgb", "value": 0.05}},
+            "floor": {
+                "type": "rectangle",
+                "to_world": T().scale([4, 4, 1]),
+                "bsdf": {"type": "roughconductor", "material": "Al", "distribution": "ggx", "alpha": 0.12},
+            },
+            "ball": {"type": "sphere", "center": [0.6, 0.3, 0.35], "radius": 0.35, "bsdf": {"type": "diffuse"}},
+            "light": {
+                "type": "rectangle",
+                "to_world": T().translate([-0.3, 2.0, 1.0]).rotate([1, 0, 0], 80).scale([0.8, 0.4, 1]),
+                "emitter": {"type": "area", "radiance": {"type": "rgb", "value": 12.0}},
+            },
+        }
     raise ValueError(name)
 
 

@@ -14,8 +14,8 @@ import pytest
 
 import dpc
 
-# The one optional test file: mitsuba (the mitsuba extra) is not needed by anything else, so
-# without it this file skips (run_all.sh installs it, so CI runs it).
+# Mitsuba-optional (with test_rendering_anchors.py): mitsuba (the mitsuba extra) is needed by
+# nothing else, so without it this file skips (run_all.sh installs it, so CI runs it).
 mi = pytest.importorskip("mitsuba", reason="mitsuba is not installed (pip install .[mitsuba])")
 mi.set_variant("scalar_rgb")
 import dpc.mitsuba  # noqa: E402  (builds the plugin once and registers it)
