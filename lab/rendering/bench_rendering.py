@@ -3,6 +3,8 @@ published samplers renderer teams compare against (lab/rendering/anchors: ZSobol
 Sobol' joint and padded, PMJ02BN, Heitz et al. 2019).
 
     python -m lab.rendering.bench_rendering [--width 128] [--jobs 2] [--quick]
+    python -m lab.rendering.bench_rendering --only "dpc,dpc (pixel nets)"   # re-render these, keep the rest
+    python -m lab.rendering.bench_rendering --report   # rewrite the docs section from the last results
 
 Five scenes built from Mitsuba scene dicts (lab/common.py), one per integrand class:
 soft-shadow (direct light from a large area light: the light's 2-D sample against an occluder),
@@ -157,13 +159,13 @@ def seeds_for(spp: int, args) -> int:
 
 
 def run_scene(scene: str, args) -> dict:
-    """Every sampler, count and seed of one scene (a worker process)."""
+    """Every sampler (or those of --only), count and seed of one scene (a worker process)."""
     mi, anchors = _mitsuba()
     t0 = time.perf_counter()
     ref, ref_mse = reference(mi, scene, args.width, args.ref_spp)
     print(f"{scene}: reference ready ({time.perf_counter() - t0:.0f} s), its own MSE {ref_mse:.2e}", flush=True)
     out = {"ref_mse": ref_mse, "samplers": {}, "figure": {}}
-    for sampler in SAMPLERS:
+    for sampler in args.only or SAMPLERS:
         rows = {}
         for spp in SPP:
             mse, el, blur, times, used = [], [], [], [], None
@@ -228,13 +230,32 @@ def run(args) -> dict:
         "scenes": {},
     }
     scenes = list(SCENES)
+    if args.only:  # the other samplers' rows (and the timing) from the last full run
+        last = load_results()
+        args.width, args.seeds_low, args.seeds_high = last["width"], last["seeds_low"], last["seeds_high"]
+        res.update(width=args.width, seeds_low=args.seeds_low, seeds_high=args.seeds_high)
     # spawned workers: Mitsuba's thread pool does not survive a fork
     with ProcessPoolExecutor(max_workers=args.jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
         for scene, out in zip(scenes, pool.map(run_scene, scenes, [args] * len(scenes))):
             res["scenes"][scene] = out
+    if args.only:
+        for scene in scenes:
+            old, new = last["scenes"][scene], res["scenes"][scene]
+            rows = {n: old["samplers"][n] for n in SAMPLERS if n in old["samplers"] and n not in args.only}
+            res["scenes"][scene] = {**old, "samplers": {**rows, **new["samplers"]}, "figure": new["figure"]}
+        res["commit"] = f"{last['commit']}; {', '.join(args.only)} at {res['commit']}"
+        return res
     for scene in scenes:  # alone on the machine
         res["scenes"][scene]["timing"] = timing(scene, args)
         print(f"  {scene}: render time at {TIME_SPP} spp: {res['scenes'][scene]['timing']}", flush=True)
+    return res
+
+
+def load_results() -> dict:
+    """The last run's results.json, counts as integers again."""
+    res = json.loads((CACHE / "results.json").read_text())
+    for sres in res["scenes"].values():
+        sres["samplers"] = {n: {int(k): v for k, v in rows.items()} for n, rows in sres["samplers"].items()}
     return res
 
 
@@ -442,13 +463,18 @@ def main() -> None:
     ap.add_argument("--jobs", type=int, default=2, help="scenes rendered side by side (one thread each)")
     ap.add_argument("--quick", action="store_true", help="64 x 64 pixels, 3 seeds: a smoke run, writes nothing")
     ap.add_argument(
+        "--only",
+        help="comma-separated samplers to render again; the others' rows come from the last run's results.json",
+    )
+    ap.add_argument(
         "--report", action="store_true", help="rewrite the docs section from the last run's results.json (no renders)"
     )
     args = ap.parse_args()
+    args.only = [n.strip() for n in args.only.split(",")] if args.only else None
+    if args.only and not set(args.only) <= set(SAMPLERS):
+        ap.error(f"--only: samplers among {', '.join(SAMPLERS)}")
     if args.report:
-        res = json.loads((CACHE / "results.json").read_text())
-        for sres in res["scenes"].values():  # JSON keys are strings
-            sres["samplers"] = {n: {int(k): v for k, v in rows.items()} for n, rows in sres["samplers"].items()}
+        res = load_results()
         figs = sorted(p.name for p in FIGS.glob("*.png"))
         replace_section(DOC, "bench_rendering", section(res, goals(res), figs))
         print(f"rewrote {DOC} from {CACHE / 'results.json'}")
@@ -464,7 +490,8 @@ def main() -> None:
     print(f"{sum(ok for _, ok, _ in checks)} of {len(checks)} goals met")
     if args.quick:
         return
-    figs = figures(res)
+    # a partial run has the error images of its own samplers only: the figures stay the last full run's
+    figs = sorted(p.name for p in FIGS.glob("*.png")) if args.only else figures(res)
     CACHE.mkdir(parents=True, exist_ok=True)
     (CACHE / "results.json").write_text(
         json.dumps({**res, "scenes": {k: {**v, "figure": None} for k, v in res["scenes"].items()}})
