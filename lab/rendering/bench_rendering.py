@@ -112,8 +112,9 @@ def _mitsuba():
     return mi, anchors
 
 
-def render(mi, anchors, scene: str, sampler: str, spp: int, seed: int, width: int):
-    """One render as one block: (image, seconds, samples per pixel used)."""
+def render(mi, anchors, scene: str, sampler: str, spp: int, seed: int, width: int, extra: dict | None = None):
+    """One render as one block: (image, seconds, samples per pixel used); extra: more sampler
+    properties."""
     from lab.common import scene_dict  # noqa: PLC0415
 
     d = scene_dict(mi, scene, width)
@@ -125,7 +126,7 @@ def render(mi, anchors, scene: str, sampler: str, spp: int, seed: int, width: in
             props["net_layout"] = "pixel"
     elif sampler in ANCHORS:
         props.update(block_size=width, **anchors.properties(sampler, mi))
-    d["sensor"]["sampler"] = props
+    d["sensor"]["sampler"] = {**props, **(extra or {})}
     sc = mi.load_dict(d)
     used = sc.sensors()[0].sampler().sample_count()
     t = time.perf_counter()

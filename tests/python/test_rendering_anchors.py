@@ -33,11 +33,11 @@ def morton(x: int, y: int) -> int:
     return sum(((x >> b) & 1) << (2 * b) | ((y >> b) & 1) << (2 * b + 1) for b in range(8))
 
 
-def values(name: str, spp: int, seed: int, block: int, pixels, requests: int = 4, two_d: bool = True):
+def values(name: str, spp: int, seed: int, block: int, pixels, requests: int = 4, two_d: bool = True, **extra):
     """{(x, y): (spp, requests, 2)} values of the plugin for pixels of one block; the block's
     first seed is 0, as Mitsuba's first block of a render with seed 0."""
     s = mi.load_dict(
-        {"type": name, "sample_count": spp, "seed": seed, "block_size": block, **anchors.properties(name, mi)}
+        {"type": name, "sample_count": spp, "seed": seed, "block_size": block, **anchors.properties(name, mi), **extra}
     )
     s.seed(0)  # the block's first seed: the pixel at Morton index 0
     out = {}
@@ -113,14 +113,25 @@ def test_heitz2019_is_the_published_function_of_its_tables(spp):
                 assert got[s, d // 2, d % 2] == np.float32((0.5 + value) / 256)
 
 
-@pytest.mark.parametrize("name", anchors.ANCHORS)
-def test_values_are_uniform_over_seeds(name):
+def test_heitz2019_rotated_is_the_published_values_rotated_per_dimension():
+    """The study variant: each dimension's values moved by one toroidal rotation per seed."""
+    pix = [(0, 0), (3, 1), (7, 6)]
+    a, b = values("heitz2019", 4, 2, 8, pix, requests=3), values("heitz2019", 4, 2, 8, pix, requests=3, rotate=True)
+    shift = (b[pix[0]] - a[pix[0]]) % 1.0  # (samples, requests, 2): one rotation per dimension
+    for p in pix:
+        d = (b[p] - a[p]) % 1.0
+        assert np.allclose(np.minimum(np.abs(d - shift[0]), 1 - np.abs(d - shift[0])), 0, atol=1e-6)
+    assert np.all(shift[0] > 1e-4)
+
+
+@pytest.mark.parametrize("name,extra", [(n, {}) for n in anchors.ANCHORS] + [("heitz2019", {"rotate": True})])
+def test_values_are_uniform_over_seeds(name, extra):
     """One pixel, sample 0, its first 1-D and 2-D values over 400 seeds: Kolmogorov-Smirnov."""
     from scipy.stats import kstest
 
     got = []
     for seed in range(400):
-        v = values(name, 4, seed, 8, [(3, 5)], requests=2)[(3, 5)]
+        v = values(name, 4, seed, 8, [(3, 5)], requests=2, **extra)[(3, 5)]
         got.append(v[0].ravel())
     got = np.array(got)
     # heitz2019's values are bin centres of 256 bins: uniform up to 1/512

@@ -16,6 +16,8 @@
 //   heitz2019     Heitz et al. 2019's published tables (256 spp x 256 dimensions of one
 //                 Owen-scrambled Sobol' sequence, 128 x 128 scrambling and ranking keys optimised
 //                 per sample count); the tile is moved by a hash of the seed so that seeds differ.
+//                 Property "rotate" (a study's variant): each dimension's values also rotated
+//                 toroidally per seed, as dpc's set slots are.
 //
 // Mitsuba tells a sampler only a seed per pixel: render_seed * w * h + block_id * block^2 + the
 // pixel's Morton index in its block. As dpc's plugin, a fork's first seed starts a block; the
@@ -325,6 +327,9 @@ template <typename Float, typename Spectrum> class Heitz2019Anchor final : publi
     static constexpr size_t SOBOL = 256 * 256, TILE = 128 * 128 * 8, COUNTS = 9;
     Heitz2019Anchor(const Properties &props) : Base(props) {
         m_data = std::make_shared<std::vector<uint8_t>>(this->tables(SOBOL + COUNTS * 2 * TILE));
+        // a study's variant, not the published sampler: every value of a dimension rotated
+        // toroidally by a random amount per seed, as dpc's set slots are (uniform over seeds)
+        m_rotate = props.get<bool>("rotate", false);
         select();
     }
     void set_sample_count(uint32_t spp) override {
@@ -337,6 +342,7 @@ template <typename Float, typename Spectrum> class Heitz2019Anchor final : publi
     Heitz2019Anchor(const Heitz2019Anchor &o) : Base(o) {
         m_data = o.m_data;
         m_level = o.m_level;
+        m_rotate = o.m_rotate;
     }
     void select() { // the keys optimised for the smallest tabulated count >= spp
         if (m_sample_count > 256) Throw("heitz2019: at most 256 samples per pixel");
@@ -352,11 +358,15 @@ template <typename Float, typename Spectrum> class Heitz2019Anchor final : publi
         // d >= 8 (and past the table's end in the last pixels); d mod 8, as for the scrambling key
         const uint32_t ranked = s ^ rnk[(d & 7) + (i + j * 128) * 8];
         const uint32_t v = (*m_data)[d + ranked * 256] ^ scr[(d & 7) + (i + j * 128) * 8];
-        return (0.5f + (float)v) / 256.0f;
+        const float u = (0.5f + (float)v) / 256.0f;
+        if (!m_rotate) return u;
+        const float r = u + (float)(anchors::hash(k, dim, 0xC0) >> 40) * 0x1p-24f;
+        return r >= 1.0f ? r - 1.0f : r;
     }
     Point2f value(uint32_t dim, int n) const { return Point2f(one(dim), n == 2 ? one(dim + 1) : 0.f); }
     std::shared_ptr<std::vector<uint8_t>> m_data;
     uint32_t m_level = 0;
+    bool m_rotate = false;
 };
 
 extern "C" MI_EXPORT void init_plugin(std::string_view name, PluginRegisterFn fn) {
