@@ -45,7 +45,7 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
-from lab.common import CACHE, REF_SPP, ROOT, cpu_name, ratio_se, replace_section
+from lab.common import CACHE, REF_SPP, ROOT, cpu_name, ratio_se, reference, replace_section
 
 DOC = ROOT / "docs" / "rendering.md"
 FIGS = ROOT / "docs" / "figures" / "rendering"
@@ -134,27 +134,6 @@ def render(mi, anchors, scene: str, sampler: str, spp: int, seed: int, width: in
     return img, time.perf_counter() - t, used
 
 
-def reference(mi, scene: str, width: int, ref_spp: int = REF_SPP):
-    """ldsampler at ref_spp as two halves of other seeds (Mitsuba's 32-pixel blocks, all threads;
-    cached), and the squared error of their mean from the halves' difference."""
-    from lab.common import scene_dict  # noqa: PLC0415
-
-    CACHE.mkdir(parents=True, exist_ok=True)
-    path = CACHE / f"ref1-{scene}-{width}-{ref_spp}.npz"
-    if path.is_file():
-        z = np.load(path)
-        return z["ref"], float(z["ref_mse"])
-    halves = []
-    for k in range(2):
-        d = scene_dict(mi, scene, width)
-        d["sensor"]["sampler"] = {"type": "ldsampler", "sample_count": ref_spp // 2, "seed": 1000 + k}
-        halves.append(np.array(mi.render(mi.load_dict(d)), dtype=np.float64))
-    ref = 0.5 * (halves[0] + halves[1])
-    ref_mse = float(((halves[0] - halves[1]) ** 2).mean() / 4)
-    np.savez(path, ref=ref, ref_mse=ref_mse)
-    return ref, ref_mse
-
-
 def seeds_for(spp: int, args) -> int:
     return args.seeds_low if spp < 16 else args.seeds_high
 
@@ -163,7 +142,7 @@ def run_scene(scene: str, args) -> dict:
     """Every sampler (or those of --only), count and seed of one scene (a worker process)."""
     mi, anchors = _mitsuba()
     t0 = time.perf_counter()
-    ref, ref_mse = reference(mi, scene, args.width, args.ref_spp)
+    ref, ref_mse = reference(mi, scene, args.width, args.ref_spp)  # lab.common's, cached
     print(f"{scene}: reference ready ({time.perf_counter() - t0:.0f} s), its own MSE {ref_mse:.2e}", flush=True)
     out = {"ref_mse": ref_mse, "samplers": {}, "figure": {}}
     for sampler in args.only or SAMPLERS:

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from lab.common import REPORTS, replace_section
+from lab.common import REPORTS, reference, replace_section
 from lab.rendering import bench_rendering as br
 
 DOC = REPORTS / "rendering-studies.md"
@@ -34,7 +34,7 @@ def main() -> None:
     width = 128
     rows = {}
     for scene in SCENES:
-        ref, ref_mse = br.reference(mi, scene, width)
+        ref, ref_mse = reference(mi, scene, width)
         for label, (sampler, extra) in VARIANTS.items():
             for spp in COUNTS:
                 el, mse = [], []
