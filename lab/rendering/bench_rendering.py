@@ -200,7 +200,7 @@ def run(args) -> dict:
     )
     mi, _ = _mitsuba()  # builds the plugins once, before the workers start
     res = {
-        "commit": commit,
+        "commit": f"tree {commit}",
         "width": args.width,
         "seeds_low": args.seeds_low,
         "seeds_high": args.seeds_high,
@@ -383,7 +383,7 @@ def _name(n: str) -> str:
 
 def section(res: dict, checks, figs) -> str:
     L = [
-        f"Measured by `python -m lab.rendering.bench_rendering` (tree {res['commit']}) on {res['cpu']}, one "
+        f"Measured by `python -m lab.rendering.bench_rendering` ({res['commit']}) on {res['cpu']}, one "
         f"thread per render, Mitsuba {res['mitsuba']} `scalar_rgb`, {res['width']} x {res['width']} pixels; "
         f"{res['seeds_low']} seeds per cell below 16 spp, {res['seeds_high']} from 16 on (the sampler's `seed` "
         f"property). Reference: ldsampler at {res['ref_spp']:,} spp, its own error subtracted from every MSE.",
