@@ -45,7 +45,7 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
-from lab.common import CACHE, REF_SPP, ROOT, cpu_name, ratio_se, reference, replace_section
+from lab.common import CACHE, REF_SPP, ROOT, cpu_name, ratio_se, reference, replace_section, scene_dict
 
 DOC = ROOT / "docs" / "rendering.md"
 FIGS = ROOT / "docs" / "figures" / "rendering"
@@ -115,8 +115,6 @@ def _mitsuba():
 def render(mi, anchors, scene: str, sampler: str, spp: int, seed: int, width: int, extra: dict | None = None):
     """One render as one block: (image, seconds, samples per pixel used); extra: more sampler
     properties."""
-    from lab.common import scene_dict  # noqa: PLC0415
-
     d = scene_dict(mi, scene, width)
     d["integrator"]["block_size"] = width
     props = {"type": sampler, "sample_count": spp, "seed": seed}

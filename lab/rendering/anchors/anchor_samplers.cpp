@@ -142,8 +142,9 @@ template <typename Float, typename Spectrum> class AnchorSampler : public Sample
             const uint32_t i = (uint32_t)(seed - m_phase) & (m_block_pixels - 1);
             m_x = anchors::compact_bits(i);
             m_y = anchors::compact_bits(i >> 1);
-            m_block = (uint32_t)seed - i;
-            m_pixel_key = anchors::hash(((uint64_t)m_y << 32) | m_x, anchors::hash(m_base_seed, m_block));
+            const uint32_t block = (uint32_t)seed - i; // the block's first seed names it
+            m_run_key = anchors::hash(m_base_seed, block);
+            m_pixel_key = anchors::hash(((uint64_t)m_y << 32) | m_x, m_run_key);
         }
     }
 
@@ -155,7 +156,7 @@ template <typename Float, typename Spectrum> class AnchorSampler : public Sample
         m_phase_known = o.m_phase_known;
         m_x = o.m_x;
         m_y = o.m_y;
-        m_block = o.m_block;
+        m_run_key = o.m_run_key;
         m_pixel_key = o.m_pixel_key;
     }
     std::vector<uint8_t> tables(size_t bytes) const {
@@ -163,7 +164,7 @@ template <typename Float, typename Spectrum> class AnchorSampler : public Sample
         if (t.size() != bytes) Throw("tables \"%s\": %zu bytes, expected %zu", m_tables_path, t.size(), bytes);
         return t;
     }
-    uint64_t run_key() const { return anchors::hash(m_base_seed, m_block); } // the seed and the block
+    uint64_t run_key() const { return m_run_key; } // the seed and the block, hashed once per pixel
     template <typename S> ref<Sampler<Float, Spectrum>> fork_as(const S &self) {
         S *s = new S(self);
         s->m_phase_known = false; // the fork's first seed starts a block
@@ -174,8 +175,8 @@ template <typename Float, typename Spectrum> class AnchorSampler : public Sample
     std::string m_tables_path;
     uint32_t m_phase = 0;
     bool m_phase_known = false;
-    uint32_t m_x = 0, m_y = 0, m_block = 0;
-    uint64_t m_pixel_key = 0;
+    uint32_t m_x = 0, m_y = 0;
+    uint64_t m_run_key = 0, m_pixel_key = 0;
 };
 
 #define ANCHOR_BOILERPLATE(Name)                                                                            \
