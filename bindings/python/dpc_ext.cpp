@@ -329,7 +329,7 @@ class Sampler {
     // Created off the calling thread (see run_off_thread): Ctrl-C raises KeyboardInterrupt at
     // once, progress(done, total) counts the tables' sets.
     Sampler(const std::vector<const Model *> &models, uint32_t spp, uint32_t dims, uint64_t seed, uint32_t fold_from,
-            uint32_t net_dims, uint32_t net_layout, py::object progress) {
+            uint32_t net_dims, uint32_t net_layout, uint32_t frames, py::object progress) {
         auto build = std::make_shared<SamplerBuild>();
         for (const Model *m : models) {
             build->models.push_back(m->shared());
@@ -343,10 +343,11 @@ class Sampler {
         o.fold_from = fold_from;
         o.net_dims = net_dims;
         o.net_layout = net_layout;
+        o.frames = frames;
         run_off_thread(build, progress);
         sampler_ = build->sampler;
         build->sampler = nullptr;
-        spp_ = spp;
+        spp_ = spp * frames; // points per table
         dims_ = dims;
     }
     ~Sampler() { dpc_sampler_free(sampler_); }
@@ -393,6 +394,7 @@ class Sampler {
         d["progressive"] = static_cast<bool>(i.progressive);
         d["seed"] = i.seed;
         d["net_layout"] = i.net_layout;
+        d["frames"] = i.frames;
         return d;
     }
 
@@ -656,9 +658,9 @@ PYBIND11_MODULE(_core, mod) {
     mod.attr("SAMPLER_SCREEN_NETS_BELOW") = DPC_SAMPLER_SCREEN_NETS_BELOW;
     py::class_<Sampler>(mod, "Sampler")
         .def(py::init<const std::vector<const Model *> &, uint32_t, uint32_t, uint64_t, uint32_t, uint32_t, uint32_t,
-                      py::object>(),
+                      uint32_t, py::object>(),
              py::arg("models"), py::arg("spp"), py::arg("dims"), py::arg("seed"), py::arg("fold_from"),
-             py::arg("net_dims"), py::arg("net_layout"), py::arg("progress") = py::none())
+             py::arg("net_dims"), py::arg("net_layout"), py::arg("frames") = 1u, py::arg("progress") = py::none())
         .def("get", &Sampler::get, py::arg("x"), py::arg("y"), py::arg("index"), py::arg("dim"), py::arg("width"))
         .def("table", &Sampler::table, py::arg("t"))
         .def("info", &Sampler::info);

@@ -64,6 +64,10 @@ class Sampler:
     block at its randomised Morton code, so neighbouring pixels' samples together form finer
     nets and the error is blue across pixels; ``"pixel"``, one optimised net per slot, digitally
     shifted per pixel (white error); ``"auto"`` (default), screen below 64 samples per pixel.
+    ``frames`` (real-time use: ``samples_per_pixel`` samples per frame, ``frames`` frames averaged,
+    e.g. by temporal accumulation): the tables hold ``samples_per_pixel * frames`` points read in
+    order, so that each frame's error is blue across pixels and a pixel's frames together are one
+    blue-noise set; pass ``frame=f`` to the lookups (the same as ``index + f * samples_per_pixel``).
     docs/rendering.md defines every step. Values are float32 in [0, 1); the same C object backs
     the C API, the Mitsuba plugin and this class, so all three give the same bits.
 
@@ -90,6 +94,7 @@ class Sampler:
         net_dims: int | str = "auto",
         net_layout: str = "auto",
         *,
+        frames: int = 1,
         progress=None,
     ):
         if isinstance(models, (str, bytes, Model, os.PathLike)):
@@ -117,6 +122,7 @@ class Sampler:
         if not isinstance(net_layout, str) or net_layout not in _LAYOUTS:
             raise InvalidArgumentError(f'net_layout must be "auto", "screen" or "pixel", got {net_layout!r}')
         self.net_layout = net_layout
+        self.frames = _args.integer(frames, "frames", 1, MAX_SPP // self.samples_per_pixel)
         self._h = _core.Sampler(
             [m._h for m in self.models],
             self.samples_per_pixel,
@@ -125,6 +131,7 @@ class Sampler:
             NO_FOLD if self.fold_from is None else self.fold_from,
             NET_DIMS_AUTO if self.net_dims == "auto" else self.net_dims,
             _LAYOUTS[net_layout],
+            self.frames,
             progress,
         )
 
@@ -133,10 +140,15 @@ class Sampler:
         return (
             f"dpc.Sampler([{names}], samples_per_pixel={self.samples_per_pixel}, "
             f"dimensions={self.dimensions}, seed={self.seed}, fold_from={self.fold_from}, net_dims={self.net_dims!r}, "
-            f"net_layout={self.net_layout!r})"
+            f"net_layout={self.net_layout!r}, frames={self.frames})"
         )
 
-    def _lookup(self, x, y, index, dimension, width: int, max_bytes) -> np.ndarray:
+    def _lookup(self, x, y, index, dimension, width: int, max_bytes, frame=0) -> np.ndarray:
+        if not (isinstance(frame, (int, np.integer)) and frame == 0):
+            # index + frame * spp, in int64 so that an index past 2^32 - 1 is refused, not wrapped
+            index = np.asarray(_uint32_array(index, "index", wrap=False), dtype=np.int64) + np.asarray(
+                _uint32_array(frame, "frame", wrap=False), dtype=np.int64
+            ) * np.int64(self.samples_per_pixel)
         args = (
             _uint32_array(x, "x", wrap=True),
             _uint32_array(y, "y", wrap=True),
@@ -174,16 +186,18 @@ class Sampler:
                 o[...] = values.view(np.complex64)[:, 0] if width == 2 else values
         return out
 
-    def get_1d(self, x, y, index, dimension, *, max_bytes: float | None = None) -> np.ndarray:
+    def get_1d(self, x, y, index, dimension, *, frame=0, max_bytes: float | None = None) -> np.ndarray:
         """Values in [0, 1) of the stratified 1-D lattice; arguments broadcast like numpy's (the
-        broadcast is evaluated in chunks, never made full size). ``max_bytes``: the largest output
-        allowed (default 4 GiB or $DPC_MAX_OUTPUT_BYTES), else :class:`LimitError` before any work."""
-        return self._lookup(x, y, index, dimension, 1, max_bytes)
+        broadcast is evaluated in chunks, never made full size). ``frame``: sample ``index`` of that
+        frame, ``index + frame * samples_per_pixel`` (see ``frames``). ``max_bytes``: the largest
+        output allowed (default 4 GiB or $DPC_MAX_OUTPUT_BYTES), else :class:`LimitError` before any
+        work."""
+        return self._lookup(x, y, index, dimension, 1, max_bytes, frame)
 
-    def get_2d(self, x, y, index, dimension, *, max_bytes: float | None = None) -> np.ndarray:
-        """Points in [0, 1)^2 from the model's set: shape ``broadcast shape + (2,)`` (``max_bytes``
-        as in :meth:`get_1d`)."""
-        return self._lookup(x, y, index, dimension, 2, max_bytes)
+    def get_2d(self, x, y, index, dimension, *, frame=0, max_bytes: float | None = None) -> np.ndarray:
+        """Points in [0, 1)^2 from the model's set: shape ``broadcast shape + (2,)`` (``frame`` and
+        ``max_bytes`` as in :meth:`get_1d`)."""
+        return self._lookup(x, y, index, dimension, 2, max_bytes, frame)
 
     @property
     def net_slots(self) -> int:
@@ -198,7 +212,7 @@ class Sampler:
         return "screen" if self._h.info()["net_layout"] == _core.SAMPLER_NETS_SCREEN else "pixel"
 
     def table(self, t: int) -> np.ndarray:
-        """The (samples_per_pixel, 2) point set of table ``t`` (0 <= t < dimensions)."""
+        """The (samples_per_pixel * frames, 2) point set of table ``t`` (0 <= t < dimensions)."""
         return self._h.table(_args.integer(t, "t", 0, self.dimensions - 1))
 
     @staticmethod

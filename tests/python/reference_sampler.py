@@ -55,6 +55,28 @@ def stratify(table: np.ndarray) -> np.ndarray:
     return out
 
 
+FRAME_ORDER = 0x632BE59BD9B4E019
+
+
+def order_for_frames(table: np.ndarray, scramble: int) -> np.ndarray:
+    """Frames: points by their cells' Morton codes (2^L x 2^L cells, 4^L >= n; x bit b at 2b),
+    each code scrambled by nested(code, scramble), then bit-reversed over 2L bits; ties by position."""
+    n = len(table)
+    L = 0
+    while 4**L < n:
+        L += 1
+    keys = []
+    for i in range(n):
+        code = 0
+        for a in range(2):
+            cell = (int(F32(table[i, a] * F32(n))) << L) // n
+            for b in range(L):
+                code |= ((cell >> b) & 1) << (2 * b + a)
+        rev = reverse32(nested(code, scramble)) >> (32 - 2 * L) if L else 0
+        keys.append((rev, i))
+    return table[[i for _, i in sorted(keys)]]
+
+
 NET_OPTIMISED = 64
 NET_SWEEPS = 4
 NET_SEED = 0x243F6A8885A308D3
@@ -199,13 +221,16 @@ class ReferenceSampler:
         fold_from: int | None = None,
         net_dims="auto",
         net_layout="auto",
+        frames: int = 1,
     ):
+        self.frames = frames
+        spp *= frames  # points per table; frame f takes indices f * spp / frames ..
         self.n, self.D, self.base = spp, dims, mix64(seed)
         self.fold_from = fold_from  # None: no dimension folded
         models = [dpc.load(p, isa="scalar", threads=1) for p in model_paths]
         # progressive models: tables read in order (rotation range 0), 1-D strata by x rank
         self.progressive = models[0].order == "progressive"
-        self.rotate = 0 if self.progressive else spp
+        self.rotate = 0 if self.progressive or frames > 1 else spp  # frames: read in order too
         self.tables = []
         k = 0
         while len(self.tables) < dims:
@@ -213,13 +238,17 @@ class ReferenceSampler:
             pts = m.generate(seed=mix64(self.base + (k + 1) * SET_STEP), n_points=spp)
             for a in range(0, m.dims - 1, 2):
                 if len(self.tables) < dims:
-                    self.tables.append(stratify(pts[:, a : a + 2].astype(F32)))
+                    table = stratify(pts[:, a : a + 2].astype(F32))
+                    if frames > 1 and not self.progressive:
+                        t = len(self.tables)
+                        table = order_for_frames(table, mix64(self.base ^ mix64(t + FRAME_ORDER)) & M32)
+                    self.tables.append(table)
             k += 1
         self.mask = dpc.Sampler.mask()
         # net slots: only when spp is a power of two >= 2
         self.m = spp.bit_length() - 1
-        if net_dims == "auto":  # every slot for set models (from 2 spp on), else dimension 0
-            net_dims = dims if spp >= 2 and not self.progressive else 1
+        if net_dims == "auto":  # every slot for set models (from 2 spp on), else dimension 0; frames none
+            net_dims = 0 if frames > 1 else dims if spp >= 2 and not self.progressive else 1
         self.net_slots = min(net_dims, dims) if spp >= 2 and spp == 1 << self.m else 0
         if net_layout == "auto":  # screen-ordered below 64 spp
             net_layout = "screen" if spp < SCREEN_BELOW else "pixel"
@@ -252,7 +281,7 @@ class ReferenceSampler:
             j = k + (((h >> 32) * self.rotate) >> 32)
             return t, j - n if j >= n else j, None, None, h
         tile = ((y // TILE) << 32) | (x // TILE)
-        kt = mix64(key ^ tile)
+        kt = mix64((self.key(0, pass_) if self.frames > 1 else key) ^ tile)  # frames: dimension 0's offsets
         place = (y % TILE) * TILE + (x % TILE)
         spin = ((kt ^ (((place + 1) * GOLDEN) & M64)) * SPIN) & M64
         j = k + (((spin >> 32) * self.rotate) >> 32)
@@ -282,7 +311,10 @@ class ReferenceSampler:
         if t < self.net_slots:
             return net_values(self.nets[t][j], j, h, self.m)[0]  # never folded
         u = wrap(m[2], c[0])
-        i = int(F32(self.tables[t][j][0] * F32(self.n))) if self.progressive else j
+        i = int(F32(self.tables[t][j][0] * F32(self.n))) if not self.rotate else j
+        if self.frames > 1:  # i / n shifted as a whole by u
+            v = wrap(wrap(F32(F32(i) * F32(F32(1.0) / F32(self.n))), u), c[1])
+            return fold(v) if self._folds(dim) else v
         lattice = F32(F32(F32(i) + u) * F32(F32(1.0) / F32(self.n)))
         v = wrap(lattice if lattice < F32(1.0) else F32(0.0), c[1])
         return fold(v) if self._folds(dim) else v

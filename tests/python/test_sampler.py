@@ -21,40 +21,51 @@ BNOT = dpc.model_path("bnot-2d-stratified")
 PROGRESSIVE = dpc.model_path("progressive-2d")
 
 
+CASES = [
+    ([BNOT], 16, 4, 0, 1, 1, "auto"),  # dimension 0 a net, screen-ordered
+    ([BNOT], 16, 4, 0, None, 0, "auto"),  # no dimension folded, no nets
+    ([BNOT], 16, 4, 0, 0, 3, "auto"),  # three net slots, folded
+    ([BNOT], 5, 3, 12345, 0, 1, "auto"),  # spp not a power of two (no nets); every dimension folded
+    ([BNOT], 1, 2, 7, 1, 1, "auto"),
+    ([BNOT], 2, 3, 7, 1, 2, "auto"),  # the smallest net
+    ([BNOT], 64, 2, 11, 1, 1, "pixel"),  # the largest optimised net
+    ([BNOT], 128, 2, 11, 1, 1, "auto"),  # past the optimised sizes: the randomly scrambled net
+    ([BNOT], 2048, 1, 4, 1, 1, "auto"),
+    ([dpc.model_path("bnot-4d"), BNOT], 8, 5, 2**64 - 1, 3, 1, "auto"),  # 4-D model fills two slots per set
+    ([DATA / "model_3d_mixed.onnx"], 12, 3, 99, 1, 1, "auto"),  # odd dims: the last is left out
+    ([BNOT], 3, 70, 5, 66, 1, "auto"),  # past the 64 dimensions with precomputed shifted masks
+    ([BNOT], 4, 70, 5, 66, 67, "auto"),  # net slots past them too
+    ([PROGRESSIVE], 64, 4, 3, 1, 1, "auto"),  # progressive: tables in order, 1-D strata by x rank
+    ([PROGRESSIVE], 48, 70, 8, None, 1, "auto"),
+    ([PROGRESSIVE], 64, 4, 3, 1, 2, "auto"),  # progressive nets: later ones shuffled within octaves
+    ([BNOT], 256, 3, 9, None, 3, "auto"),  # nets after the first reordered
+    ([BNOT], 32, 5, 21, 1, "auto", "auto"),  # the default: every slot a screen-ordered net
+    ([BNOT], 16, 3, 21, 1, "auto", "auto"),  # and at 16 spp
+    ([PROGRESSIVE], 64, 3, 3, 1, "auto", "auto"),  # progressive: dimension 0 only
+    ([dpc.model_path("progressive-2d-relaxed")], 64, 20, 5, 1, 1, "auto"),  # relaxed tables, made 2+ at once
+    ([BNOT], 16, 4, 0, None, 3, "pixel"),  # nets digitally shifted per pixel
+    ([BNOT], 16, 4, 0, None, 3, "screen"),  # screen-ordered nets, named
+    ([BNOT], 128, 3, 9, None, 3, "screen"),  # past the default's screen-ordered counts
+    ([BNOT], 2, 3, 7, 1, 2, "screen"),  # the smallest: one bit of sample index
+    ([BNOT], 65536, 1, 4, None, 1, "screen"),  # the largest: 26-bit sequence indices
+    ([PROGRESSIVE], 64, 3, 3, None, 2, "screen"),  # progressive: sample index shuffled, nested
+    ([BNOT], 4, 70, 5, 66, 67, "screen"),  # codes past the precomputed slots
+]
+# frames: tables of spp * frames points, read in order, one mask offset for all dimensions
+FRAME_CASES = [
+    ([BNOT], 1, 4, 3, None, "auto", "auto", 16),  # real time: 1 spp per frame
+    ([BNOT], 2, 3, 8, 1, 0, "auto", 8),  # 2 spp per frame, folded
+    ([BNOT], 1, 70, 5, None, "auto", "auto", 5),  # odd frame count; past the precomputed slots
+    ([BNOT], 3, 2, 2**64 - 1, 0, "auto", "auto", 300),  # 900 points: 16 x 16 cells, ties
+    ([PROGRESSIVE], 1, 3, 3, None, "auto", "auto", 64),  # progressive tables keep their order
+]
+
+
 @pytest.mark.parametrize(
-    "models,spp,dims,seed,fold_from,net_dims,net_layout",
-    [
-        ([BNOT], 16, 4, 0, 1, 1, "auto"),  # dimension 0 a net, screen-ordered
-        ([BNOT], 16, 4, 0, None, 0, "auto"),  # no dimension folded, no nets
-        ([BNOT], 16, 4, 0, 0, 3, "auto"),  # three net slots, folded
-        ([BNOT], 5, 3, 12345, 0, 1, "auto"),  # spp not a power of two (no nets); every dimension folded
-        ([BNOT], 1, 2, 7, 1, 1, "auto"),
-        ([BNOT], 2, 3, 7, 1, 2, "auto"),  # the smallest net
-        ([BNOT], 64, 2, 11, 1, 1, "pixel"),  # the largest optimised net
-        ([BNOT], 128, 2, 11, 1, 1, "auto"),  # past the optimised sizes: the randomly scrambled net
-        ([BNOT], 2048, 1, 4, 1, 1, "auto"),
-        ([dpc.model_path("bnot-4d"), BNOT], 8, 5, 2**64 - 1, 3, 1, "auto"),  # 4-D model fills two slots per set
-        ([DATA / "model_3d_mixed.onnx"], 12, 3, 99, 1, 1, "auto"),  # odd dims: the last is left out
-        ([BNOT], 3, 70, 5, 66, 1, "auto"),  # past the 64 dimensions with precomputed shifted masks
-        ([BNOT], 4, 70, 5, 66, 67, "auto"),  # net slots past them too
-        ([PROGRESSIVE], 64, 4, 3, 1, 1, "auto"),  # progressive: tables in order, 1-D strata by x rank
-        ([PROGRESSIVE], 48, 70, 8, None, 1, "auto"),
-        ([PROGRESSIVE], 64, 4, 3, 1, 2, "auto"),  # progressive nets: later ones shuffled within octaves
-        ([BNOT], 256, 3, 9, None, 3, "auto"),  # nets after the first reordered
-        ([BNOT], 32, 5, 21, 1, "auto", "auto"),  # the default: every slot a screen-ordered net
-        ([BNOT], 16, 3, 21, 1, "auto", "auto"),  # and at 16 spp
-        ([PROGRESSIVE], 64, 3, 3, 1, "auto", "auto"),  # progressive: dimension 0 only
-        ([dpc.model_path("progressive-2d-relaxed")], 64, 20, 5, 1, 1, "auto"),  # relaxed tables, made 2+ at once
-        ([BNOT], 16, 4, 0, None, 3, "pixel"),  # nets digitally shifted per pixel
-        ([BNOT], 16, 4, 0, None, 3, "screen"),  # screen-ordered nets, named
-        ([BNOT], 128, 3, 9, None, 3, "screen"),  # past the default's screen-ordered counts
-        ([BNOT], 2, 3, 7, 1, 2, "screen"),  # the smallest: one bit of sample index
-        ([BNOT], 65536, 1, 4, None, 1, "screen"),  # the largest: 26-bit sequence indices
-        ([PROGRESSIVE], 64, 3, 3, None, 2, "screen"),  # progressive: sample index shuffled, nested
-        ([BNOT], 4, 70, 5, 66, 67, "screen"),  # codes past the precomputed slots
-    ],
+    "models,spp,dims,seed,fold_from,net_dims,net_layout,frames",
+    [c + (1,) for c in CASES] + FRAME_CASES,
 )
-def test_lookups_match_the_reference_bit_for_bit(models, spp, dims, seed, fold_from, net_dims, net_layout):
+def test_lookups_match_the_reference_bit_for_bit(models, spp, dims, seed, fold_from, net_dims, net_layout, frames):
     s = dpc.Sampler(
         models,
         samples_per_pixel=spp,
@@ -63,8 +74,10 @@ def test_lookups_match_the_reference_bit_for_bit(models, spp, dims, seed, fold_f
         fold_from=fold_from,
         net_dims=net_dims,
         net_layout=net_layout,
+        frames=frames,
     )
-    ref = ReferenceSampler(models, spp, dims, seed, fold_from, net_dims, net_layout)
+    ref = ReferenceSampler(models, spp, dims, seed, fold_from, net_dims, net_layout, frames)
+    spp *= frames  # points per table
     assert s.net_layout_resolved == ("screen" if ref.screen else "pixel")
     for t in range(dims):
         want = ref.tables[t] if t >= ref.net_slots else ((ref.nets[t] + 0.5) / spp).astype(np.float32)

@@ -27,15 +27,23 @@
  *   net_dims, seed, x, y, i, d): the same bits across runs, threads and machines.
  * - Any pixel: x and y are taken modulo 2^32 (negative coordinates cast to uint32_t tile
  *   seamlessly). Any dimension: d >= D reuses table d mod D with its own index rotation and
- *   shift. Any index: indices i >= spp continue in passes of spp samples, each a shifted copy of
- *   the table (use spp >= the samples you take).
+ *   shift. Any index: indices i >= n (n = spp * F, the table's points) continue in passes of n
+ *   samples, each a shifted copy of the table (use spp * F >= the samples you take).
  * - Progressive models (metadata dpc.order = "progressive"; all of the sampler's models or none,
  *   else DPC_ERROR_INVALID_ARGUMENT): tables are read in order, not rotated per pixel, so a
  *   pixel's first 2^k samples (k >= 4) are a blue-noise set of their own, and net slots' first
  *   2^k samples a (0,k,2)-net (docs/progressive.md).
+ * - Frames (options.frames = F > 1, for renderers that take spp samples per frame and average
+ *   F frames): frame f takes sample indices f * spp .. f * spp + spp - 1. The tables hold spp * F
+ *   points, ordered so that early frames spread over the table, and are read in order, not
+ *   rotated per pixel: at 1 spp per frame each frame's values, across pixels, are the mask's
+ *   blue noise shifted by one common vector, and each pixel's F frames together are one
+ *   toroidally shifted blue-noise set of spp * F points. No net slots. Frames from F on are
+ *   later passes (below): a new shift, so a period of F frames repeats nothing.
  * - get_1d draws from the stratified lattice (j + u) / spp (one value per stratum, u the pixel's
  *   mask value), get_2d from the table; dimension d of get_1d and of get_2d share their index
- *   rotation and shift (hence rule 1).
+ *   rotation and shift (hence rule 1). With frames the lattice j / (spp * F) is shifted as a
+ *   whole by u, so that one frame's values spread over [0, 1) across pixels.
  * - Net slots: when spp = 2^m >= 2, slots t < N hold (0,m,2)-nets instead of the models' sets:
  *   every elementary interval of a pixel's samples holds one sample. N = min(options.net_dims,
  *   D). Screen-ordered (options.net_layout; the default below 64 spp) the samples of each
@@ -46,7 +54,7 @@
  *   on any number of threads. It does not keep the models: they may be freed after
  *   dpc_sampler_create. Lookups leave the thread's error message alone unless they fail (the one
  *   exception to the convention of dpc.h).
- * - Memory: sizeof(dpc_sampler) + D * (8 * spp + 8) + min(D, 64) * 12,288 + N * 4 * spp bytes,
+ * - Memory (n = spp * F points per table): sizeof(dpc_sampler) + D * (8 * n + 8) + min(D, 64) * 12,288 + N * 4 * spp bytes,
  *   screen-ordered nets 4,096 more, plus a 12 KiB mask shared by all samplers.
  */
 #ifndef DPC_DPC_SAMPLER_H
@@ -102,6 +110,12 @@ typedef struct dpc_sampler_options {
      * below DPC_SAMPLER_SCREEN_NETS_BELOW spp, per pixel from there on. Added after `user`: older
      * struct sizes are still accepted, as the default. */
     uint32_t net_layout;
+    /* F: frames of samples_per_pixel samples each that a pixel's samples span (see "Frames"
+     * above): 1 (default; 0 reads as 1) for one image of spp samples; 2 .. DPC_SAMPLER_MAX_SPP /
+     * spp for real-time use, where frame f takes sample indices f * spp .. f * spp + spp - 1.
+     * Needs net_dims 0 or DPC_SAMPLER_NET_DIMS_AUTO (resolved to 0), and spp * F * D <= 2^24.
+     * Added after `net_layout` in its padding: older callers' zeroed structs read as 1. */
+    uint32_t frames;
 } dpc_sampler_options;
 
 #define DPC_SAMPLER_NETS_PER_PIXEL 0u
@@ -148,12 +162,13 @@ typedef struct dpc_sampler_info {
      * are no net slots). Added after `seed`: a struct_size of offsetof(dpc_sampler_info,
      * net_layout) is still accepted and leaves it out. */
     uint32_t net_layout;
+    uint32_t frames; /* F (options.frames, 0 resolved to 1); tables hold spp * F points */
 } dpc_sampler_info;
 
 /* Fill *out_info (its struct_size set by the caller, see above). */
 DPC_API dpc_status dpc_sampler_get_info(const dpc_sampler *sampler, dpc_sampler_info *out_info);
 
-/* The sampler's tables: table t (0 <= t < D) is spp points of 2 floats, row-major (a net slot's
+/* The sampler's tables: table t (0 <= t < D) is spp * F points of 2 floats, row-major (a net slot's
  * table holds its per-pixel net's cell centres, which screen-ordered lookups do not read); *out_table stays valid while the sampler lives. For
  * inspection and for reimplementing lookups elsewhere (e.g. on a GPU) from docs/rendering.md. */
 DPC_API dpc_status dpc_sampler_table(const dpc_sampler *sampler, uint32_t t, const float **out_table);

@@ -18,6 +18,7 @@ void dpc_sampler_options_init(dpc_sampler_options *options) {
     options->fold_from = DPC_SAMPLER_NO_FOLD;
     options->net_dims = DPC_SAMPLER_NET_DIMS_AUTO;
     options->net_layout = DPC_SAMPLER_NETS_AUTO;
+    options->frames = 1;
 }
 
 /* The caller's options in the current layout: older callers pass the struct without `progress`
@@ -72,9 +73,19 @@ static dpc_status check_options(const dpc_sampler_options *o) {
     if (o->dimensions < 1 || o->dimensions > DPC_SAMPLER_MAX_DIMENSIONS)
         return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "options.dimensions is %u, must be 1 .. %u", o->dimensions,
                         DPC_SAMPLER_MAX_DIMENSIONS);
-    if ((uint64_t)o->samples_per_pixel * o->dimensions > MAX_TABLE_POINTS)
-        return dpc_fail(DPC_ERROR_LIMIT, "%u samples per pixel x %u dimensions exceeds 2^24 table points",
-                        o->samples_per_pixel, o->dimensions);
+    const uint32_t frames = o->frames ? o->frames : 1;
+    if ((uint64_t)o->samples_per_pixel * frames > DPC_SAMPLER_MAX_SPP)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
+                        "options.frames is %u: %u samples per pixel x %u frames exceeds DPC_SAMPLER_MAX_SPP (%u)",
+                        o->frames, o->samples_per_pixel, o->frames, DPC_SAMPLER_MAX_SPP);
+    if (frames > 1 && o->net_dims != 0 && o->net_dims != DPC_SAMPLER_NET_DIMS_AUTO)
+        return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
+                        "options.net_dims is %u with options.frames %u: frames hold no net slots (give 0 or "
+                        "DPC_SAMPLER_NET_DIMS_AUTO)",
+                        o->net_dims, o->frames);
+    if ((uint64_t)o->samples_per_pixel * frames * o->dimensions > MAX_TABLE_POINTS)
+        return dpc_fail(DPC_ERROR_LIMIT, "%u samples per pixel x %u frames x %u dimensions exceeds 2^24 table points",
+                        o->samples_per_pixel, frames, o->dimensions);
     return DPC_OK;
 }
 
@@ -129,7 +140,8 @@ dpc_status dpc_sampler_get_info(const dpc_sampler *sampler, dpc_sampler_info *ou
     dpc_sampler_info info;
     memset(&info, 0, sizeof info);
     info.struct_size = size;
-    info.samples_per_pixel = sampler->spp;
+    info.samples_per_pixel = sampler->spp / sampler->frames;
+    info.frames = sampler->frames;
     info.dimensions = sampler->slots;
     info.fold_from = sampler->fold_from;
     info.net_slots = sampler->net_slots;

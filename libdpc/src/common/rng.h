@@ -28,8 +28,10 @@ static inline uint64_t dpc_mix64(uint64_t z) {
 #define DPC_STREAM_SAMPLER_NET 0x243F6A8885A308D3ull
 /* the shuffle of net t's points, dpc_stream_at(net seed, K, i - 1) for point i >= 1; */
 #define DPC_STREAM_NET_SHUFFLE 0xD1342543DE82EF95ull
-/* the Owen-scrambling flips of a net, dpc_stream_at(net seed, K, f) for flip f. */
+/* the Owen-scrambling flips of a net, dpc_stream_at(net seed, K, f) for flip f; */
 #define DPC_STREAM_NET_FLIP DPC_GOLDEN
+/* the scramble of table t's frame order, dpc_child_seed(base, K, t). */
+#define DPC_STREAM_SAMPLER_FRAME_ORDER 0x632BE59BD9B4E019ull
 /* The mask designer's two SplitMix64 generators (mask/mask_design.c), started at seed * K + C:
  * the void-and-cluster start's and the annealer's. */
 #define DPC_STREAM_MASK_START DPC_GOLDEN

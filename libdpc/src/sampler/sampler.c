@@ -33,6 +33,56 @@ static void stratify_projections(float *table, uint32_t n, ranked *scratch) {
     }
 }
 
+/* Frames: a set's points in the order of their cells' Morton codes bit-reversed (a quadtree
+ * walked breadth-first, as van der Corput walks the bits of [0, 1)), cells of a 2^L x 2^L grid
+ * with 4^L >= n, ties by position: the first 2^k points spread over the square like a
+ * stratification, so that the first frames of a pixel are spread too. The code is scrambled
+ * (nested, from the digit the sort reads first) by the table's own seed: with one order for every table,
+ * point k of each lay in the same cells, and their pairs across dimensions integrated products
+ * of half-planes worse than a random pairing (a development measurement). The cells come from
+ * the stratified coordinates' ranks, so the order is integer arithmetic. */
+typedef struct coded {
+    uint64_t key; /* reversed Morton code << 32 | position */
+    uint32_t i;
+} coded;
+
+static int by_key(const void *a, const void *b) {
+    const uint64_t x = ((const coded *)a)->key, y = ((const coded *)b)->key;
+    return (x > y) - (x < y);
+}
+
+static dpc_status order_for_frames(float *table, uint32_t n, uint32_t scramble) {
+    uint32_t L = 0;
+    while ((1ull << (2 * L)) < n) L++;
+    coded *c = (coded *)malloc((size_t)n * sizeof *c);
+    float *copy = (float *)malloc((size_t)n * 2 * sizeof *copy);
+    if (!c || !copy) {
+        free(c);
+        free(copy);
+        return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory ordering a sampler table of %u points", n);
+    }
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t code = 0;
+        for (int a = 0; a < 2; a++) {
+            const uint64_t rank = (uint64_t)(table[(size_t)i * 2 + a] * (float)n); /* (rank + 1/2) / n, exact */
+            const uint32_t cell = (uint32_t)((rank << L) / n);
+            for (uint32_t b = 0; b < L; b++) code |= ((cell >> b) & 1u) << (2 * b + a);
+        }
+        /* nested from bit 0 up: the code's coarsest digit is the reversed code's lowest */
+        const uint32_t reversed = L ? dpc_sampler_reverse32(dpc_sampler_nested(code, scramble)) >> (32 - 2 * L) : 0;
+        c[i] = (coded){(uint64_t)reversed << 32 | i, i};
+    }
+    qsort(c, n, sizeof *c, by_key);
+    memcpy(copy, table, (size_t)n * 2 * sizeof *copy);
+    for (uint32_t r = 0; r < n; r++) {
+        table[(size_t)r * 2] = copy[(size_t)c[r].i * 2];
+        table[(size_t)r * 2 + 1] = copy[(size_t)c[r].i * 2 + 1];
+    }
+    free(c);
+    free(copy);
+    return DPC_OK;
+}
+
 #define SAMPLER_MAX_WORKERS 16u
 
 /* options.progress: one unit per set made, polled inside each set's generation (between the
@@ -77,17 +127,20 @@ static uint64_t sets_to_make(const dpc_sampler_options *o, uint32_t net_slots) {
 }
 
 static dpc_status build(dpc_sampler *s, const dpc_sampler_options *o, build_progress *progress) {
-    const uint32_t n = o->samples_per_pixel, D = o->dimensions;
+    const uint32_t frames = o->frames ? o->frames : 1, n = o->samples_per_pixel * frames, D = o->dimensions;
     uint32_t widest = 0;
     for (uint32_t j = 0; j < o->n_models; j++)
         if (o->models[j]->cascade.dims > widest) widest = o->models[j]->cascade.dims;
     s->spp = n;
+    s->frames = frames;
     s->slots = D;
     s->seed = o->seed;
     s->base = dpc_mix64(o->seed);
     s->inv_spp = 1.0f / (float)n;
     s->fold_from = o->fold_from;
-    s->rotate = o->models[0]->cascade.progressive_base ? 0 : n; /* all progressive or none (api_sampler.c) */
+    /* progressive tables and frames are read in order (all progressive or none: api_sampler.c) */
+    const int progressive = o->models[0]->cascade.progressive_base != 0;
+    s->rotate = progressive || frames > 1 ? 0 : n;
     uint32_t log_n = 0;
     while ((1u << log_n) < n) log_n++;
     /* The default: nets in every slot from DPC_SAMPLER_AUTO_NETS_SPP on, where they beat the
@@ -95,7 +148,8 @@ static dpc_status build(dpc_sampler *s, const dpc_sampler_options *o, build_prog
      * (docs/rendering.md, "Nets in every slot"); progressive samplers keep one (more were not
      * measured in a renderer). */
     uint32_t net_dims = o->net_dims;
-    if (net_dims == DPC_SAMPLER_NET_DIMS_AUTO) net_dims = s->rotate && n >= DPC_SAMPLER_AUTO_NETS_SPP ? D : 1;
+    if (net_dims == DPC_SAMPLER_NET_DIMS_AUTO)
+        net_dims = frames > 1 ? 0 : !progressive && n >= DPC_SAMPLER_AUTO_NETS_SPP ? D : 1;
     s->net_slots = n >= 2 && (1u << log_n) == n ? (net_dims < D ? net_dims : D) : 0;
     s->net_shift = 24 - log_n;
     /* The default: screen-ordered below DPC_SAMPLER_SCREEN_NETS_BELOW, where their errors are blue
@@ -188,6 +242,10 @@ static dpc_status build(dpc_sampler *s, const dpc_sampler_options *o, build_prog
                     table[(size_t)i * 2 + 1] = made[(size_t)i * dims + a + 1];
                 }
                 stratify_projections(table, n, scratch);
+                if (frames > 1 && !progressive &&
+                    (st = order_for_frames(
+                         table, n, (uint32_t)dpc_child_seed(s->base, DPC_STREAM_SAMPLER_FRAME_ORDER, u))) != DPC_OK)
+                    goto done;
             }
         }
         if (progress && dpc_progress_add(progress, job.count) != DPC_OK) goto cancelled;

@@ -60,7 +60,8 @@ struct Table {
 };
 
 inline std::shared_ptr<Table> build(const std::vector<std::string> &models, uint32_t spp, uint32_t dims, uint64_t seed,
-                                    uint32_t fold_from, uint32_t net_dims, uint32_t net_layout, std::string &error) {
+                                    uint32_t fold_from, uint32_t net_dims, uint32_t net_layout, uint32_t frames,
+                                    std::string &error) {
     std::vector<dpc_model *> loaded;
     auto table = std::make_shared<Table>();
     for (const std::string &m : models) {
@@ -84,6 +85,7 @@ inline std::shared_ptr<Table> build(const std::vector<std::string> &models, uint
         o.fold_from = fold_from;
         o.net_dims = net_dims;
         o.net_layout = net_layout;
+        o.frames = frames;
         if (dpc_sampler_create(&o, &table->sampler) != DPC_OK) error = dpc_last_error();
     }
     for (dpc_model *h : loaded) dpc_model_free(h);
@@ -139,6 +141,14 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
         m_net_layout = layout == "screen"  ? DPC_SAMPLER_NETS_SCREEN
                        : layout == "pixel" ? DPC_SAMPLER_NETS_PER_PIXEL
                                            : DPC_SAMPLER_NETS_AUTO;
+        // real-time use: sample_count samples per frame, `frames` frames averaged; this render is
+        // frame `frame` (the same render seed for every frame: the pixels must keep their place)
+        int frames = props.get<int>("frames", 1), frame = props.get<int>("frame", 0);
+        if (frames < 1 || frames > (int)DPC_SAMPLER_MAX_SPP)
+            Throw("property \"frames\" is %d, must be 1 .. %u", frames, DPC_SAMPLER_MAX_SPP);
+        if (frame < 0) Throw("property \"frame\" is %d, must be >= 0", frame);
+        m_frames = (uint32_t)frames;
+        m_frame = (uint32_t)frame;
         m_block_side = (uint32_t)block;
         m_block_pixels = (uint32_t)block * (uint32_t)block;
         rebuild();
@@ -179,7 +189,7 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
         if constexpr (!dr::is_jit_v<Float>) {
             DRJIT_MARK_USED(active);
             float v = 0.f;
-            dpc_sampler_get_1d(m_table->sampler, m_x, m_y, m_sample_index, m_dimension_index++, &v);
+            dpc_sampler_get_1d(m_table->sampler, m_x, m_y, index(), m_dimension_index++, &v);
             return v;
         } else {
             DRJIT_MARK_USED(active);
@@ -191,7 +201,7 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
         if constexpr (!dr::is_jit_v<Float>) {
             DRJIT_MARK_USED(active);
             float v[2] = {0.f, 0.f};
-            dpc_sampler_get_2d(m_table->sampler, m_x, m_y, m_sample_index, m_dimension_index++, v);
+            dpc_sampler_get_2d(m_table->sampler, m_x, m_y, index(), m_dimension_index++, v);
             return Point2f(v[0], v[1]);
         } else {
             DRJIT_MARK_USED(active);
@@ -211,6 +221,7 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
                (m_net_layout == DPC_SAMPLER_NETS_SCREEN      ? std::string("screen")
                 : m_net_layout == DPC_SAMPLER_NETS_PER_PIXEL ? std::string("pixel")
                                                              : std::string("auto")) +
+               ", frames = " + std::to_string(m_frames) + ", frame = " + std::to_string(m_frame) +
                ", seed = " + std::to_string(m_base_seed) + "]";
     }
 
@@ -229,19 +240,24 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
         m_fold_from = other.m_fold_from;
         m_net_dims = other.m_net_dims;
         m_net_layout = other.m_net_layout;
+        m_frames = other.m_frames;
+        m_frame = other.m_frame;
         m_y = other.m_y;
     }
+
+    // the libdpc sample index: this frame's samples (index + frame * sample_count, modulo 2^32)
+    uint32_t index() const { return (uint32_t)m_sample_index + m_frame * m_sample_count; }
 
     void rebuild() {
         std::string error;
         m_table = dpc_plugin::build(m_models, m_sample_count, m_dims, m_base_seed, m_fold_from, m_net_dims,
-                                    m_net_layout, error);
+                                    m_net_layout, m_frames, error);
         if (!m_table) Throw("dpc sampler: %s", error);
     }
 
     std::vector<std::string> m_models;
     uint32_t m_dims = 16, m_block_side = 32, m_block_pixels = 1024, m_fold_from = DPC_SAMPLER_NO_FOLD,
-             m_net_dims = DPC_SAMPLER_NET_DIMS_AUTO, m_net_layout = DPC_SAMPLER_NETS_AUTO;
+             m_net_dims = DPC_SAMPLER_NET_DIMS_AUTO, m_net_layout = DPC_SAMPLER_NETS_AUTO, m_frames = 1, m_frame = 0;
     std::shared_ptr<dpc_plugin::Table> m_table;
     uint32_t m_phase = 0;
     bool m_phase_known = false;
