@@ -582,3 +582,81 @@ TEST(SamplerProgress, CancelStopsAProgressiveRelaxationPromptly) {
     EXPECT_NE(std::string(dpc_last_error()).find("cancelled"), std::string::npos) << dpc_last_error();
     EXPECT_EQ(c.last_done.load(), 0u); // no set finished in 0.3 s
 }
+
+// Frames (options.frames): checked options, the info, and the structure that makes each frame's
+// error blue: tables of spp * F points read in order (no rotation, no nets), every pixel's values
+// its table point shifted by one mask entry for all dimensions (each rotated by its own key), the
+// same shift for every frame of a pass, a new one from frame F on.
+TEST(SamplerFrames, OptionsInfoAndOneShiftPerPixelForEveryDimensionAndFrame) {
+    ModelPtr m = load(model_path("model_2d"));
+    const dpc_model *h = m.get();
+    dpc_sampler_options o;
+    dpc_sampler_options_init(&o);
+    EXPECT_EQ(o.frames, 1u);
+    o.models = &h;
+    o.n_models = 1;
+    o.samples_per_pixel = 1;
+    o.dimensions = 3;
+    o.seed = 17;
+    dpc_sampler *s = nullptr;
+    o.frames = DPC_SAMPLER_MAX_SPP + 1;
+    EXPECT_EQ(dpc_sampler_create(&o, &s), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(dpc_last_error()).find("frames"), std::string::npos) << dpc_last_error();
+    o.frames = 16;
+    o.net_dims = 2;
+    EXPECT_EQ(dpc_sampler_create(&o, &s), DPC_ERROR_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(dpc_last_error()).find("net_dims"), std::string::npos) << dpc_last_error();
+    o.net_dims = DPC_SAMPLER_NET_DIMS_AUTO;
+    o.samples_per_pixel = 256;
+    o.frames = 256;
+    o.dimensions = 300;
+    EXPECT_EQ(dpc_sampler_create(&o, &s), DPC_ERROR_LIMIT);
+    EXPECT_EQ(s, nullptr);
+
+    const uint32_t F = 16, D = 3;
+    o.samples_per_pixel = 1;
+    o.frames = F;
+    o.dimensions = D;
+    ASSERT_EQ(dpc_sampler_create(&o, &s), DPC_OK) << dpc_last_error();
+    SamplerPtr frames(s);
+    dpc_sampler_info info;
+    info.struct_size = sizeof info;
+    ASSERT_EQ(dpc_sampler_get_info(s, &info), DPC_OK);
+    EXPECT_EQ(info.samples_per_pixel, 1u);
+    EXPECT_EQ(info.frames, F);
+    EXPECT_EQ(info.net_slots, 0u);
+    // frames 0 reads as 1 (an older caller's zeroed field): the bits of frames = 1
+    o.frames = 0;
+    ASSERT_EQ(dpc_sampler_create(&o, &s), DPC_OK) << dpc_last_error();
+    SamplerPtr zero(s);
+    o.frames = 1;
+    ASSERT_EQ(dpc_sampler_create(&o, &s), DPC_OK) << dpc_last_error();
+    SamplerPtr one(s);
+    EXPECT_EQ(table_of(zero.get(), 1, 1), table_of(one.get(), 1, 1));
+
+    std::vector<std::vector<float>> tables;
+    for (uint32_t d = 0; d < D; d++) tables.push_back(table_of(frames.get(), d, F));
+    auto shift = [&](uint32_t x, uint32_t y, uint32_t index, uint32_t d, int c) {
+        float v[2];
+        EXPECT_EQ(dpc_sampler_get_2d(frames.get(), x, y, index, d, v), DPC_OK);
+        const double r = (double)v[c] - tables[d][(index % F) * 2 + c];
+        return r - std::floor(r);
+    };
+    auto same = [](double a, double b) { // equal on the torus, up to float rounding
+        const double e = std::fabs(a - b);
+        return std::min(e, 1.0 - e) < 1e-6;
+    };
+    for (uint32_t y = 0; y < 32; y += 5)
+        for (uint32_t x = 0; x < 32; x += 3)
+            for (int c = 0; c < 2; c++) {
+                const double s0 = shift(x, y, 0, 0, c);
+                for (uint32_t f = 1; f < F; f++) EXPECT_TRUE(same(shift(x, y, f, 0, c), s0)) << x << " " << y << " " << f;
+                // dimension 1's shift is dimension 0's plus its own rotation, the same at every pixel
+                const double k1 = shift(0, 0, 0, 1, c) - shift(0, 0, 0, 0, c);
+                EXPECT_TRUE(same(shift(x, y, 3, 1, c) - s0, k1)) << x << " " << y;
+            }
+    // frame F starts a new pass: a new shift
+    int moved = 0;
+    for (uint32_t x = 0; x < 32; x++) moved += !same(shift(x, 0, F, 0, 0), shift(x, 0, 0, 0, 0));
+    EXPECT_GT(moved, 28);
+}
