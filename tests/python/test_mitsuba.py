@@ -94,6 +94,20 @@ def test_values_are_those_of_dpc_sampler():
                 fork.advance()
 
 
+def test_frame_property_reads_that_frames_samples():
+    """frames / frame: the render's sample i is libdpc's index frame * sample_count + i of a
+    sampler with that many frames (dpc.Sampler's frame argument)."""
+    ref = dpc.Sampler("bnot-2d-stratified", samples_per_pixel=2, dimensions=2, seed=3, frames=8)
+    for frame in (0, 5, 9):  # 9: past the frames, a new pass
+        fork = mi.load_dict({"type": "dpc", "sample_count": 2, "seed": 3, "dimensions": 2, "frames": 8, "frame": frame})
+        fork = fork.fork()
+        fork.seed(0)
+        for i in range(2):
+            assert np.array_equal(np.array(fork.next_2d()), ref.get_2d(0, 0, i, 0, frame=frame))
+            assert np.float32(fork.next_1d()) == ref.get_1d(0, 0, i, 1, frame=frame)
+            fork.advance()
+
+
 def _plane_under_sky(sampler: dict, width: int = 64) -> object:
     """A diffuse plane filling the view under a sky with one bright quarter, at infinity: every
     pixel integrates the same function of its light sample."""
@@ -164,6 +178,9 @@ def test_bad_properties_say_what_is_wrong():
         ({"net_dims": -2}, "net_dims"),
         ({"net_layout": "diagonal"}, "net_layout"),
         ({"sample_count": 0}, "samples_per_pixel"),
+        ({"frames": 0}, "frames"),
+        ({"frame": -1}, "frame"),
+        ({"frames": 4, "net_dims": 2}, "net_dims"),
     ]:
         with pytest.raises(Exception, match=says):
             mi.load_dict({"type": "dpc", **props})

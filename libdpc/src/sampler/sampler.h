@@ -326,7 +326,7 @@ static inline dpc_sampler_point dpc_sampler_locate(const struct dpc_sampler *s, 
 /* The key whose tile offsets fast slot dim's lookups (pass 0) read the mask at: its own, or with
  * frames dimension 0's for every dimension. One frame's values are then the same mask entry in
  * every dimension, each rotated by its own key, and the error of an integrand over several
- * dimension pairs stays blue (4-D products of half-planes: E_low 0.43 against 0.54 with offsets
+ * dimension pairs stays blue (4-D products of half-planes: E_low 0.35 against 0.50 with offsets
  * per dimension, lab/rendering/frames_study.py); over seeds the rotations alone keep each
  * pixel's values uniform and independent across dimensions. */
 static inline uint64_t dpc_sampler_tile_key(const struct dpc_sampler *s, uint32_t dim) {
