@@ -650,7 +650,8 @@ TEST(SamplerFrames, OptionsInfoAndOneShiftPerPixelForEveryDimensionAndFrame) {
         for (uint32_t x = 0; x < 32; x += 3)
             for (int c = 0; c < 2; c++) {
                 const double s0 = shift(x, y, 0, 0, c);
-                for (uint32_t f = 1; f < F; f++) EXPECT_TRUE(same(shift(x, y, f, 0, c), s0)) << x << " " << y << " " << f;
+                for (uint32_t f = 1; f < F; f++)
+                    EXPECT_TRUE(same(shift(x, y, f, 0, c), s0)) << x << " " << y << " " << f;
                 // dimension 1's shift is dimension 0's plus its own rotation, the same at every pixel
                 const double k1 = shift(0, 0, 0, 1, c) - shift(0, 0, 0, 0, c);
                 EXPECT_TRUE(same(shift(x, y, 3, 1, c) - s0, k1)) << x << " " << y;
