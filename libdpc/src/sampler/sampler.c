@@ -181,7 +181,10 @@ static dpc_status build(dpc_sampler *s, const dpc_sampler_options *o, build_prog
         goto done;
     }
     for (uint32_t d = 0; d < D; d++) s->keys[d] = dpc_sampler_key(s->base, d, 0);
-    for (uint32_t d = 0; d < s->fast_slots; d++) s->fast_key[d] = s->keys[d];
+    for (uint32_t d = 0; d < s->fast_slots; d++) {
+        s->fast_key[d] = s->keys[d];
+        s->tile_key[d] = s->keys[frames > 1 ? 0 : d]; /* frames: dimension 0's offsets for all */
+    }
     if (s->net_layout) {
         uint32_t v[32];
         v[0] = 1u << 31;

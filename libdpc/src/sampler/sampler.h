@@ -61,6 +61,9 @@ struct dpc_sampler {
     /* keys[d] for d < fast_slots, inside the object: one dependent load less on the lookups'
      * critical path (key -> hash -> point -> table read) */
     uint64_t fast_key[DPC_SAMPLER_FAST_SLOTS];
+    /* the key whose tile offsets a set slot's lookups read (dpc_sampler_tile_key), one load as
+     * fast_key's: no frames test on the common path */
+    uint64_t tile_key[DPC_SAMPLER_FAST_SLOTS];
 };
 
 /* Key of (dimension d, pass r): everything a lookup derives for that dimension and block of
@@ -329,9 +332,7 @@ static inline dpc_sampler_point dpc_sampler_locate(const struct dpc_sampler *s, 
  * dimension pairs stays blue (4-D products of half-planes: E_low 0.35 against 0.50 with offsets
  * per dimension, lab/rendering/frames_study.py); over seeds the rotations alone keep each
  * pixel's values uniform and independent across dimensions. */
-static inline uint64_t dpc_sampler_tile_key(const struct dpc_sampler *s, uint32_t dim) {
-    return s->fast_key[s->frames > 1 ? 0 : dim];
-}
+static inline uint64_t dpc_sampler_tile_key(const struct dpc_sampler *s, uint32_t dim) { return s->tile_key[dim]; }
 
 /* Entry at of the rotated mask of fast slot dim (pass 0). */
 static inline const float *dpc_sampler_shifted_at(const struct dpc_sampler *s, uint32_t dim, uint32_t at) {
