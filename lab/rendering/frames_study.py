@@ -16,8 +16,9 @@ as good as one render of F samples per pixel. Three ways to use the sampler, F =
   dimension but the film position), which makes smooth integrands periodic over the shifts.
 Part 1, synthetic (no renderer): bench_rendering's measure E_low (|nu| <= 1/8, a quarter of
 Nyquist; white = 1) of each frame's error on a 64 x 64 screen and the 16-frame average's
-per-pixel MSE, on a toroidal half-plane and a Gaussian lobe in one dimension pair and products of
-half-planes in two (the family of the sampler's frame goal; tests/python/test_sampler.py checks
+per-pixel MSE, and for progressive use the same of the first k = 1, 2, 4, 8, 16 samples, on
+a toroidal half-plane and a Gaussian lobe in one dimension pair and products of half-planes in
+two (the family of the sampler's frame goal; tests/python/test_sampler.py checks
 the same), 24 seeds.
 Part 2, Mitsuba 3: bench_rendering's five scenes at 128 x 128 against its cached references (run
 `python -m lab.rendering.bench_rendering` first), 4 seeds: per-frame E_low of the luminance error
@@ -50,12 +51,37 @@ def half_plane(rng: np.random.Generator, p: np.ndarray) -> np.ndarray:
     return (np.cos(a) * d[..., 0] + np.sin(a) * d[..., 1] > 0).astype(float)
 
 
-def synthetic(seeds: int, width: int = 64) -> dict:
-    """{(way, integrand): (per-frame E_low, 16-frame MSE)}, means over seeds."""
+PREFIXES = (1, 2, 4, 8, 16)
+
+
+def family(seed: int, v1: np.ndarray, v2: np.ndarray) -> dict:
+    """The synthetic integrands of seed on two dimensions' values: {name: (values, integral)}."""
+    rng = np.random.default_rng(seed)
+    c, w = rng.random(2), 0.15
+    d = v1 - c
+    d -= np.rint(d)
+    return {
+        "half-plane (2-D)": (half_plane(rng, v1), 0.5),
+        "Gaussian lobe (2-D)": (np.exp(-(d**2).sum(-1) / (2 * w * w)), 2 * np.pi * w * w),
+        "product of half-planes (4-D)": (half_plane(rng, v1) * half_plane(rng, v2), 0.25),
+    }
+
+
+def synthetic(seeds: int, width: int = 64) -> tuple[dict, dict]:
+    """{(way, integrand): (per-frame E_low, 16-frame MSE)} and, for progressive use,
+    {(way, integrand, k): (E_low, MSE) of the average of a pixel's first k samples} with way
+    "k spp" a sampler of k samples per pixel; means over seeds."""
     ys, xs = np.mgrid[0:width, 0:width]
     frame = np.arange(F)[:, None, None]
     acc: dict = {}
+    pre: dict = {}
     for seed in range(seeds):
+        for k in PREFIXES:
+            s = dpc.Sampler(samples_per_pixel=k, dimensions=3, seed=seed)
+            v1, v2 = (s.get_2d(x=xs, y=ys, dimension=d, index=np.arange(k)[:, None, None]) for d in (1, 2))
+            for name, (f, exact) in family(seed, v1.astype(np.float64), v2.astype(np.float64)).items():
+                e = f.mean(0) - exact
+                pre.setdefault(("k spp", name, k), []).append((br.low_band_energy(e, br.ISSUE_BAND), (e**2).mean()))
         samplers = {
             "frames": (dpc.Sampler(samples_per_pixel=1, dimensions=3, seed=seed, frames=F), dict(index=0, frame=frame)),
             "passes": (dpc.Sampler(samples_per_pixel=1, dimensions=3, seed=seed), dict(index=frame)),
@@ -63,19 +89,14 @@ def synthetic(seeds: int, width: int = 64) -> dict:
         }
         for way, (s, kw) in samplers.items():
             v1, v2 = (s.get_2d(x=xs, y=ys, dimension=d, **kw).astype(np.float64) for d in (1, 2))
-            rng = np.random.default_rng(seed)
-            c, w = rng.random(2), 0.15
-            d = v1 - c
-            d -= np.rint(d)
-            family = {
-                "half-plane (2-D)": (half_plane(rng, v1), 0.5),
-                "Gaussian lobe (2-D)": (np.exp(-(d**2).sum(-1) / (2 * w * w)), 2 * np.pi * w * w),
-                "product of half-planes (4-D)": (half_plane(rng, v1) * half_plane(rng, v2), 0.25),
-            }
-            for name, (f, exact) in family.items():
+            for name, (f, exact) in family(seed, v1, v2).items():
                 el = np.mean([br.low_band_energy(e - exact, br.ISSUE_BAND) for e in f])
                 acc.setdefault((way, name), []).append((el, ((f.mean(0) - exact) ** 2).mean()))
-    return {k: tuple(np.mean(v, axis=0)) for k, v in acc.items()}
+                for k in PREFIXES if way != "passes" else ():
+                    e = f[:k].mean(0) - exact
+                    pre.setdefault((way, name, k), []).append((br.low_band_energy(e, br.ISSUE_BAND), (e**2).mean()))
+    mean = lambda d: {k: tuple(np.mean(v, axis=0)) for k, v in d.items()}  # noqa: E731
+    return mean(acc), mean(pre)
 
 
 def scene_rows(job) -> dict:
@@ -109,7 +130,7 @@ def main() -> None:
     ap.add_argument("--width", type=int, default=128)
     ap.add_argument("--jobs", type=int, default=2)
     args = ap.parse_args()
-    syn = synthetic(args.synthetic_seeds)
+    syn, pre = synthetic(args.synthetic_seeds)
     scenes = list(br.SCENES)
     with ProcessPoolExecutor(args.jobs) as ex:
         rows = dict(zip(scenes, ex.map(scene_rows, [(s, args.seeds, args.width) for s in scenes])))
@@ -132,6 +153,24 @@ def main() -> None:
             + " | ".join(el)
             + f" | {syn[('frames', n)][1] / base:.2f} | {syn[('passes', n)][1] / base:.2f} |"
         )
+    L += [
+        "",
+        "Progressive use (synthetic, the same seeds): a renderer that stops after the first k of a pixel's 16 "
+        "samples. E_low of the average of the first k, and its MSE over that of a sampler made for k samples "
+        "per pixel ('k spp', the default options, whose rows give its own E_low):",
+        "",
+        "| integrand | way | "
+        + " | ".join(f"E_low {k}" for k in PREFIXES)
+        + " | "
+        + " | ".join(f"MSE {k} / k spp" for k in PREFIXES)
+        + " |",
+        "|---|---|" + "---:|" * (2 * len(PREFIXES)),
+    ]
+    for n in names:
+        for way in ("frames", "16 spp", "k spp"):
+            el = [f"{pre[(way, n, k)][0]:.2f}" for k in PREFIXES]
+            ms = [f"{pre[(way, n, k)][1] / pre[('k spp', n, k)][1]:.2f}" for k in PREFIXES]
+            L.append(f"| {n} | {way} | " + " | ".join(el + ms) + " |")
     L += [
         "",
         f"Mitsuba 3 (bench_rendering's scenes, {args.width} x {args.width} pixels, {args.seeds} seeds; "
