@@ -64,7 +64,8 @@ def test_loads_from_xml_with_every_property():
     assert sampler.sample_count() == 8
     assert "bnot-2d-stratified,bnot-4d" in str(sampler) and "fold_from = none" in str(sampler)
     assert "net_dims = 2" in str(sampler) and "net_layout = pixel" in str(sampler)
-    assert "net_dims = auto" in str(mi.load_dict({"type": "dpc"}))
+    assert "net_dims = default" in str(mi.load_dict({"type": "dpc"}))  # 2, or libdpc's for progressive models
+    assert "net_dims = auto" in str(mi.load_dict({"type": "dpc", "net_dims": -1}))
     assert "net_layout = auto" in str(mi.load_dict({"type": "dpc"}))
     img = np.array(mi.render(scene))
     assert img.shape == (16, 16, 3) and np.all(np.isfinite(img))
@@ -77,7 +78,8 @@ def test_values_are_those_of_dpc_sampler():
     (32 (b & 0xFFFF) + x, 32 (b >> 16) + y), and in a later block (b + 1024) the same place
     gives other values."""
     plugin = mi.load_dict({"type": "dpc", "sample_count": 4, "seed": 9, "dimensions": 3})
-    ref = dpc.Sampler("bnot-2d-stratified", samples_per_pixel=4, dimensions=3, seed=9)  # neither folds
+    # neither folds; the plugin's net_dims when not given is 2
+    ref = dpc.Sampler("bnot-2d-stratified", samples_per_pixel=4, dimensions=3, seed=9, net_dims=2)
     fork = plugin.fork()
     # a fork's first seed starts a block, whatever the render seed; the second block has
     # nonzero high bits, so both halves of the block's name are used
