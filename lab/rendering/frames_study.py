@@ -1,7 +1,7 @@
 """The sampler's frames (real-time use: 1 sample per pixel per frame, frames averaged), measured
 on the synthetic integrand family and in Mitsuba 3.
 
-    python -m lab.rendering.frames_study          # about 10 minutes on 2 cores
+    python -m lab.rendering.frames_study         # under a minute on 2 cores
 
 A renderer that takes one sample per pixel per frame wants each frame's error blue in screen
 space (what a viewer sees, and what a temporal filter smooths best) and the average of F frames

@@ -1,7 +1,7 @@
 """Which of the sampler's dimension slots should hold nets, per integrand: the Mitsuba bench's
 scenes rendered with the first `net_dims` slots as nets and the rest as dpc's shifted sets.
 
-    python -m lab.rendering.slots_study          # about 10 minutes on 2 cores
+    python -m lab.rendering.slots_study          # about a minute on 2 cores
 
 libdpc's default puts a net in every slot at power-of-two counts (docs/rendering.md, "Net
 dimensions"); the Mitsuba plugin's, from this study, in slots 0 and 1. Mitsuba's integrators
