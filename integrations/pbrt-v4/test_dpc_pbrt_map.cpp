@@ -264,11 +264,22 @@ TEST(PbrtMap, OptionsReachTheSampler) {
     EXPECT_EQ(info.net_slots, 0u);
     EXPECT_EQ(info.seed, 42u);
     EXPECT_EQ(info.net_layout, DPC_SAMPLER_NETS_PER_PIXEL); // no net slots
-    // the defaults: nothing folded, every slot a screen-ordered net at 16 spp
+    // the defaults: nothing folded, slots 0 .. NET_DIMS_PBRT - 1 screen-ordered nets at 16 spp
     SharedSampler d = make_default(16);
     ASSERT_EQ(dpc_sampler_get_info(d.get(), &info), DPC_OK);
     EXPECT_EQ(info.fold_from, DPC_SAMPLER_NO_FOLD);
+    EXPECT_EQ(info.net_slots, (uint32_t)dpc_pbrt::NET_DIMS_PBRT);
+    Config every; // -1: libdpc's default, every slot
+    every.net_dims = -1;
+    SharedSampler e = make(every);
+    ASSERT_EQ(dpc_sampler_get_info(e.get(), &info), DPC_OK);
     EXPECT_EQ(info.net_slots, 16u);
+    Config progressive; // progressive models keep libdpc's default: one net slot
+    progressive.model = "progressive-2d";
+    SharedSampler g = make(progressive);
+    ASSERT_TRUE(g);
+    ASSERT_EQ(dpc_sampler_get_info(g.get(), &info), DPC_OK);
+    EXPECT_EQ(info.net_slots, 1u);
     EXPECT_EQ(info.net_layout, DPC_SAMPLER_NETS_SCREEN);
     EXPECT_EQ(info.dimensions, 16u);
     c.net_dims = 2;

@@ -65,9 +65,9 @@ SharedSampler make_sampler(const Config &config, std::string &error) {
         error = "\"integer fold_from\" is " + std::to_string(config.fold_from) + ": a slot (>= 0), or -1 to fold none";
         return nullptr;
     }
-    if (config.net_dims < -1) {
+    if (config.net_dims < -2) {
         error = "\"integer net_dims\" is " + std::to_string(config.net_dims) +
-                ": a slot count (>= 0), or -1 for libdpc's default";
+                ": a slot count (>= 0), -1 for libdpc's default or -2 for the integration's";
         return nullptr;
     }
     if (config.net_layout != "auto" && config.net_layout != "pixel" && config.net_layout != "screen") {
@@ -107,7 +107,11 @@ SharedSampler make_sampler(const Config &config, std::string &error) {
         o.samples_per_pixel = (uint32_t)config.samples_per_pixel;
         o.dimensions = (uint32_t)config.dimensions;
         o.fold_from = config.fold_from < 0 ? DPC_SAMPLER_NO_FOLD : (uint32_t)config.fold_from;
-        o.net_dims = config.net_dims < 0 ? DPC_SAMPLER_NET_DIMS_AUTO : (uint32_t)config.net_dims;
+        const char *order = dpc_model_metadata(handles[0], "dpc.order");
+        const bool progressive = order && std::string(order) == "progressive";
+        o.net_dims = config.net_dims == -2 && !progressive ? (uint32_t)NET_DIMS_PBRT
+                     : config.net_dims < 0                 ? DPC_SAMPLER_NET_DIMS_AUTO
+                                                           : (uint32_t)config.net_dims;
         o.seed = (uint64_t)config.seed;
         o.net_layout = config.net_layout == "screen"  ? DPC_SAMPLER_NETS_SCREEN
                        : config.net_layout == "pixel" ? DPC_SAMPLER_NETS_PER_PIXEL

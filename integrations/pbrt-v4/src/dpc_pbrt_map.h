@@ -34,8 +34,10 @@ struct Config {
     int samples_per_pixel = 16; // "integer pixelsamples" (pbrt's --spp overrides it)
     int dimensions = 16;        // "integer dimensions": the tables D; slots d >= D reuse table d mod D
     int fold_from = -1;         // "integer fold_from": first folded slot; -1 (default) folds none
-    int net_dims = -1;          // "integer net_dims": slots that are (0,m,2)-nets; -1: libdpc's default
-    int64_t seed = 0;           // "integer seed" (pbrt's --seed is the default)
+    // "integer net_dims": slots that are (0,m,2)-nets. -2, the default: NET_DIMS_PBRT for set
+    // models, libdpc's default for progressive ones; -1: libdpc's default (every slot).
+    int net_dims = -2;
+    int64_t seed = 0; // "integer seed" (pbrt's --seed is the default)
     // "string net_layout": "auto" (libdpc's default), "screen" (one Sobol' sequence per 32 x 32
     // tile, pixels in a randomised Morton order) or "pixel" (nets digitally shifted per pixel)
     std::string net_layout = "auto";
@@ -43,6 +45,11 @@ struct Config {
     // not depend on it.
     uint32_t threads = 1;
 };
+
+// net_dims by default: nets in slots 0-5, pbrt's film position, wavelength, time, lens, light
+// choice and light position, and dpc's sets from the BSDF samples on (the Mitsuba plugin's rule,
+// nets up to the first light sample, in pbrt's numbering: reports/pbrt.md's diagnostics).
+constexpr int NET_DIMS_PBRT = 6;
 
 // The immutable libdpc sampler, shared by a pbrt sampler and all its clones; freed with the last.
 using SharedSampler = std::shared_ptr<const dpc_sampler>;
