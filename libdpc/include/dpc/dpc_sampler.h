@@ -54,7 +54,7 @@
  *   on any number of threads. It does not keep the models: they may be freed after
  *   dpc_sampler_create. Lookups leave the thread's error message alone unless they fail (the one
  *   exception to the convention of dpc.h).
- * - Memory (n = spp * F points per table): sizeof(dpc_sampler) + D * (8 * n + 8) + min(D, 64) * 12,288 + N * 4 * spp bytes,
+ * - Memory (n = spp * F points per table): sizeof(dpc_sampler) + D * (8 * n + 8) + min(D, 64) * 12,288 + N * 4 * n bytes,
  *   screen-ordered nets 4,096 more, plus a 12 KiB mask shared by all samplers.
  */
 #ifndef DPC_DPC_SAMPLER_H

@@ -37,6 +37,7 @@ static dpc_status read_options(const dpc_sampler_options *options, dpc_sampler_o
                         "options.struct_size is %u, expected %u: initialise with dpc_sampler_options_init",
                         options->struct_size, (unsigned)sizeof *o);
     }
+    if (o->frames == 0) o->frames = 1; /* an older caller's zeroed padding */
     return DPC_OK;
 }
 
@@ -73,7 +74,7 @@ static dpc_status check_options(const dpc_sampler_options *o) {
     if (o->dimensions < 1 || o->dimensions > DPC_SAMPLER_MAX_DIMENSIONS)
         return dpc_fail(DPC_ERROR_INVALID_ARGUMENT, "options.dimensions is %u, must be 1 .. %u", o->dimensions,
                         DPC_SAMPLER_MAX_DIMENSIONS);
-    const uint32_t frames = o->frames ? o->frames : 1;
+    const uint32_t frames = o->frames; /* at least 1 (read_options) */
     if ((uint64_t)o->samples_per_pixel * frames > DPC_SAMPLER_MAX_SPP)
         return dpc_fail(DPC_ERROR_INVALID_ARGUMENT,
                         "options.frames is %u: %u samples per pixel x %u frames exceeds DPC_SAMPLER_MAX_SPP (%u)",

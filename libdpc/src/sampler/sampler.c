@@ -41,23 +41,18 @@ static void stratify_projections(float *table, uint32_t n, ranked *scratch) {
  * point k of each lay in the same cells, and their pairs across dimensions integrated products
  * of half-planes worse than a random pairing (a development measurement). The cells come from
  * the stratified coordinates' ranks, so the order is integer arithmetic. */
-typedef struct coded {
-    uint64_t key; /* reversed Morton code << 32 | position */
-    uint32_t i;
-} coded;
-
 static int by_key(const void *a, const void *b) {
-    const uint64_t x = ((const coded *)a)->key, y = ((const coded *)b)->key;
+    const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
     return (x > y) - (x < y);
 }
 
 static dpc_status order_for_frames(float *table, uint32_t n, uint32_t scramble) {
     uint32_t L = 0;
     while ((1ull << (2 * L)) < n) L++;
-    coded *c = (coded *)malloc((size_t)n * sizeof *c);
+    uint64_t *key = (uint64_t *)malloc((size_t)n * sizeof *key); /* reversed code << 32 | position */
     float *copy = (float *)malloc((size_t)n * 2 * sizeof *copy);
-    if (!c || !copy) {
-        free(c);
+    if (!key || !copy) {
+        free(key);
         free(copy);
         return dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory ordering a sampler table of %u points", n);
     }
@@ -70,15 +65,16 @@ static dpc_status order_for_frames(float *table, uint32_t n, uint32_t scramble) 
         }
         /* nested from bit 0 up: the code's coarsest digit is the reversed code's lowest */
         const uint32_t reversed = L ? dpc_sampler_reverse32(dpc_sampler_nested(code, scramble)) >> (32 - 2 * L) : 0;
-        c[i] = (coded){(uint64_t)reversed << 32 | i, i};
+        key[i] = (uint64_t)reversed << 32 | i;
     }
-    qsort(c, n, sizeof *c, by_key);
+    qsort(key, n, sizeof *key, by_key);
     memcpy(copy, table, (size_t)n * 2 * sizeof *copy);
     for (uint32_t r = 0; r < n; r++) {
-        table[(size_t)r * 2] = copy[(size_t)c[r].i * 2];
-        table[(size_t)r * 2 + 1] = copy[(size_t)c[r].i * 2 + 1];
+        const uint32_t i = (uint32_t)key[r];
+        table[(size_t)r * 2] = copy[(size_t)i * 2];
+        table[(size_t)r * 2 + 1] = copy[(size_t)i * 2 + 1];
     }
-    free(c);
+    free(key);
     free(copy);
     return DPC_OK;
 }
@@ -127,7 +123,7 @@ static uint64_t sets_to_make(const dpc_sampler_options *o, uint32_t net_slots) {
 }
 
 static dpc_status build(dpc_sampler *s, const dpc_sampler_options *o, build_progress *progress) {
-    const uint32_t frames = o->frames ? o->frames : 1, n = o->samples_per_pixel * frames, D = o->dimensions;
+    const uint32_t frames = o->frames, n = o->samples_per_pixel * frames, D = o->dimensions;
     uint32_t widest = 0;
     for (uint32_t j = 0; j < o->n_models; j++)
         if (o->models[j]->cascade.dims > widest) widest = o->models[j]->cascade.dims;

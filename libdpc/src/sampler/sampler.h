@@ -61,8 +61,13 @@ struct dpc_sampler {
     /* keys[d] for d < fast_slots, inside the object: one dependent load less on the lookups'
      * critical path (key -> hash -> point -> table read) */
     uint64_t fast_key[DPC_SAMPLER_FAST_SLOTS];
-    /* the key whose tile offsets a set slot's lookups read (dpc_sampler_tile_key), one load as
-     * fast_key's: no frames test on the common path */
+    /* The key whose tile offsets fast slot d's set lookups (pass 0) read the mask at: keys[d], or
+     * with frames keys[0] for every dimension, so that one frame's values are the same mask entry
+     * in every dimension, each rotated by its own key, and the error of an integrand over several
+     * dimension pairs stays blue (4-D products of half-planes: E_low 0.35 against 0.50 with offsets
+     * per dimension, lab/rendering/frames_study.py); over seeds the rotations alone keep each
+     * pixel's values uniform and independent across dimensions. Precomputed, so that the common
+     * path tests nothing for frames. */
     uint64_t tile_key[DPC_SAMPLER_FAST_SLOTS];
 };
 
@@ -309,9 +314,8 @@ static inline dpc_sampler_point dpc_sampler_locate(const struct dpc_sampler *s, 
         rot = dpc_sampler_rotation(p.h, s->rotate);
         p.mask[0] = p.mask[1] = p.mask[2] = p.c[0] = p.c[1] = 0.0f;
     } else {
-        /* frames: every dimension's mask at the offsets of dimension 0's key (see
-         * dpc_sampler_tile_key) */
-        const uint64_t tile_key = s->frames > 1 ? (pass == 0 ? s->keys[0] : dpc_sampler_key(s->base, 0, pass)) : key;
+        /* frames: every dimension's mask at the offsets of dimension 0's key (see tile_key) */
+        const uint64_t tile_key = s->frames > 1 ? dpc_sampler_key(s->base, 0, pass) : key;
         const dpc_sampler_tiled tiled = dpc_sampler_tile(tile_key, s->rotate, x, y);
         const float *m = dpc_sampler_mask_data + (size_t)tiled.at * DPC_SAMPLER_MASK_CHANNELS;
         p.h = 0;
@@ -325,14 +329,6 @@ static inline dpc_sampler_point dpc_sampler_locate(const struct dpc_sampler *s, 
     p.j = dpc_sampler_rotated(n, k, rot);
     return p;
 }
-
-/* The key whose tile offsets fast slot dim's lookups (pass 0) read the mask at: its own, or with
- * frames dimension 0's for every dimension. One frame's values are then the same mask entry in
- * every dimension, each rotated by its own key, and the error of an integrand over several
- * dimension pairs stays blue (4-D products of half-planes: E_low 0.35 against 0.50 with offsets
- * per dimension, lab/rendering/frames_study.py); over seeds the rotations alone keep each
- * pixel's values uniform and independent across dimensions. */
-static inline uint64_t dpc_sampler_tile_key(const struct dpc_sampler *s, uint32_t dim) { return s->tile_key[dim]; }
 
 /* Entry at of the rotated mask of fast slot dim (pass 0). */
 static inline const float *dpc_sampler_shifted_at(const struct dpc_sampler *s, uint32_t dim, uint32_t at) {
@@ -365,7 +361,7 @@ static inline dpc_status dpc_sampler_lookup_2d(const struct dpc_sampler *s, uint
         return DPC_OK;
     }
     /* the common case: one hash, two reads */
-    const dpc_sampler_tiled tiled = dpc_sampler_tile(dpc_sampler_tile_key(s, dim), s->rotate, x, y);
+    const dpc_sampler_tiled tiled = dpc_sampler_tile(s->tile_key[dim], s->rotate, x, y);
     const float *m = dpc_sampler_shifted_at(s, dim, tiled.at);
     const float *t = s->tables + ((size_t)dim * s->spp + dpc_sampler_rotated(s->spp, index, tiled.rot)) * 2;
     out[0] = dpc_sampler_out(s, dim, dpc_sampler_wrap(t[0], m[0]));
@@ -392,7 +388,7 @@ static inline dpc_status dpc_sampler_lookup_1d(const struct dpc_sampler *s, uint
                                                uint32_t dim, float *out) {
     if (index >= s->spp || dim >= s->fast_slots || dim < s->net_slots)
         return dpc_sampler_lookup_1d_general(s, x, y, index, dim, out);
-    const dpc_sampler_tiled tiled = dpc_sampler_tile(dpc_sampler_tile_key(s, dim), s->rotate, x, y);
+    const dpc_sampler_tiled tiled = dpc_sampler_tile(s->tile_key[dim], s->rotate, x, y);
     const uint32_t j = dpc_sampler_rotated(s->spp, index, tiled.rot);
     *out = dpc_sampler_out(
         s, dim,
