@@ -204,6 +204,21 @@ TEST(SamplerDeterminism, ModelsMayBeFreedAfterCreate) {
 
 // The shift of pixel (x, y) in dimension d: value - table point, for the table point that
 // sample 0 reads (found as the j that makes every sample a shifted table point).
+// Hero-wavelength sampling (pbrt-v4, Mitsuba 3) reads a 1-D value v at v + i/4, i = 0..3: a
+// pixel's n values, so shifted, lie 1/(4n) apart all around the circle (the 4n strata of a shifted
+// lattice, one each).
+static bool fills_hero_strata(const std::vector<float> &one, uint32_t n) {
+    std::vector<double> all;
+    for (float v : one)
+        for (int i = 0; i < 4; i++) all.push_back(std::fmod((double)v + 0.25 * i, 1.0));
+    std::sort(all.begin(), all.end());
+    for (size_t i = 0; i < all.size(); i++) {
+        const double gap = (i + 1 < all.size() ? all[i + 1] : all[0] + 1.0) - all[i];
+        if (std::fabs(gap - 0.25 / n) > 2e-6) return false;
+    }
+    return true;
+}
+
 static bool shift_of(const dpc_sampler *s, const std::vector<float> &tab, uint32_t n, uint32_t x, uint32_t y,
                      uint32_t d, double out[2]) {
     float first[2];
@@ -246,8 +261,7 @@ TEST(SamplerStructure, EachPixelGetsItsTableShiftedAndALattice) {
                 dpc_sampler_get_1d(s.get(), x, y, i, d, &w);
                 one.push_back(w);
             }
-            std::sort(one.begin(), one.end());
-            for (uint32_t i = 1; i < n; i++) EXPECT_NEAR(one[i] - one[i - 1], 1.0 / n, 1e-6);
+            EXPECT_TRUE(fills_hero_strata(one, n)) << "pixel (" << x << ", " << y << ") dimension " << d;
         }
     }
 }
@@ -300,7 +314,8 @@ bool is_net(const std::vector<float> &pts, uint32_t m) {
 }
 
 // Net slots (net_dims): every pixel's samples of every pass are a (0,m,2)-net, also through
-// dimensions past D that reuse a net slot; get_1d is get_2d's x; the table shows the cells'
+// dimensions past D that reuse a net slot; get_1d is in get_2d's x's stratum, and the pixel's
+// values fill the hero-wavelength strata; the table shows the cells'
 // centres; other slots keep the shifted set (the same table as with net_dims = 0).
 TEST(SamplerStructure, NetSlotsGiveEachPixelANet) {
     ModelPtr m = load(model_path("model_2d"));
@@ -314,16 +329,18 @@ TEST(SamplerStructure, NetSlotsGiveEachPixelANet) {
         for (uint32_t d : {0u, 1u, 3u, 4u, 70u}) // 3, 4, 70 reuse slots 0, 1, 1
             for (uint32_t pass : {0u, 2u})
                 for (uint32_t p = 0; p < 4; p++) {
-                    std::vector<float> pts;
+                    std::vector<float> pts, one;
                     for (uint32_t i = pass * n; i < (pass + 1) * n; i++) {
                         float v[2], w;
                         ASSERT_EQ(dpc_sampler_get_2d(s.get(), p * 91 + 5, p * 7, i, d, v), DPC_OK);
                         ASSERT_EQ(dpc_sampler_get_1d(s.get(), p * 91 + 5, p * 7, i, d, &w), DPC_OK);
-                        EXPECT_EQ(w, v[0]);
+                        EXPECT_EQ(std::floor(w * (float)n), std::floor(v[0] * (float)n));
                         pts.push_back(v[0]);
                         pts.push_back(v[1]);
+                        one.push_back(w);
                     }
                     EXPECT_TRUE(is_net(pts, log_n)) << "n " << n << " dimension " << d << " pass " << pass;
+                    EXPECT_TRUE(fills_hero_strata(one, n)) << "n " << n << " dimension " << d << " pass " << pass;
                 }
     }
     // spp not a power of two: no nets, slot 0 is the shifted set

@@ -16,6 +16,7 @@ GOLDEN = 0x9E3779B97F4A7C15
 SET_STEP = 0xD1B54A32D192ED03
 TILE = 32
 SPIN = 0xBF58476D1CE4E5B9
+HERO = 0x632BE59BD9B4E019  # the 1-D offsets of net slots: mix64(hash ^ HERO)
 F32 = np.float32
 
 
@@ -33,6 +34,12 @@ def unit24(bits: int) -> np.float32:
 def wrap(a, b) -> np.float32:
     t = F32(F32(a) + F32(b))
     return F32(t - F32(1.0)) if t >= F32(1.0) else t
+
+
+def in_stratum(s: int, n: int, u) -> np.float32:
+    """Where a 1-D value of stratum s of n sits inside it: frac(u + k/4), k = floor(s gcd(n, 4) / n)."""
+    g = 4 if n % 4 == 0 else (1 if n % 2 else 2)
+    return wrap(u, F32(0.25) * F32((s * g) // n))
 
 
 def fold(v) -> np.float32:
@@ -306,15 +313,24 @@ class ReferenceSampler:
 
     def get_1d(self, x: int, y: int, index: int, dim: int) -> np.float32:
         t, j, m, c, h = self._locate(x, y, index, dim)
-        if t < self.net_slots and self.screen:
-            return screen_values(h[0], h[1], j, self.m)[0]  # never folded
-        if t < self.net_slots:
-            return net_values(self.nets[t][j], j, h, self.m)[0]  # never folded
+        inv = F32(F32(1.0) / F32(self.n))
+        if t < self.net_slots:  # the net point's stratum at the pixel's offset; never folded
+            if self.screen:
+                kt, code = h
+                v = screen_values(kt, code, j, self.m)[0]
+                below = ((reverse32(code) >> 10) ^ mix64(kt ^ HERO)) & 0x3FFFFF
+                u = F32(((code & 3) << 22) | below) * F32(2.0**-24)
+            else:
+                v = net_values(self.nets[t][j], j, h, self.m)[0]
+                u = unit24(mix64(h ^ HERO))
+            s = int(F32(v * F32(self.n)))
+            value = F32(F32(F32(s) + in_stratum(s, self.n, u)) * inv)
+            return value if value < F32(1.0) else F32(0.0)
         u = wrap(m[2], c[0])
         i = int(F32(self.tables[t][j][0] * F32(self.n))) if not self.rotate else j
         if self.frames > 1:  # i / n shifted as a whole by u
             v = wrap(wrap(F32(F32(i) * F32(F32(1.0) / F32(self.n))), u), c[1])
             return fold(v) if self._folds(dim) else v
-        lattice = F32(F32(F32(i) + u) * F32(F32(1.0) / F32(self.n)))
+        lattice = F32(F32(F32(i) + in_stratum(i, self.n, u)) * inv)
         v = wrap(lattice if lattice < F32(1.0) else F32(0.0), c[1])
         return fold(v) if self._folds(dim) else v

@@ -164,8 +164,40 @@ def test_structure_each_pixel_gets_the_table_shifted_and_a_stratified_lattice():
         for c in range(2):
             gaps = np.diff(np.sort(pts[:, c]))
             assert np.allclose(gaps, 1 / n, atol=1e-6)
-        one = np.sort(s.get_1d(x, y, np.arange(n), d).astype(np.float64))
-        assert np.allclose(np.diff(one), 1 / n, atol=1e-6)
+        # 1-D: one value per stratum of a shifted lattice, each a quarter turn of one in-stratum offset
+        one = s.get_1d(x, y, np.arange(n), d).astype(np.float64)
+        assert_fills_hero_strata(one, n)
+
+
+def assert_fills_hero_strata(values, n):
+    """The n values shifted by 0, 1/4, 1/2, 3/4 (hero-wavelength sampling) fill the 4n strata of a
+    shifted lattice once each, and the n values alone one stratum of width 1/n each."""
+    shifted = np.sort(((values[:, None] + np.arange(4) / 4) % 1).ravel())
+    gaps = np.diff(np.concatenate([shifted, shifted[:1] + 1]))
+    assert np.allclose(gaps, 1 / (4 * n), atol=2e-6), gaps
+    assert lattice_strata(values, n) is not None
+
+
+def lattice_strata(values, n):
+    """The stratum of each value in a lattice of n strata of width 1/n that holds one each (its
+    origin: one of the values, the lowest in its stratum), or None."""
+    for b in values:
+        strata = np.floor(((values - b) % 1) * n + 1e-4).astype(int) % n
+        if np.unique(strata).size == n:
+            return strata
+    return None
+
+
+@pytest.mark.parametrize(
+    "n,net_dims,layout",
+    [(n, 0, "pixel") for n in (1, 2, 3, 4, 6, 8, 16, 64)]
+    + [(n, 1, layout) for n in (2, 4, 8, 16, 64) for layout in ("pixel", "screen")],
+)
+def test_1d_values_fill_the_strata_of_hero_wavelengths(n, net_dims, layout):
+    # pbrt-v4 and Mitsuba 3's spectral modes draw wavelengths at v + i/4 from one 1-D value v
+    s = dpc.Sampler(samples_per_pixel=n, dimensions=2, seed=11, fold_from=None, net_dims=net_dims, net_layout=layout)
+    for x, y, first in [(0, 0, 0), (33, 7, n), (-5, 40, 0)]:
+        assert_fills_hero_strata(s.get_1d(x, y, first + np.arange(n), 0).astype(np.float64), n)
 
 
 @pytest.mark.parametrize("n", [2, 4, 16, 64, 256])
@@ -312,7 +344,7 @@ def test_progressive_pixels_read_the_table_in_order():
             assert spread.max() < 1e-6
         # 1-D values: stratum rank(x of point i), so the first 16 spread like the prefix's x
         one = s.get_1d(x, y, np.arange(n), d).astype(np.float64)
-        strata = np.floor(((one - one[0]) % 1.0) * n + 1e-4).astype(int) % n
+        strata = lattice_strata(one, n)
         ranks = np.floor(table[:, 0] * n).astype(int)
         assert np.array_equal((strata - strata[0]) % n, (ranks - ranks[0]) % n)
     with pytest.raises(dpc.InvalidArgumentError, match="progressive"):

@@ -323,11 +323,28 @@ dpc_status dpc_sampler_lookup_2d_general(const dpc_sampler *s, uint32_t x, uint3
 dpc_status dpc_sampler_lookup_1d_general(const dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index, uint32_t dim,
                                          float *out) {
     const dpc_sampler_point p = dpc_sampler_locate(s, x, y, index, dim);
-    if (p.table < s->net_slots) { /* the net's x: one value per stratum, as the lattice */
-        float v[2];
-        if (s->net_layout) dpc_sampler_screen_values(s, p.h, p.code, p.j, v);
-        else dpc_sampler_net_values(s, p.table, p.j, p.h, v);
-        *out = v[0]; /* never folded */
+    if (p.table < s->net_slots) { /* never folded */
+        /* The stratum of the net point's x (one point per stratum, as the lattice), at the
+         * in-stratum place of one offset u per pixel (dpc_sampler_in_stratum). Screen-ordered,
+         * u's quarter is the lowest digit of the pixel's permuted code and the rest its code
+         * bit-reversed (what an unscrambled Sobol' sequence has below the stratum): the 4
+         * pixels of an aligned 2 x 2 block take distinct quarters of every stratum and distinct
+         * quarters of frac(4u). Per pixel, u comes from the pixel's hash. */
+        float v[2], u;
+        const uint64_t r = dpc_mix64(p.h ^ 0x632BE59BD9B4E019ull); /* its own stream of the hash */
+        if (s->net_layout) {
+            dpc_sampler_screen_values(s, p.h, p.code, p.j, v);
+            /* the code's bits reversed and digitally shifted by the tile (so that u's quarter and its
+             * fraction are independent over seeds), then random bits: 22 bits */
+            const uint32_t below = ((dpc_sampler_reverse32(p.code) >> 10) ^ (uint32_t)r) & 0x3FFFFFu;
+            u = (float)((p.code & 3u) << 22 | below) * 0x1p-24f;
+        } else {
+            dpc_sampler_net_values(s, p.table, p.j, p.h, v);
+            u = dpc_sampler_unit(r);
+        }
+        const uint32_t stratum = (uint32_t)(v[0] * (float)s->spp); /* exact: n is a power of two */
+        const float value = ((float)stratum + dpc_sampler_in_stratum(stratum, s->spp, u)) * s->inv_spp;
+        *out = value < 1.0f ? value : 0.0f; /* 1 only by rounding */
         return DPC_OK;
     }
     *out = dpc_sampler_out(s, dim, dpc_sampler_lattice(s, p.table, p.j, dpc_sampler_wrap(p.mask[2], p.c[0]), p.c[1]));

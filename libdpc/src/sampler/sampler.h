@@ -369,21 +369,35 @@ static inline dpc_status dpc_sampler_lookup_2d(const struct dpc_sampler *s, uint
     return DPC_OK;
 }
 
-/* (i + u) / n rotated by c1: the 1-D value of point j of table t with in-stratum offset u, where
- * i = j, or for progressive tables the rank of point j's x (its table value (i + 1/2) / n times n,
- * exact for n < 2^22), so that a prefix's strata are spread like its points. */
+/* Where a 1-D value of stratum s (of n) sits inside it, for a pixel offset u in [0, 1):
+ * frac(u + k / 4), k = floor(s g / n), g = gcd(n, 4). Hero-wavelength spectral sampling (Wilkie
+ * et al. 2014; pbrt-v4 and Mitsuba 3's spectral modes) draws 4 wavelengths from one value v, at
+ * v + i / 4: with k = 0 (a plain lattice) the n values' shifts repeat n strata of [0, 1) four
+ * times where 4 divides n, and at n = 2 and 4 every sample of a pixel draws the same four
+ * wavelengths; with k they fill the 4n strata once each, at the offset frac(4u). Odd n have
+ * k = 0: their lattice already does. */
+static inline float dpc_sampler_in_stratum(uint32_t s, uint32_t n, float u) {
+    const uint32_t g = (n & 3u) == 0 ? 4u : (n & 1u) ? 1u : 2u;
+    return dpc_sampler_wrap(u, 0.25f * (float)(uint32_t)(((uint64_t)s * g) / n));
+}
+
+/* (i + in_stratum(i, n, u)) / n rotated by c1: the 1-D value of point j of table t with pixel
+ * offset u, where i = j, or for progressive tables the rank of point j's x (its table value
+ * (i + 1/2) / n times n, exact for n < 2^22), so that a prefix's strata are spread like its
+ * points. */
 static inline float dpc_sampler_lattice(const struct dpc_sampler *s, uint32_t t, uint32_t j, float u, float c1) {
     const uint32_t i = s->rotate ? j : (uint32_t)(s->tables[((size_t)t * s->spp + j) * 2] * (float)s->spp);
     /* frames: i / n shifted by u as a whole, so that one frame's values spread over [0, 1)
      * across pixels (the same lattice per pixel, u / n's place taken by frac(u n) / n) */
     if (s->frames > 1) return dpc_sampler_wrap(dpc_sampler_wrap((float)i * s->inv_spp, u), c1);
-    const float lattice = ((float)i + u) * s->inv_spp; /* in [0, 1]: 1 only by rounding */
+    const float lattice = ((float)i + dpc_sampler_in_stratum(i, s->spp, u)) * s->inv_spp; /* 1 only by rounding */
     return dpc_sampler_wrap(lattice < 1.0f ? lattice : 0.0f, c1);
 }
 
-/* 1-D: the stratified lattice (j + u) / n, u the pixel's 1-D mask value rotated by c0, then
- * the whole lattice rotated by c1: one value per stratum, and the offset inside the stratum is
- * blue noise across pixels, so neighbouring pixels fill each other's strata. */
+/* 1-D: the stratified lattice, u the pixel's 1-D mask value rotated by c0, then the whole
+ * lattice rotated by c1: one value per stratum, and the offset inside the stratum is blue noise
+ * across pixels (a quarter turn of it per quarter of the strata), so neighbouring pixels fill
+ * each other's strata. */
 static inline dpc_status dpc_sampler_lookup_1d(const struct dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index,
                                                uint32_t dim, float *out) {
     if (index >= s->spp || dim >= s->fast_slots || dim < s->net_slots)
