@@ -96,3 +96,21 @@ def test_goals_meet_and_miss():
     scenes["a"]["rows"]["dpc"] = rows(1.0, 2.0)
     by = {name: (ok, text) for name, ok, text, _ in S.goals(scenes)}
     assert not by["a, 4 spp: dpc E_low <= zsobol's"][0]
+
+
+def test_an_elow_miss_with_the_smaller_blurred_error_says_so():
+    def blurred(mse, elow, blur):
+        r = rows(mse, elow)
+        for n in S.ELOW_GOAL_SPP:
+            r[n].update(blur=blur, blur_se=0.01 * blur)
+        return r
+
+    scenes = {
+        "a": {"rows": {"dpc": blurred(1.0, 0.9, 0.5), "zsobol": blurred(2.0, 0.7, 1.0), "paddedsobol": rows(2, 1)}}
+    }
+    by = {name: (ok, text, cause) for name, ok, text, cause in S.goals(scenes)}
+    ok, text, cause = by["a, 4 spp: dpc E_low <= zsobol's"]
+    assert not ok and "blurred error x0.50" in text and "a share of each sampler's own error" in cause
+    scenes["a"]["rows"]["dpc"] = blurred(1.0, 0.9, 1.5)  # the blurred error higher too: the other causes
+    ok, text, cause = {n: (o, t, c) for n, o, t, c in S.goals(scenes)}["a, 4 spp: dpc E_low <= zsobol's"]
+    assert not ok and "blurred error x1.50" in text and "share" not in cause
