@@ -221,12 +221,19 @@ def run(args) -> dict:
             old, new = last["scenes"][scene], res["scenes"][scene]
             rows = {n: old["samplers"][n] for n in SAMPLERS if n in old["samplers"] and n not in args.only}
             res["scenes"][scene] = {**old, "samplers": {**rows, **new["samplers"]}, "figure": new["figure"]}
-        res["commit"] = f"{last['commit']}; {', '.join(args.only)} at {res['commit']}"
+        res["commit"] = provenance(last["commit"], args.only, res["commit"])
         return res
     for scene in scenes:  # alone on the machine
         res["scenes"][scene]["timing"] = timing(scene, args)
         print(f"  {scene}: render time at {TIME_SPP} spp: {res['scenes'][scene]['timing']}", flush=True)
     return res
+
+
+def provenance(last: str, only: list[str], tree: str) -> str:
+    """The results' origin after re-rendering the samplers `only` at `tree`: the last origin's
+    parts, less those naming only samplers rendered again."""
+    parts = [p for p in last.split("; ") if " at " not in p or not set(p.split(" at ")[0].split(", ")) <= set(only)]
+    return "; ".join([*parts, f"{', '.join(only)} at {tree}"])
 
 
 def load_results() -> dict:
