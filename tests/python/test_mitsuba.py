@@ -110,6 +110,26 @@ def test_frame_property_reads_that_frames_samples():
             fork.advance()
 
 
+def test_spectral_variants_put_the_nets_through_the_light_sample():
+    """Spectral variants draw the wavelength's 1-D sample between the film position and the light
+    sample: the plugin's default nets then serve dimensions 0-2 (net_dims 3), RGB ones 0-1."""
+    rgb_default = dpc.Sampler("bnot-2d-stratified", samples_per_pixel=4, dimensions=4, seed=9, net_dims=2)
+    ref = dpc.Sampler("bnot-2d-stratified", samples_per_pixel=4, dimensions=4, seed=9, net_dims=3)
+    assert not np.array_equal(ref.get_2d(0, 0, np.arange(4), 2), rgb_default.get_2d(0, 0, np.arange(4), 2))
+    mi.set_variant("scalar_spectral")
+    try:
+        fork = mi.load_dict({"type": "dpc", "sample_count": 4, "seed": 9, "dimensions": 4}).fork()
+        fork.seed(0)  # block 0, pixel (0, 0)
+        for i in range(4):
+            assert np.array_equal(np.array(fork.next_2d()), ref.get_2d(0, 0, i, 0))
+            assert np.float32(fork.next_1d()) == ref.get_1d(0, 0, i, 1)
+            assert np.array_equal(np.array(fork.next_2d()), ref.get_2d(0, 0, i, 2))
+            assert np.array_equal(np.array(fork.next_2d()), ref.get_2d(0, 0, i, 3))
+            fork.advance()
+    finally:
+        mi.set_variant("scalar_rgb")
+
+
 def _plane_under_sky(sampler: dict, width: int = 64) -> object:
     """A diffuse plane filling the view under a sky with one bright quarter, at infinity: every
     pixel integrates the same function of its light sample."""

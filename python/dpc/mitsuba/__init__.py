@@ -13,8 +13,9 @@ integrator's block size when it is not Mitsuba's default 32), ``fold_from`` (the
 folded by the baker's transform, default -1: none; 1: all but Mitsuba's film position;
 docs/rendering.md) and ``net_dims`` (the first dimensions served by blue-noise (0,m,2)-nets when
 ``sample_count`` is a power of two; not given: 2, the film position and the integrators' first
-sample, the light sample, with dpc's sets for the BSDF samples and later bounces, where they had
-up to 1.6 times lower MSE in Mitsuba, lab/rendering/slots_study.py; libdpc's default for
+sample, the light sample, or 3 in spectral variants, whose wavelength sample comes between them,
+with dpc's sets for the BSDF samples and later bounces, where they had up to 1.6 times lower MSE
+in Mitsuba, lab/rendering/slots_study.py and spectral_study.py; libdpc's default for
 progressive models and frames; -1: libdpc's default, every dimension; 0 for none) and ``net_layout``
 (``"screen"``: nets shared by a 32 x 32 tile of pixels in a randomised Morton order, errors blue
 across pixels; ``"pixel"``: each pixel's net digitally shifted; default ``"auto"``: screen below

@@ -59,12 +59,14 @@ struct Table {
     ~Table() { dpc_sampler_free(sampler); }
 };
 
-// The plugin's net_dims when the scene does not give one (see the constructor).
-constexpr uint32_t PLUGIN_NET_DIMS = 2;
+// The plugin's net_dims when the scene does not give one (see the constructor): through the
+// first light sample, which spectral variants draw after the wavelength.
+constexpr uint32_t PLUGIN_NET_DIMS_RGB = 2, PLUGIN_NET_DIMS_SPECTRAL = 3;
 
 inline std::shared_ptr<Table> build(const std::vector<std::string> &models, uint32_t spp, uint32_t dims, uint64_t seed,
-                                    uint32_t fold_from, uint32_t net_dims, bool net_dims_given, uint32_t net_layout,
-                                    uint32_t frames, std::string &error) {
+                                    uint32_t fold_from, uint32_t net_dims, bool net_dims_given,
+                                    uint32_t plugin_net_dims, uint32_t net_layout, uint32_t frames,
+                                    std::string &error) {
     std::vector<dpc_model *> loaded;
     auto table = std::make_shared<Table>();
     for (const std::string &m : models) {
@@ -88,7 +90,7 @@ inline std::shared_ptr<Table> build(const std::vector<std::string> &models, uint
         o.fold_from = fold_from;
         const char *order = dpc_model_metadata(handles[0], "dpc.order");
         const bool progressive = order && std::string(order) == "progressive";
-        o.net_dims = net_dims_given || progressive || frames > 1 ? net_dims : PLUGIN_NET_DIMS;
+        o.net_dims = net_dims_given || progressive || frames > 1 ? net_dims : plugin_net_dims;
         o.net_layout = net_layout;
         o.frames = frames;
         if (dpc_sampler_create(&o, &table->sampler) != DPC_OK) error = dpc_last_error();
@@ -134,11 +136,12 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
         if (fold_from < -1) Throw("property \"fold_from\" is %d: a dimension (>= 0), or -1 to fold none", fold_from);
         m_fold_from = fold_from < 0 ? DPC_SAMPLER_NO_FOLD : (uint32_t)fold_from;
         // Not given: nets in dimensions 0 and 1 (the film position and the integrators' first
-        // sample, the direct and path tracers' light sample), the sets beyond (BSDF samples,
-        // later bounces), for set models; libdpc's default for progressive ones and frames. Measured in
-        // Mitsuba's scenes (lab/rendering/slots_study.py): nets beyond dimension 1 had up to 1.6
-        // times the sets' MSE (glossy reflection) and never less. -1: libdpc's default (every
-        // dimension a net at power-of-two counts).
+        // sample, the direct and path tracers' light sample; in spectral variants 0-2, the
+        // wavelength's 1-D sample coming between them), the sets beyond (BSDF samples, later
+        // bounces), for set models; libdpc's default for progressive ones and frames. Measured in
+        // Mitsuba's scenes (lab/rendering/slots_study.py, spectral_study.py): nets beyond the
+        // light sample had up to 1.6 times the sets' MSE (glossy reflection) and never less. -1:
+        // libdpc's default (every dimension a net at power-of-two counts).
         m_net_dims_given = props.has_property("net_dims");
         int net_dims = props.get<int>("net_dims", -1);
         if (net_dims < -1)
@@ -263,8 +266,10 @@ template <typename Float, typename Spectrum> class DpcSampler final : public Sam
 
     void rebuild() {
         std::string error;
+        constexpr uint32_t plugin_net_dims =
+            is_spectral_v<Spectrum> ? dpc_plugin::PLUGIN_NET_DIMS_SPECTRAL : dpc_plugin::PLUGIN_NET_DIMS_RGB;
         m_table = dpc_plugin::build(m_models, m_sample_count, m_dims, m_base_seed, m_fold_from, m_net_dims,
-                                    m_net_dims_given, m_net_layout, m_frames, error);
+                                    m_net_dims_given, plugin_net_dims, m_net_layout, m_frames, error);
         if (!m_table) Throw("dpc sampler: %s", error);
     }
 
