@@ -187,7 +187,9 @@ class Sampler:
         return out
 
     def get_1d(self, x, y, index, dimension, *, frame=0, max_bytes: float | None = None) -> np.ndarray:
-        """Values in [0, 1) of the stratified 1-D lattice; arguments broadcast like numpy's (the
+        """Values in [0, 1), one per stratum of width 1/spp, placed so that a pixel's values shifted
+        by 0, 1/4, 1/2, 3/4 (hero-wavelength sampling) fill 4 spp strata once each (docs/rendering.md,
+        "Definition"); arguments broadcast like numpy's (the
         broadcast is evaluated in chunks, never made full size). ``frame``: sample ``index`` of that
         frame, ``index + frame * samples_per_pixel`` (see ``frames``). ``max_bytes``: the largest
         output allowed (default 4 GiB or $DPC_MAX_OUTPUT_BYTES), else :class:`LimitError` before any
