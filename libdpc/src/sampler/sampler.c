@@ -133,6 +133,9 @@ static dpc_status build(dpc_sampler *s, const dpc_sampler_options *o, build_prog
     s->seed = o->seed;
     s->base = dpc_mix64(o->seed);
     s->inv_spp = 1.0f / (float)n;
+    /* k = floor(s g / n), g = gcd(n, 4), reaches j at the least s with s g >= j n */
+    const uint32_t g = (n & 3u) == 0 ? 4u : (n & 1u) ? 1u : 2u;
+    for (uint32_t j = 1; j <= 3; j++) s->quarter_from[j - 1] = j < g ? (uint32_t)(((uint64_t)j * n + g - 1) / g) : n;
     s->fold_from = o->fold_from;
     /* progressive tables and frames are read in order (all progressive or none: api_sampler.c) */
     const int progressive = o->models[0]->cascade.progressive_base != 0;
@@ -343,7 +346,7 @@ dpc_status dpc_sampler_lookup_1d_general(const dpc_sampler *s, uint32_t x, uint3
             u = dpc_sampler_unit(r);
         }
         const uint32_t stratum = (uint32_t)(v[0] * (float)s->spp); /* exact: n is a power of two */
-        const float value = ((float)stratum + dpc_sampler_in_stratum(stratum, s->spp, u)) * s->inv_spp;
+        const float value = ((float)stratum + dpc_sampler_in_stratum(s, stratum, u)) * s->inv_spp;
         *out = value < 1.0f ? value : 0.0f; /* 1 only by rounding */
         return DPC_OK;
     }

@@ -36,6 +36,8 @@ struct dpc_sampler {
     uint64_t seed;
     uint64_t base;      /* mix64 of the seed: the root of every key */
     float inv_spp;      /* 1 / n, for 1-D values */
+    uint32_t quarter_from[3]; /* 1-D values: the strata from which the in-stratum offset turns by one,
+                               * two, three quarters (dpc_sampler_in_stratum; n when it never does) */
     uint32_t fold_from; /* dimensions >= fold_from are folded (dpc_sampler_fold) */
     /* The range of a pixel's rotation of the sample index: n for set models; 0 for progressive
      * models (format §6), whose tables are read in order so that the first 2^k samples of a
@@ -376,12 +378,14 @@ static inline dpc_status dpc_sampler_lookup_2d(const struct dpc_sampler *s, uint
  * times where 4 divides n, and at n = 2 and 4 every sample of a pixel draws the same four
  * wavelengths; with k they fill the 4n strata once each, at the offset frac(4u). Odd n have
  * k = 0: their lattice already does. */
-static inline float dpc_sampler_in_stratum(uint32_t s, uint32_t n, float u) {
-    const uint32_t g = (n & 3u) == 0 ? 4u : (n & 1u) ? 1u : 2u;
-    return dpc_sampler_wrap(u, 0.25f * (float)(uint32_t)(((uint64_t)s * g) / n));
+static inline float dpc_sampler_in_stratum(const struct dpc_sampler *sp, uint32_t s, float u) {
+    /* k by comparisons with precomputed strata (quarter_from), not a division per value */
+    const uint32_t k = (uint32_t)(s >= sp->quarter_from[0]) + (uint32_t)(s >= sp->quarter_from[1]) +
+                       (uint32_t)(s >= sp->quarter_from[2]);
+    return dpc_sampler_wrap(u, 0.25f * (float)k);
 }
 
-/* (i + in_stratum(i, n, u)) / n rotated by c1: the 1-D value of point j of table t with pixel
+/* (i + in_stratum(i, u)) / n rotated by c1: the 1-D value of point j of table t with pixel
  * offset u, where i = j, or for progressive tables the rank of point j's x (its table value
  * (i + 1/2) / n times n, exact for n < 2^22), so that a prefix's strata are spread like its
  * points. */
@@ -390,7 +394,7 @@ static inline float dpc_sampler_lattice(const struct dpc_sampler *s, uint32_t t,
     /* frames: i / n shifted by u as a whole, so that one frame's values spread over [0, 1)
      * across pixels (the same lattice per pixel, u / n's place taken by frac(u n) / n) */
     if (s->frames > 1) return dpc_sampler_wrap(dpc_sampler_wrap((float)i * s->inv_spp, u), c1);
-    const float lattice = ((float)i + dpc_sampler_in_stratum(i, s->spp, u)) * s->inv_spp; /* 1 only by rounding */
+    const float lattice = ((float)i + dpc_sampler_in_stratum(s, i, u)) * s->inv_spp; /* 1 only by rounding */
     return dpc_sampler_wrap(lattice < 1.0f ? lattice : 0.0f, c1);
 }
 
