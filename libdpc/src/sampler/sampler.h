@@ -34,11 +34,11 @@ struct dpc_sampler {
     uint32_t frames; /* F (options.frames, at least 1): frame f takes indices f * n / F .. */
     uint32_t slots;  /* D: tables; dimension d reads table d mod D */
     uint64_t seed;
-    uint64_t base;      /* mix64 of the seed: the root of every key */
-    float inv_spp;      /* 1 / n, for 1-D values */
+    uint64_t base;            /* mix64 of the seed: the root of every key */
+    float inv_spp;            /* 1 / n, for 1-D values */
     uint32_t quarter_from[3]; /* 1-D values: the strata from which the in-stratum offset turns by one,
                                * two, three quarters (dpc_sampler_in_stratum; n when it never does) */
-    uint32_t fold_from; /* dimensions >= fold_from are folded (dpc_sampler_fold) */
+    uint32_t fold_from;       /* dimensions >= fold_from are folded (dpc_sampler_fold) */
     /* The range of a pixel's rotation of the sample index: n for set models; 0 for progressive
      * models (format §6), whose tables are read in order so that the first 2^k samples of a
      * pixel are a progressive prefix. */
