@@ -298,6 +298,27 @@ TEST(SamplerStructure, EachTileRotatesTheMaskItsOwnWay) {
     }
 }
 
+// Each dyadic box of volume 2^(1-m) in [0,1)^3 holds exactly two of the n = 2^m points (x, y, z
+// consecutive in pts): a (1,m,3)-net.
+bool is_13_net(const std::vector<float> &pts, uint32_t m) {
+    const uint32_t n = 1u << m;
+    if (m == 0) return pts.size() == 3;
+    for (uint32_t a1 = 0; a1 < m; a1++)
+        for (uint32_t a2 = 0; a1 + a2 < m; a2++) {
+            const uint32_t a3 = m - 1 - a1 - a2;
+            std::vector<uint32_t> count(n / 2, 0);
+            for (uint32_t i = 0; i < n; i++) {
+                const uint32_t c1 = (uint32_t)(pts[3 * i] * (float)(1u << a1));
+                const uint32_t c2 = (uint32_t)(pts[3 * i + 1] * (float)(1u << a2));
+                const uint32_t c3 = (uint32_t)(pts[3 * i + 2] * (float)(1u << a3));
+                count[(c1 << (a2 + a3)) | (c2 << a3) | c3]++;
+            }
+            for (uint32_t c : count)
+                if (c != 2) return false;
+        }
+    return true;
+}
+
 // Each (0,m,2) elementary interval (2^a x 2^(m-a) boxes of a grid of 2^-m cells) holds exactly
 // one of the n = 2^m points.
 bool is_net(const std::vector<float> &pts, uint32_t m) {
@@ -314,8 +335,9 @@ bool is_net(const std::vector<float> &pts, uint32_t m) {
 }
 
 // Net slots (net_dims): every pixel's samples of every pass are a (0,m,2)-net, also through
-// dimensions past D that reuse a net slot; get_1d is in get_2d's x's stratum, and the pixel's
-// values fill the hero-wavelength strata; the table shows the cells'
+// dimensions past D that reuse a net slot; get_1d is in get_2d's x's stratum, or after a net slot
+// one (1,m,3)-net with that slot's 2-D values, and the pixel's values fill the hero-wavelength
+// strata; the table shows the cells'
 // centres; other slots keep the shifted set (the same table as with net_dims = 0).
 TEST(SamplerStructure, NetSlotsGiveEachPixelANet) {
     ModelPtr m = load(model_path("model_2d"));
@@ -329,18 +351,26 @@ TEST(SamplerStructure, NetSlotsGiveEachPixelANet) {
         for (uint32_t d : {0u, 1u, 3u, 4u, 70u}) // 3, 4, 70 reuse slots 0, 1, 1
             for (uint32_t pass : {0u, 2u})
                 for (uint32_t p = 0; p < 4; p++) {
-                    std::vector<float> pts, one;
+                    std::vector<float> pts, one, joint;
                     for (uint32_t i = pass * n; i < (pass + 1) * n; i++) {
                         float v[2], w;
                         ASSERT_EQ(dpc_sampler_get_2d(s.get(), p * 91 + 5, p * 7, i, d, v), DPC_OK);
                         ASSERT_EQ(dpc_sampler_get_1d(s.get(), p * 91 + 5, p * 7, i, d, &w), DPC_OK);
-                        EXPECT_EQ(std::floor(w * (float)n), std::floor(v[0] * (float)n));
+                        if (d % 3 == 0) // after a set slot or none: the stratum of the net point's x
+                            EXPECT_EQ(std::floor(w * (float)n), std::floor(v[0] * (float)n));
+                        float prev[2]; // after a net slot: one 3-D net with its 2-D values
+                        if (d % 3 != 0) {
+                            ASSERT_EQ(dpc_sampler_get_2d(s.get(), p * 91 + 5, p * 7, i, d - 1, prev), DPC_OK);
+                            joint.insert(joint.end(), {prev[0], prev[1], w});
+                        }
                         pts.push_back(v[0]);
                         pts.push_back(v[1]);
                         one.push_back(w);
                     }
                     EXPECT_TRUE(is_net(pts, log_n)) << "n " << n << " dimension " << d << " pass " << pass;
                     EXPECT_TRUE(fills_hero_strata(one, n)) << "n " << n << " dimension " << d << " pass " << pass;
+                    if (d % 3 != 0)
+                        EXPECT_TRUE(is_13_net(joint, log_n)) << "n " << n << " dimension " << d << " pass " << pass;
                 }
     }
     // spp not a power of two: no nets, slot 0 is the shifted set

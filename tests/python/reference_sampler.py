@@ -208,10 +208,28 @@ def sobol1(i: int) -> int:
     return out
 
 
-def screen_values(kt: int, code: int, k: int, m: int) -> list:
+def sobol2(i: int) -> int:
+    """Sobol's third coordinate of i, 32 bits, from its definition: primitive polynomial
+    x^2 + x + 1, initial m_1 = 1, m_2 = 3, m_k = 2 m_(k-1) XOR 4 m_(k-2) XOR m_(k-2), direction
+    number v_k = m_k / 2^k."""
+    mk = [1, 3]
+    while len(mk) < 32:
+        mk.append((2 * mk[-1]) ^ (4 * mk[-2]) ^ mk[-2])
+    out = 0
+    for b in range(32):
+        if (i >> b) & 1:
+            out ^= (mk[b] << (31 - b)) & M32
+    return out
+
+
+def screen_index(kt: int, code: int, k: int, m: int) -> int:
+    """Sample k's index in the tile's sequence: the block at code, k shuffled in it."""
     hp = mix64(kt ^ ((code << 1) | 1))
-    kk = reverse32(nested(reverse32(k) >> (32 - m), hp & M32)) >> (32 - m)
-    i = (code << m) | kk
+    return (code << m) | (reverse32(nested(reverse32(k) >> (32 - m), hp & M32)) >> (32 - m))
+
+
+def screen_values(kt: int, code: int, k: int, m: int) -> list:
+    i = screen_index(kt, code, k, m)
     hs = mix64(kt + GOLDEN)
     xs = reverse32(nested(i, hs & M32))
     ys = reverse32(nested(reverse32(sobol1(i)), hs >> 32))
@@ -260,16 +278,18 @@ class ReferenceSampler:
         if net_layout == "auto":  # screen-ordered below 64 spp
             net_layout = "screen" if spp < SCREEN_BELOW else "pixel"
         self.screen = self.net_slots > 0 and net_layout == "screen"
-        self.nets = []
+        self.nets, self.net_index = [], []  # the cells, and each cell's Sobol' index
         for t in range(self.net_slots):
             seed_t = mix64(self.base ^ mix64(t + NET_SEED))
-            net = make_net(self.m, seed_t)
+            net, index = make_net(self.m, seed_t), np.arange(spp)
             if t > 0:  # later nets in a seeded random order (Fisher-Yates), progressive: per octave
                 for i in range(spp - 1, 0, -1):
                     low = 0 if self.rotate else 1 << (i.bit_length() - 1)
                     j = low + (((mix64((seed_t + i * 0xD1342543DE82EF95) & M64) >> 32) * (i - low + 1)) >> 32)
                     net[[i, j]] = net[[j, i]]
+                    index[[i, j]] = index[[j, i]]
             self.nets.append(net)
+            self.net_index.append(index)
 
     def key(self, dim: int, pass_: int) -> int:
         return mix64(self.base ^ mix64(((pass_ << 32) | dim) + GOLDEN))
@@ -314,16 +334,21 @@ class ReferenceSampler:
     def get_1d(self, x: int, y: int, index: int, dim: int) -> np.float32:
         t, j, m, c, h = self._locate(x, y, index, dim)
         inv = F32(F32(1.0) / F32(self.n))
-        if t < self.net_slots:  # the net point's stratum at the pixel's offset; never folded
+        if t < self.net_slots:  # a stratum at the pixel's offset; never folded
+            r = mix64((h[0] if self.screen else h) ^ HERO)
             if self.screen:
                 kt, code = h
-                v = screen_values(kt, code, j, self.m)[0]
-                below = ((reverse32(code) >> 10) ^ mix64(kt ^ HERO)) & 0x3FFFFF
+                below = ((reverse32(code) >> 10) ^ r) & 0x3FFFFF
                 u = F32(((code & 3) << 22) | below) * F32(2.0**-24)
             else:
-                v = net_values(self.nets[t][j], j, h, self.m)[0]
-                u = unit24(mix64(h ^ HERO))
-            s = int(F32(v * F32(self.n)))
+                u = unit24(r)
+            if dim > 0 and (dim - 1) % self.D < self.net_slots:  # after a net slot: its point's Sobol' z
+                t0, j0, _, _, h0 = self._locate(x, y, index, dim - 1)
+                i = screen_index(h0[0], h0[1], j0, self.m) if self.screen else int(self.net_index[t0][j0])
+                s = reverse32(nested(reverse32(sobol2(i)), r >> 32)) >> (32 - self.m)
+            else:  # the stratum of this slot's own net point's x
+                v = screen_values(*h, j, self.m)[0] if self.screen else net_values(self.nets[t][j], j, h, self.m)[0]
+                s = int(F32(v * F32(self.n)))
             value = F32(F32(F32(s) + in_stratum(s, self.n, u)) * inv)
             return value if value < F32(1.0) else F32(0.0)
         u = wrap(m[2], c[0])

@@ -188,6 +188,36 @@ def lattice_strata(values, n):
     return None
 
 
+def is_13_net(pts: np.ndarray) -> bool:
+    """Every dyadic box of volume 2 / n in [0, 1)^3 (a_1 + a_2 + a_3 = m - 1 halvings) holds 2 points."""
+    n = len(pts)
+    m = n.bit_length() - 1
+    for a1 in range(m):
+        for a2 in range(m - a1):
+            a3 = m - 1 - a1 - a2
+            cells = [np.floor(pts[:, c] * (1 << a)).astype(int) for c, a in enumerate((a1, a2, a3))]
+            keys = (cells[0] << (a2 + a3)) | (cells[1] << a3) | cells[2]
+            if not np.all(np.bincount(keys, minlength=1 << (m - 1)) == 2):
+                return False
+    return True
+
+
+@pytest.mark.parametrize("n", [16, 64, 256])
+@pytest.mark.parametrize("layout", ["pixel", "screen"])
+def test_a_1d_value_after_a_net_slot_makes_one_3d_net_with_it(n, layout):
+    # renderers draw the wavelength's 1-D value right after the film position (pbrt-v4, Mitsuba's
+    # spectral variants): per pixel the two are the first three Sobol' coordinates, a (1,m,3)-net
+    s = dpc.Sampler(samples_per_pixel=n, dimensions=4, seed=4, net_dims=3, net_layout=layout)
+    for x, y, first in [(0, 0, 0), (45, 9, n), (-7, 70, 3 * n)]:
+        k = first + np.arange(n)
+        for d in (0, 1):
+            pts = np.column_stack([s.get_2d(x, y, k, d), s.get_1d(x, y, k, d + 1)]).astype(np.float64)
+            assert is_13_net(pts), (x, y, d)
+    # after a set slot (dimension 3, past net_dims): no such structure is promised, and the
+    # 1-D values keep one per stratum
+    assert lattice_strata(s.get_1d(0, 0, np.arange(n), 3).astype(np.float64), n) is not None
+
+
 @pytest.mark.parametrize(
     "n,net_dims,layout",
     [(n, 0, "pixel") for n in (1, 2, 3, 4, 6, 8, 16, 64)]

@@ -114,6 +114,7 @@ void dpc_sampler_free(dpc_sampler *sampler) {
     free(sampler->keys);
     free(sampler->shifted);
     free(sampler->nets);
+    free(sampler->net_index);
     free(sampler->sobol1);
     free(sampler);
 }

@@ -172,9 +172,10 @@ static dpc_status build(dpc_sampler *s, const dpc_sampler_options *o, build_prog
     float *set = (float *)malloc((size_t)workers * n * widest * sizeof(float)); /* sets of the widest model */
     ranked *scratch = (ranked *)malloc((size_t)n * sizeof *scratch);
     s->nets = s->net_slots ? (uint32_t *)malloc((size_t)s->net_slots * n * sizeof *s->nets) : NULL;
+    s->net_index = s->net_slots ? (uint32_t *)malloc((size_t)s->net_slots * n * sizeof *s->net_index) : NULL;
     if (s->net_layout) s->sobol1 = (uint32_t *)malloc(4 * 256 * sizeof *s->sobol1);
     dpc_status st = DPC_OK;
-    if (!s->tables || !s->keys || !s->shifted || !set || !scratch || (s->net_slots && !s->nets) ||
+    if (!s->tables || !s->keys || !s->shifted || !set || !scratch || (s->net_slots && (!s->nets || !s->net_index)) ||
         (s->net_layout && !s->sobol1)) {
         st = dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory for a sampler of %u x %u points", D, n);
         goto done;
@@ -256,7 +257,8 @@ static dpc_status build(dpc_sampler *s, const dpc_sampler_options *o, build_prog
     /* Net slots: the net's cells, as cell centres (what dpc_sampler_table shows; the lookups
      * read the cells). */
     for (t = 0; t < s->net_slots; t++) {
-        uint32_t *cells = s->nets + (size_t)t * n;
+        uint32_t *cells = s->nets + (size_t)t * n, *sobol_index = s->net_index + (size_t)t * n;
+        for (uint32_t i = 0; i < n; i++) sobol_index[i] = i;
         if (progress && dpc_progress_add(progress, 0) != DPC_OK) goto cancelled;
         const uint64_t net_seed = dpc_child_seed(s->base, DPC_STREAM_SAMPLER_NET, t);
         if ((st = dpc_sampler_make_net(log_n, net_seed, cells)) != DPC_OK) goto done;
@@ -276,6 +278,9 @@ static dpc_status build(dpc_sampler *s, const dpc_sampler_options *o, build_prog
                 const uint32_t j = low + (uint32_t)(((r >> 32) * (i - low + 1)) >> 32), c = cells[i];
                 cells[i] = cells[j];
                 cells[j] = c;
+                const uint32_t k = sobol_index[i];
+                sobol_index[i] = sobol_index[j];
+                sobol_index[j] = k;
             }
         float *table = s->tables + (size_t)t * n * 2;
         for (uint32_t i = 0; i < n; i++) {
@@ -323,29 +328,57 @@ dpc_status dpc_sampler_lookup_2d_general(const dpc_sampler *s, uint32_t x, uint3
     return DPC_OK;
 }
 
+/* Sobol's third coordinate (primitive polynomial x^2 + x + 1, initial direction numbers 1, 3):
+ * direction number b of index bit b, the fraction's first bit at bit 31. */
+static const uint32_t SOBOL2_DIRECTIONS[32] = {
+    0x80000000u, 0xC0000000u, 0x60000000u, 0x90000000u, 0xE8000000u, 0x5C000000u, 0x8E000000u, 0xC5000000u,
+    0x68800000u, 0x9CC00000u, 0xEE600000u, 0x55900000u, 0x80680000u, 0xC09C0000u, 0x60EE0000u, 0x90550000u,
+    0xE8808000u, 0x5CC0C000u, 0x8E606000u, 0xC5909000u, 0x6868E800u, 0x9C9C5C00u, 0xEEEE8E00u, 0x5555C500u,
+    0x8000E880u, 0xC0005CC0u, 0x60008E60u, 0x9000C590u, 0xE8006868u, 0x5C009C9Cu, 0x8E00EEEEu, 0xC5005555u};
+
+static uint32_t sobol2(uint32_t i) {
+    uint32_t z = 0;
+    for (uint32_t b = 0; i; b++, i >>= 1) z ^= SOBOL2_DIRECTIONS[b] & (0u - (i & 1u));
+    return z;
+}
+
 dpc_status dpc_sampler_lookup_1d_general(const dpc_sampler *s, uint32_t x, uint32_t y, uint32_t index, uint32_t dim,
                                          float *out) {
     const dpc_sampler_point p = dpc_sampler_locate(s, x, y, index, dim);
     if (p.table < s->net_slots) { /* never folded */
-        /* The stratum of the net point's x (one point per stratum, as the lattice), at the
-         * in-stratum place of one offset u per pixel (dpc_sampler_in_stratum). Screen-ordered,
-         * u's quarter is the lowest digit of the pixel's permuted code and the rest its code
-         * bit-reversed (what an unscrambled Sobol' sequence has below the stratum): the 4
-         * pixels of an aligned 2 x 2 block take distinct quarters of every stratum and distinct
-         * quarters of frac(4u). Per pixel, u comes from the pixel's hash. */
-        float v[2], u;
+        /* A stratum, at the in-stratum place of one offset u per pixel (dpc_sampler_in_stratum).
+         * Screen-ordered, u's quarter is the lowest digit of the pixel's permuted code and the
+         * rest its code bit-reversed (what an unscrambled Sobol' sequence has below the stratum):
+         * the 4 pixels of an aligned 2 x 2 block take distinct quarters of every stratum and
+         * distinct quarters of frac(4u). Per pixel, u comes from the pixel's hash. */
+        float u;
         const uint64_t r = dpc_mix64(p.h ^ 0x632BE59BD9B4E019ull); /* its own stream of the hash */
         if (s->net_layout) {
-            dpc_sampler_screen_values(s, p.h, p.code, p.j, v);
             /* the code's bits reversed and digitally shifted by the tile (so that u's quarter and its
              * fraction are independent over seeds), then random bits: 22 bits */
             const uint32_t below = ((dpc_sampler_reverse32(p.code) >> 10) ^ (uint32_t)r) & 0x3FFFFFu;
             u = (float)((p.code & 3u) << 22 | below) * 0x1p-24f;
         } else {
-            dpc_sampler_net_values(s, p.table, p.j, p.h, v);
             u = dpc_sampler_unit(r);
         }
-        const uint32_t stratum = (uint32_t)(v[0] * (float)s->spp); /* exact: n is a power of two */
+        /* The stratum: after a net slot (a 2-D value, renderers' film position before the
+         * wavelength), the third Sobol' coordinate of that slot's point, Owen-scrambled per
+         * pixel, so that the previous slot's 2-D values and these are one 3-D net per pixel
+         * (the first three Sobol' coordinates: t = 1); else the stratum of this slot's own net
+         * point's x (one point per stratum, as the lattice). */
+        uint32_t stratum;
+        const dpc_sampler_point q = dpc_sampler_locate(s, x, y, index, dim > 0 ? dim - 1 : dim);
+        if (dim > 0 && q.table < s->net_slots) {
+            const uint32_t i = s->net_layout ? dpc_sampler_screen_index(s, q.h, q.code, q.j)
+                                             : s->net_index[(size_t)q.table * s->spp + q.j];
+            const uint32_t z = dpc_sampler_nested(dpc_sampler_reverse32(sobol2(i)), (uint32_t)(r >> 32));
+            stratum = dpc_sampler_reverse32(z) >> (8 + s->net_shift);
+        } else {
+            float v[2];
+            if (s->net_layout) dpc_sampler_screen_values(s, p.h, p.code, p.j, v);
+            else dpc_sampler_net_values(s, p.table, p.j, p.h, v);
+            stratum = (uint32_t)(v[0] * (float)s->spp); /* exact: n is a power of two */
+        }
         const float value = ((float)stratum + dpc_sampler_in_stratum(s, stratum, u)) * s->inv_spp;
         *out = value < 1.0f ? value : 0.0f; /* 1 only by rounding */
         return DPC_OK;

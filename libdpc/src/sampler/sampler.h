@@ -49,6 +49,7 @@ struct dpc_sampler {
     uint32_t net_slots;
     uint32_t net_shift; /* 24 - m: a cell's coordinate times 2^net_shift is its value on the 2^-24 grid */
     uint32_t *nets;
+    uint32_t *net_index; /* per-pixel nets: the Sobol' index of each cell (nets after the first are shuffled) */
     float *tables;       /* D * n * 2 floats: table t, point j at (t * n + j) * 2 */
     uint64_t *keys;      /* D: key (d, pass 0), the common case */
     uint32_t fast_slots; /* min(D, DPC_SAMPLER_FAST_SLOTS) */
@@ -254,17 +255,20 @@ static inline uint32_t dpc_sampler_sobol1(const struct dpc_sampler *s, uint32_t 
            s->sobol1[768 + (i >> 24)];
 }
 
-/* The values of screen-ordered net sample k (< n = 2^m, m = 24 - net_shift) for tile hash kt
- * and permuted code c. */
-static inline void dpc_sampler_screen_values(const struct dpc_sampler *s, uint64_t kt, uint32_t c, uint32_t k,
-                                             float out[2]) {
+/* The index in the tile's sequence of screen-ordered net sample k (< n = 2^m, m = 24 - net_shift)
+ * for tile hash kt and permuted code c: the block at c, k shuffled in it, nested from its top bit,
+ * so that every power-of-two prefix of the pixel's samples stays an aligned block. */
+static inline uint32_t dpc_sampler_screen_index(const struct dpc_sampler *s, uint64_t kt, uint32_t c, uint32_t k) {
     const uint32_t m = 24 - s->net_shift;
     const uint64_t hp = dpc_mix64(kt ^ ((uint64_t)c << 1 | 1u));
-    /* the sample index shuffled, nested from its top bit: every power-of-two prefix of the
-     * pixel's samples stays an aligned block of the sequence */
-    const uint32_t kk =
-        dpc_sampler_reverse32(dpc_sampler_nested(dpc_sampler_reverse32(k) >> (32 - m), (uint32_t)hp)) >> (32 - m);
-    const uint32_t i = c << m | kk;
+    return c << m |
+           dpc_sampler_reverse32(dpc_sampler_nested(dpc_sampler_reverse32(k) >> (32 - m), (uint32_t)hp)) >> (32 - m);
+}
+
+/* The values of screen-ordered net sample k (< n = 2^m) for tile hash kt and permuted code c. */
+static inline void dpc_sampler_screen_values(const struct dpc_sampler *s, uint64_t kt, uint32_t c, uint32_t k,
+                                             float out[2]) {
+    const uint32_t i = dpc_sampler_screen_index(s, kt, c, k);
     const uint64_t hs = dpc_mix64(kt + 0x9E3779B97F4A7C15ull);
     /* x is i bit-reversed: scrambling i from bit 0 up is x's Owen scrambling from the top */
     const uint32_t xs = dpc_sampler_reverse32(dpc_sampler_nested(i, (uint32_t)hs));
