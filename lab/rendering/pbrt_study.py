@@ -451,7 +451,7 @@ def elow_cause(spp: int, blur_lower: bool = False) -> str:
     return (
         "the slots up to the first light sample get dpc's screen-ordered nets (in 32 x 32 tiles; ZSobol "
         "orders the whole image), the BSDF samples and later bounces dpc's sets (the integration's "
-        "default: nets there had up to x1.07 the MSE, 'dpc nets in every slot' in the diagnostics), "
+        "default; nets there too: 'dpc nets in every slot' in the diagnostics), "
         "whose error is not ordered across pixels above 1 spp, so where those slots carry the error (the "
         "path-traced scene) E_low is higher; elsewhere a miss is within what the tiles' edges, the "
         "hashes and the seeds' noise give"

@@ -44,7 +44,8 @@
  *   mask value, turned by a quarter per quarter of the strata for even spp, so that the values
  *   shifted by 0, 1/4, 1/2, 3/4, as hero-wavelength spectral sampling reads them, fill 4 spp
  *   strata once each; a net slot's 1-D value keeps its point's stratum and takes such a place
- *   in it), get_2d from the table; dimension d of get_1d and of get_2d share their index
+ *   in it, or after a net slot forms one (1,m,3)-net per pixel with that slot's 2-D values),
+ *   get_2d from the table; dimension d of get_1d and of get_2d share their index
  *   rotation and shift (hence rule 1). With frames the lattice j / (spp * F) is shifted as a
  *   whole by u, so that one frame's values spread over [0, 1) across pixels.
  * - Net slots: when spp = 2^m >= 2, slots t < N hold (0,m,2)-nets instead of the models' sets:
