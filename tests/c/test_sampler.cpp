@@ -356,10 +356,10 @@ TEST(SamplerStructure, NetSlotsGiveEachPixelANet) {
                         float v[2], w;
                         ASSERT_EQ(dpc_sampler_get_2d(s.get(), p * 91 + 5, p * 7, i, d, v), DPC_OK);
                         ASSERT_EQ(dpc_sampler_get_1d(s.get(), p * 91 + 5, p * 7, i, d, &w), DPC_OK);
-                        if (d % 3 == 0) // after a set slot or none: the stratum of the net point's x
+                        float prev[2];
+                        if (d % 3 == 0) { // after a set slot or none: the stratum of the net point's x
                             EXPECT_EQ(std::floor(w * (float)n), std::floor(v[0] * (float)n));
-                        float prev[2]; // after a net slot: one 3-D net with its 2-D values
-                        if (d % 3 != 0) {
+                        } else { // after a net slot: one 3-D net with its 2-D values
                             ASSERT_EQ(dpc_sampler_get_2d(s.get(), p * 91 + 5, p * 7, i, d - 1, prev), DPC_OK);
                             joint.insert(joint.end(), {prev[0], prev[1], w});
                         }
@@ -369,8 +369,9 @@ TEST(SamplerStructure, NetSlotsGiveEachPixelANet) {
                     }
                     EXPECT_TRUE(is_net(pts, log_n)) << "n " << n << " dimension " << d << " pass " << pass;
                     EXPECT_TRUE(fills_hero_strata(one, n)) << "n " << n << " dimension " << d << " pass " << pass;
-                    if (d % 3 != 0)
+                    if (d % 3 != 0) {
                         EXPECT_TRUE(is_13_net(joint, log_n)) << "n " << n << " dimension " << d << " pass " << pass;
+                    }
                 }
     }
     // spp not a power of two: no nets, slot 0 is the shifted set

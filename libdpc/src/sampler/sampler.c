@@ -367,8 +367,8 @@ dpc_status dpc_sampler_lookup_1d_general(const dpc_sampler *s, uint32_t x, uint3
          * (the first three Sobol' coordinates: t = 1); else the stratum of this slot's own net
          * point's x (one point per stratum, as the lattice). */
         uint32_t stratum;
-        const dpc_sampler_point q = dpc_sampler_locate(s, x, y, index, dim > 0 ? dim - 1 : dim);
-        if (dim > 0 && q.table < s->net_slots) {
+        if (dim > 0 && (dim - 1) % s->slots < s->net_slots) { /* only then the previous point is needed */
+            const dpc_sampler_point q = dpc_sampler_locate(s, x, y, index, dim - 1);
             const uint32_t i = s->net_layout ? dpc_sampler_screen_index(s, q.h, q.code, q.j)
                                              : s->net_index[(size_t)q.table * s->spp + q.j];
             const uint32_t z = dpc_sampler_nested(dpc_sampler_reverse32(sobol2(i)), (uint32_t)(r >> 32));
