@@ -237,63 +237,157 @@ static inline uint32_t next_chunk(run *rn, const dpc_sub_job *job, unsigned k, f
         DIMS(DIFF_##S)             \
         TERM_ACC(S, DIMS(ACC_##S)) \
     }
-/* Full vectors first (every lane loads: the mask is a constant the compiler folds away), then
- * the last, partial one: the same operations on every lane as one loop would do. */
-#define LOOP(DIMS, STEPS)                                                        \
-    {                                                                            \
-        run rn = {ranges, n_ranges, 0, 0};                                       \
-        const float *cols[4];                                                    \
-        uint32_t first, len;                                                     \
-        while ((len = next_chunk(&rn, job, kdim, scratch, cols, &first)) != 0) { \
-            uint32_t o = 0;                                                      \
-            for (; o + CANON <= len; o += CANON) {                               \
-                const uint32_t j = first + o;                                    \
-                const vmask load = VMASK_ALL;                                    \
-                DIMS(LOADC)                                                      \
-                STEPS                                                            \
-            }                                                                    \
-            if (o < len) {                                                       \
-                const uint32_t j = first + o;                                    \
-                const vmask load = VMASK_BELOW(len - o);                         \
-                DIMS(LOADC)                                                      \
-                STEPS                                                            \
-            }                                                                    \
-        }                                                                        \
+/* One chunk of the run: full vectors first (every lane loads: the mask is a constant the
+ * compiler folds away), then the last, partial one: the same operations on every lane as one
+ * loop would do. */
+#define CHUNK_LOOP(DIMS, STEPS)                      \
+    {                                                \
+        uint32_t o = 0;                              \
+        for (; o + CANON <= len; o += CANON) {       \
+            const uint32_t j = first + o;            \
+            const vmask load = VMASK_ALL;            \
+            DIMS(LOADC)                              \
+            STEPS                                    \
+        }                                            \
+        if (o < len) {                               \
+            const uint32_t j = first + o;            \
+            const vmask load = VMASK_BELOW(len - o); \
+            DIMS(LOADC)                              \
+            STEPS                                    \
+        }                                            \
     }
-#define QPV (VW / CANON) /* query points per vector */
-#ifndef PAIRS            /* run two vectors of query points side by side (more work in flight, more registers) */
-#define PAIRS 1
-#endif
-#define DECL(S, q, P)                                                           \
-    const vf x##S##q = vpair(xs[(P)*kdim + q], xs[((P) + QPV - 1) * kdim + q]); \
-    vf a##S##q = vsplat(0.0f);
-#define DECL_A2(q) DECL(A, q, p)
-#define DECL_B2(q) DECL(B, q, p + QPV)
-#define DECL_A1(q) DECL(A, q, p)
-#define FIN(S, q, P, HALVES) vstore_sums(a##S##q, HALVES, accs + (P)*kdim + q, kdim);
-#define FIN_A2(q) FIN(A, q, p, QPV)
-#define FIN_B2(q) FIN(B, q, p + QPV, QPV)
 
-#define SMALL_KERNEL(NAME, K, DIMS)                                                                       \
-    static void NAME(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,     \
-                     unsigned n_ranges, float *accs, float *scratch) {                                    \
-        SETUP                                                                                             \
-        const unsigned kdim = K;                                                                          \
-        unsigned p = 0;                                                                                   \
-        for (; PAIRS && p + 2 * QPV <= count; p += 2 * QPV) { /* two vectors side by side */              \
-            DIMS(DECL_A2) DIMS(DECL_B2) LOOP(DIMS, STEP(A, DIMS) STEP(B, DIMS)) DIMS(FIN_A2) DIMS(FIN_B2) \
-        }                                                                                                 \
-        for (; p < count; p += QPV) { /* the rest, one vector at a time */                                \
-            const unsigned here = count - p < QPV ? count - p : QPV;                                      \
-            DIMS(DECL_LAST)                                                                               \
-            LOOP(DIMS, STEP(A, DIMS))                                                                     \
-            DIMS(FIN_LAST)                                                                                \
-        }                                                                                                 \
+/* The same loop software-pipelined: the front of a vector's terms (differences, window, 1/sqrt)
+ * is issued one vector ahead of its back (bins, lookup, sums), so the work in the scheduler's
+ * window has its inputs ready instead of waiting on one long dependency chain (x0.85 the layer
+ * time with AVX-512 and x0.75 with AVX2 on AMD Zen 4; docs/performance.md). The terms and the
+ * order of the FMAs into each lane's sum are the loop's, so are the bits; a vector with no lane
+ * in the window is not skipped here but adds +0 to every sum, which changes no bit (a sum starts
+ * at +0 and never becomes -0). Front state: n* (this vector), back state: p* (the one before). */
+#define PIPE_DECL_T(S, q) vf pt##S##q, nt##S##q;
+#define PIPE_DECL_TA(q) PIPE_DECL_T(A, q)
+#define PIPE_DECL_TB(q) PIPE_DECL_T(B, q)
+#define PIPE_DECL(S, DIMS)           \
+    DIMS(PIPE_DECL_T##S)             \
+    vf pd2##S, py##S, nd2##S, ny##S; \
+    vmask pin##S, nin##S;
+#define FRONT_DIFF(S, q)              \
+    nt##S##q = vwrap(c##q - x##S##q); \
+    nd2##S = FMA(nt##S##q, nt##S##q, nd2##S);
+#define FRONT_DIFF_A(q) FRONT_DIFF(A, q)
+#define FRONT_DIFF_B(q) FRONT_DIFF(B, q)
+#define FRONT(S, DIMS)                  \
+    {                                   \
+        nd2##S = vsplat(0.0f);          \
+        DIMS(FRONT_DIFF_##S)            \
+        nin##S = VWINDOW(load, nd2##S); \
+        ny##S = vrsqrt(nd2##S);         \
     }
-#define DECL_LAST(q)                                                         \
-    const vf xA##q = vpair(xs[p * kdim + q], xs[(p + here - 1) * kdim + q]); \
-    vf aA##q = vsplat(0.0f);
-#define FIN_LAST(q) vstore_sums(aA##q, here, accs + p * kdim + q, kdim);
+#define PASS_T(S, q) pt##S##q = nt##S##q;
+#define PASS_TA(q) PASS_T(A, q)
+#define PASS_TB(q) PASS_T(B, q)
+#define PASS(S, DIMS)    \
+    {                    \
+        DIMS(PASS_T##S)  \
+        pd2##S = nd2##S; \
+        py##S = ny##S;   \
+        pin##S = nin##S; \
+    }
+#define BACK_ACC(S, q) a##S##q = FMA(coef##S, pt##S##q, a##S##q);
+#define BACK_ACC_A(q) BACK_ACC(A, q)
+#define BACK_ACC_B(q) BACK_ACC(B, q)
+#define BACK(S, DIMS)                                                       \
+    {                                                                       \
+        const vf u##S = VMIN(vsqrt(pd2##S, py##S) * scale, umax);           \
+        const vi b##S = VIMIN(__builtin_convertvector(u##S, vi), qmax);     \
+        const vf f##S = u##S - __builtin_convertvector(b##S, vf);           \
+        const vf g##S = FMA(f##S, LOOKUP(&dw_t, b##S), LOOKUP(&w_t, b##S)); \
+        const vf coef##S = VCOEF(pin##S, g##S, py##S);                      \
+        DIMS(BACK_ACC_##S)                                                  \
+    }
+#define CHUNK_PIPE(DIMS, FRONTS, BACKS, PASSES)                             \
+    {                                                                       \
+        {                                                                   \
+            const uint32_t j = first;                                       \
+            const vmask load = len >= CANON ? VMASK_ALL : VMASK_BELOW(len); \
+            DIMS(LOADC)                                                     \
+            FRONTS                                                          \
+            PASSES                                                          \
+        }                                                                   \
+        uint32_t o = CANON;                                                 \
+        for (; o + CANON <= len; o += CANON) {                              \
+            const uint32_t j = first + o;                                   \
+            const vmask load = VMASK_ALL;                                   \
+            DIMS(LOADC)                                                     \
+            FRONTS                                                          \
+            BACKS                                                           \
+            PASSES                                                          \
+        }                                                                   \
+        if (o < len) {                                                      \
+            const uint32_t j = first + o;                                   \
+            const vmask load = VMASK_BELOW(len - o);                        \
+            DIMS(LOADC)                                                     \
+            FRONTS                                                          \
+            BACKS                                                           \
+            PASSES                                                          \
+        }                                                                   \
+        BACKS                                                               \
+    }
+#ifndef PIPE_MAX_K /* the largest subspace whose pipelined loop fits the ISA's registers */
+#define PIPE_MAX_K 4
+#endif
+#define PAIR_LOOP(K, DIMS)                                                                                            \
+    if (K <= PIPE_MAX_K) {                                                                                            \
+        PIPE_DECL(A, DIMS)                                                                                            \
+        PIPE_DECL(B, DIMS)                                                                                            \
+            CHUNK_PIPE(DIMS, FRONT(A, DIMS) FRONT(B, DIMS), BACK(A, DIMS) BACK(B, DIMS), PASS(A, DIMS) PASS(B, DIMS)) \
+    } else CHUNK_LOOP(DIMS, STEP(A, DIMS) STEP(B, DIMS))
+#define ONE_LOOP(K, DIMS)                                              \
+    if (K <= PIPE_MAX_K) {                                             \
+        PIPE_DECL(A, DIMS)                                             \
+        CHUNK_PIPE(DIMS, FRONT(A, DIMS), BACK(A, DIMS), PASS(A, DIMS)) \
+    } else CHUNK_LOOP(DIMS, STEP(A, DIMS))
+
+#define QPV (VW / CANON) /* query points per vector */
+/* Query vector v: queries v QPV and min(v QPV + QPV - 1, count - 1) (a lone last point fills
+ * both halves of a 16-lane vector and keeps one), its lane sums in sums[v K + q]. */
+#define LAST_OF(v) ((v)*QPV + QPV - 1 < count ? (v)*QPV + QPV - 1 : count - 1)
+#define DECL(S, q, V)                                                            \
+    const vf x##S##q = vpair(xs[(V)*QPV * kdim + q], xs[LAST_OF(V) * kdim + q]); \
+    vf a##S##q = sums[(V)*kdim + q];
+#define DECL_A(q) DECL(A, q, v)
+#define DECL_B(q) DECL(B, q, v + 1)
+#define KEEP_A(q) sums[v * kdim + q] = aA##q;
+#define KEEP_B(q) sums[(v + 1) * kdim + q] = aB##q;
+
+/* The candidate run is read chunk by chunk (one chunk, gathered once, for nearly every cell)
+ * and every query vector goes over each chunk, two side by side (more work in flight), the
+ * last alone; the lane sums carry over from chunk to chunk in sums[]. */
+#define SMALL_KERNEL(NAME, K, DIMS)                                                                   \
+    static void NAME(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges, \
+                     unsigned n_ranges, float *accs, float *scratch) {                                \
+        SETUP                                                                                         \
+        const unsigned kdim = K, nv = (count + QPV - 1) / QPV;                                        \
+        vf sums[DPC_BLOCK_MAX / QPV * K];                                                             \
+        for (unsigned i = 0; i < nv * kdim; i++) sums[i] = vsplat(0.0f);                              \
+        run rn = {ranges, n_ranges, 0, 0};                                                            \
+        const float *cols[4];                                                                         \
+        uint32_t first, len;                                                                          \
+        while ((len = next_chunk(&rn, job, kdim, scratch, cols, &first)) != 0) {                      \
+            unsigned v = 0;                                                                           \
+            for (; v + 2 <= nv; v += 2) {                                                             \
+                DIMS(DECL_A) DIMS(DECL_B) PAIR_LOOP(K, DIMS) DIMS(KEEP_A) DIMS(KEEP_B)                \
+            }                                                                                         \
+            if (v < nv) {                                                                             \
+                DIMS(DECL_A) ONE_LOOP(K, DIMS) DIMS(KEEP_A)                                           \
+            }                                                                                         \
+        }                                                                                             \
+        for (unsigned v = 0; v < nv; v++) {                                                           \
+            const unsigned here = count - v * QPV < QPV ? count - v * QPV : QPV;                      \
+            for (unsigned q = 0; q < kdim; q++)                                                       \
+                vstore_sums(sums[v * kdim + q], here, accs + v * QPV * kdim + q, kdim);               \
+        }                                                                                             \
+    }
 
 SMALL_KERNEL(kernel_1, 1, DIMS_1)
 SMALL_KERNEL(kernel_2, 2, DIMS_2)
