@@ -336,11 +336,11 @@ static inline uint32_t next_chunk(run *rn, const dpc_sub_job *job, unsigned k, f
 #ifndef PIPE_MAX_K /* the largest subspace whose pipelined loop fits the ISA's registers */
 #define PIPE_MAX_K 4
 #endif
-#define PAIR_LOOP(K, DIMS)                                                                                            \
-    if (K <= PIPE_MAX_K) {                                                                                            \
-        PIPE_DECL(A, DIMS)                                                                                            \
-        PIPE_DECL(B, DIMS)                                                                                            \
-            CHUNK_PIPE(DIMS, FRONT(A, DIMS) FRONT(B, DIMS), BACK(A, DIMS) BACK(B, DIMS), PASS(A, DIMS) PASS(B, DIMS)) \
+#define PAIR_LOOP(K, DIMS)                                                                                        \
+    if (K <= PIPE_MAX_K) {                                                                                        \
+        PIPE_DECL(A, DIMS)                                                                                        \
+        PIPE_DECL(B, DIMS)                                                                                        \
+        CHUNK_PIPE(DIMS, FRONT(A, DIMS) FRONT(B, DIMS), BACK(A, DIMS) BACK(B, DIMS), PASS(A, DIMS) PASS(B, DIMS)) \
     } else CHUNK_LOOP(DIMS, STEP(A, DIMS) STEP(B, DIMS))
 #define ONE_LOOP(K, DIMS)                                              \
     if (K <= PIPE_MAX_K) {                                             \
