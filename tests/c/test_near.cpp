@@ -1,7 +1,7 @@
 // The neighbour prefilter of large all-pairs subspaces (libdpc/src/cpu/cpu_near*.c and its use
 // in cpu_cascade.c, with the lists kept across layers, cpu_lists.c), below the public API: its
 // ranges are aligned blocks that hold every point within the radius, its point lists hold every
-// such point, the scalar and AVX2 filters agree (columns and rows), the two-tier lists give every
+// such point, the scalar, AVX2 and AVX-512 filters agree (columns and rows), the two-tier lists give every
 // point its points in reach through builds, refreshes, warm moves and re-anchored far ones,
 // and a cascade run through it gives bit for bit the points of the all-pairs scan (every ISA,
 // one and two threads, point counts that are not multiples of 8).
@@ -25,6 +25,9 @@ extern "C" {
 namespace {
 
 bool has_avx2() { return dpc_cpu_isa_available(DPC_ISA_AVX2) != 0; }
+#if defined(DPC_HAVE_AVX2)
+bool has_avx512bw() { return dpc_cpu_isa_available(DPC_ISA_AVX512) && __builtin_cpu_supports("avx512bw"); }
+#endif
 
 struct Codes {
     std::vector<std::vector<uint8_t>> cols;
@@ -79,6 +82,13 @@ TEST(Prefilter, RangesAreAlignedBlocksHoldingEveryPointInReach) {
                         ASSERT_EQ(na, nb) << "k " << k << " m " << m << " query " << i;
                         if (na <= 512) ASSERT_TRUE(std::equal(a.begin(), a.begin() + 2 * na, b.begin()));
                     }
+#if defined(DPC_HAVE_AVX2)
+                    if (has_avx512bw()) {
+                        const unsigned nb = dpc_near_avx512(&c.job, i, b.data(), 512);
+                        ASSERT_EQ(na, nb) << "avx512: k " << k << " m " << m << " query " << i;
+                        if (na <= 512) ASSERT_TRUE(std::equal(a.begin(), a.begin() + 2 * na, b.begin()));
+                    }
+#endif
                     // the passing points themselves, from a point on (the lists' builds and hot scans)
                     const uint32_t from = (i * 13) % m;
                     std::vector<uint32_t> pa(m), pb(m);
@@ -87,6 +97,12 @@ TEST(Prefilter, RangesAreAlignedBlocksHoldingEveryPointInReach) {
                         ASSERT_EQ(dpc_near_points_avx2(&c.job, i, from, pb.data(), m), npa);
                         ASSERT_TRUE(std::equal(pa.begin(), pa.begin() + npa, pb.begin()));
                     }
+#if defined(DPC_HAVE_AVX2)
+                    if (has_avx512bw()) {
+                        ASSERT_EQ(dpc_near_points_avx512(&c.job, i, from, pb.data(), m), npa) << "avx512";
+                        ASSERT_TRUE(std::equal(pa.begin(), pa.begin() + npa, pb.begin()));
+                    }
+#endif
                     std::vector<char> pass(m, 0);
                     for (unsigned g = 0; g < npa; g++) {
                         ASSERT_GE(pa[g], from);
@@ -133,6 +149,9 @@ TEST(Prefilter, SaysWhenTheRangesDoNotFit) {
     std::vector<uint32_t> a(2 * 4);
     EXPECT_EQ(dpc_near_scalar(&c.job, 3, a.data(), 4), 5u);
     if (has_avx2()) EXPECT_EQ(dpc_near_avx2(&c.job, 3, a.data(), 4), 5u);
+#if defined(DPC_HAVE_AVX2)
+    if (has_avx512bw()) EXPECT_EQ(dpc_near_avx512(&c.job, 3, a.data(), 4), 5u);
+#endif
 }
 
 TEST(Prefilter, RowFilterIsTheColumnFilter) {
@@ -230,6 +249,7 @@ TEST(Lists, EveryPointKeepsItsPointsInReachThroughEveryKindOfMove) {
     std::vector<Fns> fns = {{"scalar", dpc_near_points_scalar, dpc_near_list_scalar}};
 #if defined(DPC_HAVE_AVX2)
     if (has_avx2()) fns.push_back({"avx2", dpc_near_points_avx2, dpc_near_list_avx2});
+    if (has_avx512bw()) fns.push_back({"avx512", dpc_near_points_avx512, dpc_near_list_avx2});
 #endif
     for (const Fns &f : fns)
         for (unsigned threads : {1u, 2u}) {

@@ -31,6 +31,7 @@ typedef unsigned (*dpc_near_fn)(const dpc_near_job *job, uint32_t query, uint32_
 unsigned dpc_near_scalar(const dpc_near_job *job, uint32_t query, uint32_t *ranges, unsigned cap);
 #if defined(DPC_HAVE_AVX2)
 unsigned dpc_near_avx2(const dpc_near_job *job, uint32_t query, uint32_t *ranges, unsigned cap);
+unsigned dpc_near_avx512(const dpc_near_job *job, uint32_t query, uint32_t *ranges, unsigned cap);
 #endif
 
 /* The same test, the passing points themselves: the indices j >= from (query included when it
@@ -40,6 +41,7 @@ typedef unsigned (*dpc_near_points_fn)(const dpc_near_job *job, uint32_t query, 
 unsigned dpc_near_points_scalar(const dpc_near_job *job, uint32_t query, uint32_t from, uint32_t *out, unsigned cap);
 #if defined(DPC_HAVE_AVX2)
 unsigned dpc_near_points_avx2(const dpc_near_job *job, uint32_t query, uint32_t from, uint32_t *out, unsigned cap);
+unsigned dpc_near_points_avx512(const dpc_near_job *job, uint32_t query, uint32_t from, uint32_t *out, unsigned cap);
 #endif
 
 /* Append block b (cut at m) to the ranges, merged with the last one when adjacent; returns 0 when
