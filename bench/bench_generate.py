@@ -10,7 +10,10 @@ Builds libdpc and bench/bench_generate.c in build/bench (Release), then measures
 3. all-pairs throughput: a 2-D model whose radius covers the torus (every pair interacts),
    m = 4,096, 4 layers: m^2 * layers / time pair interactions per second;
 4. the trained 2-D blue-noise models bnot-2d (rho = 4) and bnot-2d-wide (rho = 8) at m = 1,024
-   and 65,536 on the fastest ISA.
+   and 65,536 on the fastest ISA;
+5. the cascade against its arithmetic limit: bnot-2d at 1,024 and 65,536 points on the AVX2 and
+   AVX-512 paths against (operations per neighbour pair x measured neighbours per point and layer
+   / the core's peak rate of float vector operations, bench/bench_peak.c).
 Medians over repeated runs; ratios are taken within this one run.
 
     python bench/bench_generate.py --against REV
@@ -26,6 +29,7 @@ import argparse
 import json
 import os
 import platform
+import re
 import subprocess
 from pathlib import Path
 
@@ -108,6 +112,110 @@ def run(exe: Path, model: Path, isa: str, counts: list[int]) -> list[dict]:
     return [json.loads(line) for line in out.splitlines() if line.strip()]
 
 
+OPS_FIXED, OPS_PER_DIM = 26, 5
+"""Float operations per neighbour pair of a k-D subspace in the canonical evaluation order
+(docs/model-format.md §3), one lane each: per dimension the difference, rint, the wrapped
+difference, its square's FMA and the sum's FMA (5k); the window's two comparisons, 1/sqrt (two
+integer operations, six multiplications, two FMAs), sqrt (two multiplications, two FMAs), the bin
+position (multiply, minimum), bin and fraction (two conversions, a minimum, a subtraction), two
+table entries and the FMA between them, and g * y (26). 36 for 2-D."""
+
+
+def neighbours(model: Path, m: int) -> float:
+    """Mean number of other points in a layer's window (eps < d < r, on the torus) per point and
+    layer, counted on the model's output set of m points (seed 1)."""
+    from scipy.spatial import cKDTree  # noqa: PLC0415
+
+    import dpc  # noqa: PLC0415
+    from dpc.model_file import read_model  # noqa: PLC0415
+
+    spec = read_model(model)
+    x = np.asarray(dpc.load(str(model)).generate(seed=1, n_points=m), dtype=np.float64)
+    tree = cKDTree(np.mod(x, 1.0), boxsize=1.0)
+    h = m ** (-1.0 / spec.dims)
+    counts = []
+    for layer in spec.layers:
+        r, e = min(float(layer.radius[0]) * h, 0.5), float(layer.eps) * h
+        inside = tree.count_neighbors(tree, r) - tree.count_neighbors(tree, e)  # ordered pairs, self at e
+        counts.append(inside / m)
+    return float(np.mean(counts))
+
+
+def peak_rates() -> dict:
+    """{isa: (lanes, peak vector operations per second)} from bench_peak.c: the better of FMAs
+    alone and FMAs beside additions."""
+    exe = build("dpc_bench_peak")
+    out = subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout
+    rates = {}
+    for line in out.splitlines():
+        r = json.loads(line)
+        rates[r["isa"]] = (r["lanes"], max(r["fma_ops_per_s"], r["mixed_ops_per_s"]), r)
+    return rates
+
+
+def limit_section(exe: Path, isas: list[str]) -> tuple[list[str], list[tuple[str, str, bool]]]:
+    """The bnot-2d cascade on the vector paths against its arithmetic limit, and the goals."""
+    model = ROOT / "models" / "bnot-2d.onnx"
+    from dpc.model_file import read_model  # noqa: PLC0415
+
+    layers, k = len(read_model(model).layers), 2
+    ops = OPS_FIXED + OPS_PER_DIM * k
+    peaks = peak_rates()
+    counts = [1024, 65536]
+    nb = {m: neighbours(model, m) for m in counts}
+    lines = [
+        "",
+        "## The cascade against its arithmetic limit (`bnot-2d`)",
+        "",
+        f"Limit per point and layer = operations per neighbour pair ({ops} for 2-D: the canonical order of "
+        "[model-format.md §3](model-format.md#3-what-one-pointfilter-computes), counted in `bench_generate.py`) x "
+        "measured neighbours per point and layer (points in the window eps < d < r of the output set) / the "
+        "core's peak rate of float lane operations (`bench/bench_peak.c`: the better of independent FMAs alone "
+        "and FMAs beside additions).",
+        "",
+        "| ISA | peak: FMAs alone | peak: FMAs + adds | lanes |",
+        "|---|---:|---:|---:|",
+    ]
+    vec = [isa for isa in isas if isa in peaks]
+    for isa in vec:
+        lanes, _, r = peaks[isa]
+        lines.append(
+            f"| {isa} | {r['fma_ops_per_s'] / 1e9:.2f} G vector ops/s | {r['mixed_ops_per_s'] / 1e9:.2f} G | {lanes} |"
+        )
+    lines += [
+        "",
+        "| ISA | points | neighbours | limit per point and layer | limit | measured | x limit |",
+        "|---|---:|---:|---:|---:|---:|---:|",
+    ]
+    checks = []
+    goal_ms = {"avx512": 2.0, "avx2": 3.0}
+    for isa in vec:
+        lanes, peak, _ = peaks[isa]
+        rows = run(exe, model, isa, counts)
+        for r in rows:
+            m = r["m"]
+            per = ops * nb[m] / (lanes * peak)
+            limit = per * m * layers
+            t = r["cpu_median_s"]
+            lines.append(
+                f"| {isa} | {m:,} | {nb[m]:.1f} | {per * 1e9:.1f} ns | {limit * 1e3:.2f} ms | {t * 1e3:.2f} ms | "
+                f"{t / limit:.1f}x |"
+            )
+            name = f"bnot-2d, {m:,} points, {isa}"
+            checks.append((f"{name}: <= 2x the arithmetic limit", f"{t / limit:.1f}x", t <= 2 * limit))
+            if isa in goal_ms:
+                per_k = t * 1024 / m * 1e3
+                checks.append(
+                    (
+                        f"{name}: <= {goal_ms[isa]:.1f} ms per 1,024 points",
+                        f"{per_k:.2f} ms",
+                        per_k <= goal_ms[isa],
+                    )
+                )
+    lines += ["", "Thread CPU time (median); the limit is the time the arithmetic alone takes at the peak rate."]
+    return lines, checks
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="skip the 1,048,576-point runs")
@@ -179,6 +287,8 @@ def main() -> None:
         rho = read_model(path).layers[0].radius[0]
         r = run(exe, path, best, [1024, 65536])
         lines.append(f"| `{name}` | {rho:g} | {r[0]['median_s'] * 1e3:.2f} ms | {r[1]['median_s'] * 1e3:.1f} ms |")
+    limit_lines, limit_checks = limit_section(exe, isas)
+    lines += limit_lines
     lines += ["", f"Load average while measuring: {os.getloadavg()[0]:.2f} (1 min) on {os.cpu_count()} CPUs."]
     t1k = rows[best][0]["median_s"]
     checks = [(f"1,024 points <= 2 ms ({best})", f"{t1k * 1e3:.2f} ms", t1k <= 2e-3)]
@@ -194,6 +304,7 @@ def main() -> None:
                 rates["avx2"] >= 0.5e9,
             )
         )
+    checks += limit_checks
     lines += ["", "## Against the speed targets", "", "| target | measured | met |", "|---|---:|---|"]
     lines += [f"| {name} | {value} | {'yes' if ok else '**no**'} |" for name, value, ok in checks]
     lines += [
@@ -205,8 +316,8 @@ def main() -> None:
     previous = out.read_text() if out.exists() else ""
     if args.against:
         lines += against(args.against, exe, isas[1:] or ["scalar"])
-    elif "\n## Against " in previous:  # keep the last comparison until the next one
-        start = previous.index("\n## Against ")
+    elif kept := re.search(r"\n## Against (?!the )", previous):  # keep the last comparison until the next one
+        start = kept.start()
         end = previous.find("\n## ", start + 1)
         lines += previous[start : end if end >= 0 else None].rstrip("\n").split("\n")
     lines.append("")
