@@ -19,7 +19,7 @@ Medians over repeated runs; ratios are taken within this one run.
     python bench/bench_generate.py --against REV
 
 also builds the benchmark from git revision REV (e.g. the commit before a kernel change) and
-times both builds alternately, three rounds, on every vector ISA the CPU has (repulsion-2d and
+times both builds alternately, seven rounds, on every vector ISA the CPU has (repulsion-2d and
 bnot-2d at 1,024 / 16,384 / 262,144 points): the section "Against REV" of docs/performance.md.
 """
 
@@ -64,8 +64,8 @@ def against(rev: str, exe: Path, isas: list[str]) -> list[str]:
         f"## Against {rev}",
         "",
         f"`python bench/bench_generate.py --against {rev}`: this tree and revision {rev} built alike and "
-        "timed alternately (three rounds; medians of thread CPU time, which a busy machine disturbs less "
-        "than wall time).",
+        "timed alternately (seven rounds, so that a burst of load on a shared host moves no median; medians "
+        "of thread CPU time, which a busy machine disturbs less than wall time).",
         "",
         f"| model | ISA | points | {rev} | this tree | ratio |",
         "|---|---|---:|---:|---:|---:|",
@@ -73,7 +73,7 @@ def against(rev: str, exe: Path, isas: list[str]) -> list[str]:
     for name in ("repulsion-2d", "bnot-2d"):
         model = ROOT / "models" / f"{name}.onnx"
         for isa in isas:
-            a, b = alternate(old, exe, model, isa, counts)
+            a, b = alternate(old, exe, model, isa, counts, rounds=7)
             for m in counts:
                 ta, tb = a[m], b[m]
                 lines.append(f"| `{name}` | {isa} | {m:,} | {ta * 1e3:.2f} ms | {tb * 1e3:.2f} ms | {tb / ta:.2f}x |")
@@ -81,13 +81,13 @@ def against(rev: str, exe: Path, isas: list[str]) -> list[str]:
 
 
 def alternate(
-    old: Path, exe: Path, model: Path, isa: str, counts: list[int], key: str = "cpu_median_s"
+    old: Path, exe: Path, model: Path, isa: str, counts: list[int], key: str = "cpu_median_s", rounds: int = 3
 ) -> tuple[dict, dict]:
     """Thread CPU time (or, key="median_s", wall time: for several threads) per count of two
-    builds run alternately, three rounds: the median of each build's per-round medians."""
+    builds run alternately, `rounds` rounds: the median of each build's per-round medians."""
     a = {m: [] for m in counts}
     b = {m: [] for m in counts}
-    for _ in range(3):
+    for _ in range(rounds):
         for r in run(old, model, isa, counts):
             a[r["m"]].append(r[key])
         for r in run(exe, model, isa, counts):

@@ -90,17 +90,19 @@ def main() -> None:
     a, b = alternate(prev, exe, ten, f"{isa}:2", mid, key="median_s")
     for m in mid:
         lines.append(f"| `bnot-10d` | {m:,} | {a[m] * 1e3:,.1f} ms | {b[m] * 1e3:,.1f} ms | {a[m] / b[m]:.1f}x |")
-    goal = [t for t in (scaling[2].get(8192), b.get(8192)) if t is not None]
-    if goal:
+    two = [t for t in (scaling[2].get(8192), b.get(8192)) if t is not None]
+    if two:
         # both two-thread medians of this run (the scaling table's and the alternating rounds'):
         # on a shared host they can differ by a fifth, and the goal is met only if both are
-        met = "met" if max(goal) <= 0.1 else "**not met**"
-        shown = " and ".join(f"{t * 1e3:.0f} ms" for t in goal)
-        lines += [
-            "",
-            f"Goal (8,192 10-D points through bnot-10d in <= 100 ms on 2 cores): {met}: {shown} "
-            "here (the scaling table's median, then the alternating rounds').",
+        one = scaling[1][8192]
+        goals = [
+            ("<= 60 ms on 2 threads", max(two), 0.060, " and ".join(f"{t * 1e3:.0f} ms" for t in two)),
+            ("<= 100 ms on 1 thread", one, 0.100, f"{one * 1e3:.0f} ms"),
         ]
+        lines += ["", "| goal: 8,192 points through bnot-10d | measured | x goal | met |", "|---|---:|---:|---|"]
+        for name, worst, limit, shown in goals:
+            lines.append(f"| {name} | {shown} | {worst / limit:.2f} | {'yes' if worst <= limit else '**no**'} |")
+        lines += ["", "(Two threads: the scaling table's median, then the alternating rounds'.)"]
     text = "\n".join(lines)
     print(text)
     replace_section(DOC, "bench_highdim", text)
