@@ -1,8 +1,8 @@
 // The neighbour prefilter of large all-pairs subspaces (libdpc/src/cpu/cpu_near*.c and its use
 // in cpu_cascade.c, with the lists kept across layers, cpu_lists.c), below the public API: its
 // ranges are aligned blocks that hold every point within the radius, its point lists hold every
-// such point, the scalar, AVX2 and AVX-512 filters agree (columns and rows), the two-tier lists give every
-// point its points in reach through builds, refreshes, warm moves and re-anchored far ones,
+// such point, the scalar, AVX2 and (points) AVX-512 filters agree (columns and rows), the two-tier
+// lists give every point its points in reach through builds, refreshes, warm moves and re-anchored far ones,
 // and a cascade run through it gives bit for bit the points of the all-pairs scan (every ISA,
 // one and two threads, point counts that are not multiples of 8).
 #include <cmath>
@@ -82,13 +82,6 @@ TEST(Prefilter, RangesAreAlignedBlocksHoldingEveryPointInReach) {
                         ASSERT_EQ(na, nb) << "k " << k << " m " << m << " query " << i;
                         if (na <= 512) ASSERT_TRUE(std::equal(a.begin(), a.begin() + 2 * na, b.begin()));
                     }
-#if defined(DPC_HAVE_AVX2)
-                    if (has_avx512bw()) {
-                        const unsigned nb = dpc_near_avx512(&c.job, i, b.data(), 512);
-                        ASSERT_EQ(na, nb) << "avx512: k " << k << " m " << m << " query " << i;
-                        if (na <= 512) ASSERT_TRUE(std::equal(a.begin(), a.begin() + 2 * na, b.begin()));
-                    }
-#endif
                     // the passing points themselves, from a point on (the lists' builds and hot scans)
                     const uint32_t from = (i * 13) % m;
                     std::vector<uint32_t> pa(m), pb(m);
@@ -149,9 +142,6 @@ TEST(Prefilter, SaysWhenTheRangesDoNotFit) {
     std::vector<uint32_t> a(2 * 4);
     EXPECT_EQ(dpc_near_scalar(&c.job, 3, a.data(), 4), 5u);
     if (has_avx2()) EXPECT_EQ(dpc_near_avx2(&c.job, 3, a.data(), 4), 5u);
-#if defined(DPC_HAVE_AVX2)
-    if (has_avx512bw()) EXPECT_EQ(dpc_near_avx512(&c.job, 3, a.data(), 4), 5u);
-#endif
 }
 
 TEST(Prefilter, RowFilterIsTheColumnFilter) {

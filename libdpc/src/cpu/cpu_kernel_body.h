@@ -394,13 +394,25 @@ SMALL_KERNEL(kernel_2, 2, DIMS_2)
 SMALL_KERNEL(kernel_3, 3, DIMS_3)
 SMALL_KERNEL(kernel_4, 4, DIMS_4)
 
+/* The back of kernel_n's vector in flight (pd2, py, pin) with its differences T. */
+#define BACK_N(T)                                                                  \
+    if (VMASK_ANY(pin)) {                                                          \
+        const vf u = VMIN(vsqrt(pd2, py) * scale, umax);                           \
+        const vi b = VIMIN(__builtin_convertvector(u, vi), qmax);                  \
+        const vf f = u - __builtin_convertvector(b, vf);                           \
+        const vf coef = VCOEF(pin, FMA(f, LOOKUP(&dw_t, b), LOOKUP(&w_t, b)), py); \
+        for (unsigned q = 0; q < k; q++) a[q] = FMA(coef, (T)[q], a[q]);           \
+    }
 /* Any subspace size: per-dimension values in arrays. Large subspaces run all pairs: one range,
- * or the prefilter's ranges, read in place (no scratch). */
+ * or the prefilter's ranges, read in place (no scratch). Pipelined like the small kernels (the
+ * front of the next vector before the back of this one, across range boundaries too), the
+ * differences of the two vectors in flight in two buffers; a vector with no lane in the window
+ * skips its back (it would add +0 to every sum). */
 static void kernel_n(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges, unsigned n_ranges,
                      float *accs, float *scratch) {
     SETUP
     const unsigned k = job->k;
-    vf x[DPC_MAX_DIMS], a[DPC_MAX_DIMS], t[DPC_MAX_DIMS];
+    vf x[DPC_MAX_DIMS], a[DPC_MAX_DIMS], t[2][DPC_MAX_DIMS];
     for (unsigned p = 0; p < count; p += QPV) {
         const unsigned here = count - p < QPV ? count - p : QPV;
         for (unsigned q = 0; q < k; q++) {
@@ -410,17 +422,24 @@ static void kernel_n(const dpc_sub_job *job, const float *xs, unsigned count, co
         run rn = {ranges, n_ranges, 0, 0};
         const float *cols[DPC_MAX_DIMS];
         uint32_t first, len;
+        unsigned cur = 0, pending = 0;
+        vf pd2 = vsplat(0.0f), py = vsplat(0.0f);
+        vmask pin = VMASK_BELOW(0);
         while ((len = next_chunk(&rn, job, k, scratch, cols, &first)) != 0) {
             for (uint32_t o = 0; o < len; o += CANON) {
                 const vmask load = VMASK_BELOW(len - o);
-                vf d2A = vsplat(0.0f);
+                vf d2 = vsplat(0.0f);
                 for (unsigned q = 0; q < k; q++) {
-                    t[q] = vwrap(vload8(cols[q] + first + o) - x[q]);
-                    d2A = FMA(t[q], t[q], d2A);
+                    t[cur][q] = vwrap(vload8(cols[q] + first + o) - x[q]);
+                    d2 = FMA(t[cur][q], t[cur][q], d2);
                 }
-                TERM_ACC(A, for (unsigned q = 0; q < k; q++) a[q] = FMA(coefA, t[q], a[q]);)
+                const vmask in = VWINDOW(load, d2);
+                const vf y = vrsqrt(d2);
+                if (pending) BACK_N(t[cur ^ 1]);
+                pd2 = d2, py = y, pin = in, cur ^= 1, pending = 1;
             }
         }
+        if (pending) BACK_N(t[cur ^ 1]);
         for (unsigned q = 0; q < k; q++) vstore_sums(a[q], here, accs + p * k + q, k);
     }
 }

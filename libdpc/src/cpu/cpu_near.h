@@ -31,7 +31,6 @@ typedef unsigned (*dpc_near_fn)(const dpc_near_job *job, uint32_t query, uint32_
 unsigned dpc_near_scalar(const dpc_near_job *job, uint32_t query, uint32_t *ranges, unsigned cap);
 #if defined(DPC_HAVE_AVX2)
 unsigned dpc_near_avx2(const dpc_near_job *job, uint32_t query, uint32_t *ranges, unsigned cap);
-unsigned dpc_near_avx512(const dpc_near_job *job, uint32_t query, uint32_t *ranges, unsigned cap);
 #endif
 
 /* The same test, the passing points themselves: the indices j >= from (query included when it
