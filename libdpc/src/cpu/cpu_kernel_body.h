@@ -259,8 +259,8 @@ static inline uint32_t next_chunk(run *rn, const dpc_sub_job *job, unsigned k, f
 
 /* The same loop software-pipelined: the front of a vector's terms (differences, window, 1/sqrt)
  * is issued one vector ahead of its back (bins, lookup, sums), so the work in the scheduler's
- * window has its inputs ready instead of waiting on one long dependency chain (x0.85 the layer
- * time with AVX-512 and x0.75 with AVX2 on AMD Zen 4; docs/performance.md). The terms and the
+ * window has its inputs ready instead of waiting on one long dependency chain (the layer's time
+ * falls by a tenth to a quarter on AMD Zen 4: docs/performance.md). The terms and the
  * order of the FMAs into each lane's sum are the loop's, so are the bits; a vector with no lane
  * in the window is not skipped here but adds +0 to every sum, which changes no bit (a sum starts
  * at +0 and never becomes -0). Front state: n* (this vector), back state: p* (the one before). */
