@@ -189,6 +189,17 @@ static inline uint32_t next_chunk(run *rn, const dpc_sub_job *job, unsigned k, f
     return got;
 }
 
+/* coef = g(d) / d of the lanes in the window (+0 elsewhere), from d2 and y ~ 1 / sqrt(d2): the
+ * bin position, its bin and fraction, the table's interpolation, times y. */
+static inline __attribute__((always_inline)) vf term_coef(vf d2, vf y, vmask in, vf scale, vf umax, vi qmax,
+                                                          const table_regs *w_t, const table_regs *dw_t) {
+    const vf u = VMIN(vsqrt(d2, y) * scale, umax);
+    const vi b = VIMIN(__builtin_convertvector(u, vi), qmax);
+    const vf f = u - __builtin_convertvector(b, vf);
+    return VCOEF(in, FMA(f, LOOKUP(dw_t, b), LOOKUP(w_t, b)), y);
+}
+#define COEF(d2, y, in) term_coef(d2, y, in, scale, umax, qmax, &w_t, &dw_t)
+
 #define SETUP                                                                                    \
     const vf cut2 = vsplat(job->cutoff * job->cutoff), rad2 = vsplat(job->radius * job->radius); \
     const vf scale = vsplat(job->scale), umax = vsplat(job->umax);                               \
@@ -201,18 +212,13 @@ static inline uint32_t next_chunk(run *rn, const dpc_sub_job *job, unsigned k, f
  * the window eps < d < r tested on squares (cut2 < d2 < rad2, both squared in float), then
  * coef = g(d) / d and a += coef * delta for every dimension (ACC). A vector with no lane in the
  * window is skipped: it would add +0 to every sum, which leaves the sums' bits as they are. */
-#define TERM_ACC(S, ACC)                                                        \
-    {                                                                           \
-        const vmask in##S = VWINDOW(load, d2##S);                               \
-        if (VMASK_ANY(in##S)) {                                                 \
-            const vf y##S = vrsqrt(d2##S);                                      \
-            const vf u##S = VMIN(vsqrt(d2##S, y##S) * scale, umax);             \
-            const vi b##S = VIMIN(__builtin_convertvector(u##S, vi), qmax);     \
-            const vf f##S = u##S - __builtin_convertvector(b##S, vf);           \
-            const vf g##S = FMA(f##S, LOOKUP(&dw_t, b##S), LOOKUP(&w_t, b##S)); \
-            const vf coef##S = VCOEF(in##S, g##S, y##S);                        \
-            ACC                                                                 \
-        }                                                                       \
+#define TERM_ACC(S, ACC)                                          \
+    {                                                             \
+        const vmask in##S = VWINDOW(load, d2##S);                 \
+        if (VMASK_ANY(in##S)) {                                   \
+            const vf coef##S = COEF(d2##S, vrsqrt(d2##S), in##S); \
+            ACC                                                   \
+        }                                                         \
     }
 
 /* Small subspaces (K <= 4): every per-dimension value its own variable. Each vector of lanes
@@ -296,14 +302,10 @@ static inline uint32_t next_chunk(run *rn, const dpc_sub_job *job, unsigned k, f
 #define BACK_ACC(S, q) a##S##q = FMA(coef##S, pt##S##q, a##S##q);
 #define BACK_ACC_A(q) BACK_ACC(A, q)
 #define BACK_ACC_B(q) BACK_ACC(B, q)
-#define BACK(S, DIMS)                                                       \
-    {                                                                       \
-        const vf u##S = VMIN(vsqrt(pd2##S, py##S) * scale, umax);           \
-        const vi b##S = VIMIN(__builtin_convertvector(u##S, vi), qmax);     \
-        const vf f##S = u##S - __builtin_convertvector(b##S, vf);           \
-        const vf g##S = FMA(f##S, LOOKUP(&dw_t, b##S), LOOKUP(&w_t, b##S)); \
-        const vf coef##S = VCOEF(pin##S, g##S, py##S);                      \
-        DIMS(BACK_ACC_##S)                                                  \
+#define BACK(S, DIMS)                                   \
+    {                                                   \
+        const vf coef##S = COEF(pd2##S, py##S, pin##S); \
+        DIMS(BACK_ACC_##S)                              \
     }
 #define CHUNK_PIPE(DIMS, FRONTS, BACKS, PASSES)                             \
     {                                                                       \
@@ -395,13 +397,10 @@ SMALL_KERNEL(kernel_3, 3, DIMS_3)
 SMALL_KERNEL(kernel_4, 4, DIMS_4)
 
 /* The back of kernel_n's vector in flight (pd2, py, pin) with its differences T. */
-#define BACK_N(T)                                                                  \
-    if (VMASK_ANY(pin)) {                                                          \
-        const vf u = VMIN(vsqrt(pd2, py) * scale, umax);                           \
-        const vi b = VIMIN(__builtin_convertvector(u, vi), qmax);                  \
-        const vf f = u - __builtin_convertvector(b, vf);                           \
-        const vf coef = VCOEF(pin, FMA(f, LOOKUP(&dw_t, b), LOOKUP(&w_t, b)), py); \
-        for (unsigned q = 0; q < k; q++) a[q] = FMA(coef, (T)[q], a[q]);           \
+#define BACK_N(T)                                                        \
+    if (VMASK_ANY(pin)) {                                                \
+        const vf coef = COEF(pd2, py, pin);                              \
+        for (unsigned q = 0; q < k; q++) a[q] = FMA(coef, (T)[q], a[q]); \
     }
 /* Any subspace size: per-dimension values in arrays. Large subspaces run all pairs: one range,
  * or the prefilter's ranges, read in place (no scratch). Pipelined like the small kernels (the
