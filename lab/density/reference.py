@@ -98,13 +98,40 @@ def nearest_walls(p: np.ndarray, h: np.ndarray, segs: np.ndarray) -> tuple[np.nd
     return w, n
 
 
-def _images(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The set and its mirror images at the square's sides: (9 m, 2) coordinates and the index of
-    the point each image shows."""
-    xs = (p[:, 0], -p[:, 0], 2.0 - p[:, 0])
-    ys = (p[:, 1], -p[:, 1], 2.0 - p[:, 1])
-    pts = np.concatenate([np.stack([x, y], 1) for y in ys for x in xs])
-    return pts, np.tile(np.arange(len(p)), 9)
+GLIDE = 4.0  # mean spacings: the shift along a side of the images across it (at most 1/4)
+
+
+def glide(m: int) -> float:
+    return float(np.float32(min(GLIDE / np.sqrt(m), 0.25)))
+
+
+def _images(p: np.ndarray, tau: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The set and its images at the square's sides: (coordinates, the index of the point each
+    shows, its family). Across a side an image is the mirror image shifted along the side by
+    -tau (family 1: seen by the points of the lower or left half) or +tau (family 2: the upper
+    or right half), kept where the shifted coordinate stays in [0, 1); families 1 and 2 across
+    the left and right sides, 3 and 4 across the bottom and top; the corners' images (family 5)
+    are mirrored twice and not shifted."""
+    x, y = p[:, 0], p[:, 1]
+    idx = np.arange(len(p))
+    pts, owner, fam = [p], [idx], [np.zeros(len(p), np.int64)]
+    for f, s in ((1, -tau), (2, tau)):
+        for mx in (-x, 2.0 - x):
+            k = (y + s >= 0) & (y + s < 1)
+            pts.append(np.stack([mx, y + s], 1)[k]), owner.append(idx[k]), fam.append(np.full(k.sum(), f))
+    for f, s in ((3, -tau), (4, tau)):
+        for my in (-y, 2.0 - y):
+            k = (x + s >= 0) & (x + s < 1)
+            pts.append(np.stack([x + s, my], 1)[k]), owner.append(idx[k]), fam.append(np.full(k.sum(), f))
+    for mx in (-x, 2.0 - x):
+        for my in (-y, 2.0 - y):
+            pts.append(np.stack([mx, my], 1)), owner.append(idx), fam.append(np.full(len(p), 5))
+    return np.concatenate(pts), np.concatenate(owner), np.concatenate(fam)
+
+
+def _seen(fam: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Which images a point at q sees: the set, the corners and the families of its halves."""
+    return (fam == 0) | (fam == 5) | (fam == (1 if q[1] < 0.5 else 2)) | (fam == (3 if q[0] < 0.5 else 4))
 
 
 def layer(p, hcell, spec_layer, pair: str = "harmonic", walls: bool = True, segs: np.ndarray | None = None):
@@ -117,7 +144,7 @@ def layer(p, hcell, spec_layer, pair: str = "harmonic", walls: bool = True, segs
     w = spec_layer.kernels[0].astype(np.float64)
     b = len(w)
     mean = PAIR_MEANS[pair]
-    imgs, owner = _images(p)
+    imgs, owner, fam = _images(p, glide(len(p)))
     tree = cKDTree(imgs)
     reach = np.minimum(rho * np.maximum(2.0 * h, h.max()) if pair != "harmonic" else rho * 2.0 * h, 0.5)
     lists = tree.query_ball_point(p, reach)
@@ -136,6 +163,7 @@ def layer(p, hcell, spec_layer, pair: str = "harmonic", walls: bool = True, segs
 
     for i, nb in enumerate(lists):
         nb = np.asarray(nb, dtype=np.int64)
+        nb = nb[_seen(fam[nb], p[i])]
         if not len(nb):
             continue
         delta = imgs[nb] - p[i]

@@ -51,6 +51,14 @@ static float cell_h(const density_map *d, float x, float y) { return d->h[cell_i
  * the rows of points beside a wall see it as the continuation of their side. */
 #define WALL_REACH 2.0
 
+/* The square's sides are glide mirrors: the image of a point across a side is its mirror image
+ * shifted along the side by GLIDE mean spacings (at most a quarter of the side), towards the
+ * side's middle from the half the query lies in, and dropped where that leaves the side. A plain
+ * mirror shows each point its own image, which holds the first points in a row half a spacing
+ * from the side (the strip half a spacing wide along it held 1.2 times its count); shifted, the
+ * images are other points of the same side and density, as a torus would show them. */
+#define GLIDE 4.0
+
 static double wall_reach(float h) {
     const double r = WALL_REACH * (double)h;
     return r < 0.5 ? r : 0.5;
@@ -209,6 +217,7 @@ typedef struct layer_pass {
     const density_map *map;
     uint32_t G, n_leaves;
     float rho, h_max;
+    float glide; /* the shift along a side of the images across it (GLIDE) */
     dpc_density_job job;
     dpc_density_fn kernel;
     float *scratch; /* SLOT_FLOATS per slot */
@@ -237,9 +246,9 @@ static int cell_span(float lo, float hi, uint32_t n, uint32_t *g0, uint32_t *g1)
 /* Image k of an axis: v -> off + sgn v (0: the set, 1: mirrored at 0, 2: mirrored at 1). */
 static const float img_off[3] = {0.0f, 0.0f, 2.0f}, img_sgn[3] = {1.0f, -1.0f, -1.0f};
 
-/* The originals [lo, hi] whose image k lies within R of [v0, v1]. */
-static void image_span(int k, float v0, float v1, float R, float *lo, float *hi) {
-    if (k == 0) *lo = v0 - R, *hi = v1 + R;
+/* The originals [lo, hi] whose image k lies within R of [v0, v1]; k = 0 with a shift s: v -> s + v. */
+static void image_span(int k, float s, float v0, float v1, float R, float *lo, float *hi) {
+    if (k == 0) *lo = v0 - R - s, *hi = v1 + R - s;
     else if (k == 1) *lo = -v1 - R, *hi = R - v0;
     else *lo = 2.0f - v1 - R, *hi = 2.0f - v0 + R;
 }
@@ -259,6 +268,7 @@ typedef struct group {
     float *dense;         /* the kernel's scratch */
     uint32_t r0, r1;      /* the range waiting to be appended */
     float ax, bx, ay, by; /* the image it is seen through */
+    int clip_x, clip_y;   /* the image keeps only the points whose shifted coordinate stays in [0, 1) */
     float qlo, qhi;       /* the queries' smallest and largest h */
     float wlo, whi;       /* the waiting range's */
     float clo, chi;       /* the chunk's */
@@ -279,6 +289,7 @@ static void flush(const layer_pass *p, group *g) {
 }
 
 typedef float v8 __attribute__((vector_size(32)));
+typedef int32_t v8i __attribute__((vector_size(32)));
 
 /* Append the waiting range of sorted points, seen through its image, to the chunk. */
 static void append(const layer_pass *p, group *g) {
@@ -300,6 +311,14 @@ static void append(const layer_pass *p, group *g) {
             memcpy(&va, p->sa + j0 + k, sizeof va);
             vx = oxv + sxv * vx;
             vy = oyv + syv * vy;
+            if (g->clip_x | g->clip_y) { /* a point whose image leaves the side's span is far away */
+                const v8 c = g->clip_x ? vx : vy;
+                const v8i in = (c >= (v8){0}) & (c < (v8){0} + 1.0f);
+                const v8i far = (v8i)((v8){0} + FAR_AWAY);
+                vx = (v8)(((v8i)vx & in) | (far & ~in));
+                vy = (v8)(((v8i)vy & in) | (far & ~in));
+                va = (v8)((v8i)va & in);
+            }
             memcpy(cx + k, &vx, sizeof vx);
             memcpy(cy + k, &vy, sizeof vy);
             memcpy(ca + k, &va, sizeof va);
@@ -389,16 +408,23 @@ static void gather(const layer_pass *p, group *g) {
     const uint32_t G = p->G;
     const float inv_g = 1.0f / (float)G;
     const float R = reach(p->rho, hq, p->h_max);
+    /* the images across a side glide along it towards the side's middle (the group lies in one
+     * half of each axis: the grid is even) */
+    const float sx = box[0] < 0.5f ? -p->glide : p->glide, sy = box[2] < 0.5f ? -p->glide : p->glide;
     for (int iy = 0; iy < 3; iy++) {
         float ylo, yhi, xlo, xhi;
         uint32_t gy0, gy1, gx0, gx1;
-        image_span(iy, box[2], box[3], R, &ylo, &yhi);
-        if (!cell_span(ylo, yhi, G, &gy0, &gy1)) continue;
-        g->ay = img_off[iy], g->by = img_sgn[iy];
         for (int ix = 0; ix < 3; ix++) {
-            image_span(ix, box[0], box[1], R, &xlo, &xhi);
+            /* across a left or right side (ix > 0, iy = 0) y shifts by sy; across the bottom or
+             * top x by sx; the set and the corners' images do not shift */
+            const float ty = ix > 0 && iy == 0 ? sy : 0.0f, tx = iy > 0 && ix == 0 ? sx : 0.0f;
+            image_span(iy, ty, box[2], box[3], R, &ylo, &yhi);
+            if (!cell_span(ylo, yhi, G, &gy0, &gy1)) continue;
+            g->ay = iy ? img_off[iy] : ty, g->by = img_sgn[iy];
+            image_span(ix, tx, box[0], box[1], R, &xlo, &xhi);
             if (!cell_span(xlo, xhi, G, &gx0, &gx1)) continue;
-            g->ax = img_off[ix], g->bx = img_sgn[ix];
+            g->ax = ix ? img_off[ix] : tx, g->bx = img_sgn[ix];
+            g->clip_x = tx != 0.0f, g->clip_y = ty != 0.0f;
             g->r0 = g->r1 = 0;
             for (uint32_t gy = gy0; gy <= gy1; gy++) {
                 const float gap_y = image_gap(g->ay, g->by, gy, inv_g, box[2], box[3]);
@@ -526,7 +552,8 @@ static dpc_density_fn pick_kernel(dpc_isa isa) {
  * cell's points find their candidates in the 3 x 3 cells around it where the density is flat. */
 static uint32_t grid_size(size_t m, float rho) {
     const double g = floor(sqrt((double)m) / (double)rho);
-    return g < 1.0 ? 1u : g > (double)MAX_GRID ? MAX_GRID : (uint32_t)g;
+    const uint32_t n = g < 2.0 ? 2u : g > (double)MAX_GRID ? MAX_GRID : (uint32_t)g;
+    return n - n % 2u; /* even: a cell, and so a leaf and a group, lies in one half of each axis */
 }
 
 /* Leaves per axis for a cell of n points. */
@@ -678,6 +705,7 @@ static dpc_status run_layers(const dpc_cascade *c, const density_map *map, dpc_i
         p.n_leaves = w.leaf_off[cells];
         p.rho = L->radius[0];
         p.h_max = map->h_max;
+        p.glide = (float)fmin(GLIDE / sqrt((double)m), 0.25);
         p.job.w = L->kernels;
         p.job.dw = L->slopes;
         p.job.umax = (float)(L->bins - 1);
