@@ -20,6 +20,7 @@ OUT = REPO / "docs" / "reports" / "density-design.md"
 MODEL = "bnot-2d-stratified"
 G = 128
 MIRROR_M, MIRROR_SEEDS = 2048, 3
+SIDE_M, SIDE_SEEDS = 2048, 4
 
 
 def densities():
@@ -35,6 +36,11 @@ def densities():
 def count_error(p, d, k, rng, windows=3000):
     """Mean squared count error over mean expected count in square windows of about k expected
     points (white noise: 1), windows inside the square."""
+    return count_error_at(p, d, k, rng.random((windows, 2)))
+
+
+def count_error_at(p, d, k, centres):
+    """count_error with the windows at these centres (those that leave the square are skipped)."""
     m = len(p)
     mass = d / d.sum()
     sat = np.zeros((G + 1, G + 1))
@@ -52,7 +58,7 @@ def count_error(p, d, k, rng, windows=3000):
         )
 
     err, exp = [], []
-    for c in rng.random((windows, 2)):
+    for c in centres:
         a = np.sqrt(k / (m * d[min(int(c[1] * G), G - 1), min(int(c[0] * G), G - 1)] / d.mean()))
         x0, y0 = c - a / 2
         if x0 < 0 or y0 < 0 or x0 + a > 1 or y0 + a > 1:
@@ -62,6 +68,32 @@ def count_error(p, d, k, rng, windows=3000):
         err.append((n - e) ** 2)
         exp.append(e)
     return float(np.mean(err) / np.mean(exp))
+
+
+def strip_counts(d, m, sub=64):
+    """The expected count of a strip along the four sides a quarter of the local hexagonal spacing
+    wide (the density along each side taken as constant across the strip; corners counted twice)."""
+    rho = d / d.mean()
+    total = 0.0
+    for side in (rho[:, 0], rho[:, -1], rho[0, :], rho[-1, :]):
+        r = np.repeat(side, sub)
+        total += m * (r * np.sqrt(2.0 / (np.sqrt(3.0) * m * r)) * 0.25).sum() / len(r)
+    return total
+
+
+def side_count_error(p, d, k, rng, windows=3000):
+    """count_error over windows whose edge lies within one local mean spacing of a side."""
+    m = len(p)
+    keep = []
+    for c in rng.random((windows * 8, 2)):
+        a = np.sqrt(k / (m * d[min(int(c[1] * G), G - 1), min(int(c[0] * G), G - 1)] / d.mean()))
+        lo = c - a / 2
+        gap = min(lo[0], lo[1], 1 - lo[0] - a, 1 - lo[1] - a)
+        if 0 <= gap < a / np.sqrt(k):
+            keep.append(c)
+        if len(keep) == windows // 3:
+            break
+    return count_error_at(p, d, k, np.array(keep))
 
 
 def share(p, region):
@@ -150,6 +182,39 @@ def main() -> None:
             kind = "stop steps and mirror (dpc)" if mirror else "stop steps"
             strips = f"{lo / MIRROR_SEEDS:.2f} | {hi / MIRROR_SEEDS:.2f}"
             lines.append(f"| 1 : {ratio:.0f} | {kind} | {strips} | {np.mean(errs):.3f} |")
+            print(lines[-1], flush=True)
+    lines += [
+        "",
+        "## Sides as glide mirrors",
+        "",
+        f"The square's sides as plain mirrors, against glide mirrors (dpc: the image across a side shifted "
+        f"along it by {reference.GLIDE:g} mean spacings), on a constant density and on the ramp ({SIDE_M:,} "
+        f"points, {SIDE_SEEDS} seeds): the count in strips along the four sides, a quarter of the local "
+        "hexagonal spacing wide, over their expected counts, from the side inwards (1 = the density "
+        "holds up to the side), and the count error in windows of about 64 expected points whose edge "
+        "lies within one local spacing of a side:",
+        "",
+        "| density | sides | 0-¼ | ¼-½ | ½-¾ | ¾-1 | 1-1¼ | count error k = 64, windows at a side |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for name, d in (("constant", np.ones((G, G))), ("ramp 0.1 + x", 0.1 + x)):
+        rho_of = d / d.mean()
+        for glides in (False, True):
+            strips = np.zeros(5)
+            want = np.zeros(5)
+            errs = []
+            for k in range(SIDE_SEEDS):
+                p = reference.generate(MODEL, d, SIDE_M, k, glides=glides)
+                c = np.minimum((p * G).astype(int), G - 1)
+                hexp = np.sqrt(2.0 / (np.sqrt(3.0) * SIDE_M * rho_of[c[:, 1], c[:, 0]]))
+                gap = np.minimum(np.minimum(p[:, 0], 1 - p[:, 0]), np.minimum(p[:, 1], 1 - p[:, 1])) / hexp
+                strips += np.histogram(gap, bins=5, range=(0, 1.25))[0]
+                want += strip_counts(d, SIDE_M)
+                errs.append(side_count_error(p, d, 64, np.random.default_rng(k)))
+            kind = "glide mirrors (dpc)" if glides else "mirrors"
+            lines.append(
+                f"| {name} | {kind} | " + " | ".join(f"{v:.2f}" for v in strips / want) + f" | {np.mean(errs):.3f} |"
+            )
             print(lines[-1], flush=True)
     lines += ["", f"Run time: {time.time() - t0:.0f} s.", ""]
     OUT.write_text("\n".join(lines))

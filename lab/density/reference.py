@@ -134,17 +134,20 @@ def _seen(fam: np.ndarray, q: np.ndarray) -> np.ndarray:
     return (fam == 0) | (fam == 5) | (fam == (1 if q[1] < 0.5 else 2)) | (fam == (3 if q[0] < 0.5 else 4))
 
 
-def layer(p, hcell, spec_layer, pair: str = "harmonic", walls: bool = True, segs: np.ndarray | None = None):
+def layer(
+    p, hcell, spec_layer, pair: str = "harmonic", walls: bool = True, segs: np.ndarray | None = None, glides=True
+):
     """One layer: every point's step, then the steps taken (mirrored at the sides; none across a
     wall or into a zero cell). walls: pairs of spacings more than WALL_H apart see the smaller one,
-    and steps do not cross walls; segs: the walls (wall_segments) when they also mirror."""
+    and steps do not cross walls; segs: the walls (wall_segments) when they also mirror; glides:
+    the images across the sides are shifted along them (False: plain mirror images)."""
     Hc, Wc = hcell.shape
     h = hcell[cell_of(p[:, 1], Hc), cell_of(p[:, 0], Wc)].astype(np.float64)
     rho = spec_layer.radius[0]
     w = spec_layer.kernels[0].astype(np.float64)
     b = len(w)
     mean = PAIR_MEANS[pair]
-    imgs, owner, fam = _images(p, glide(len(p)))
+    imgs, owner, fam = _images(p, glide(len(p)) if glides else 0.0)
     tree = cKDTree(imgs)
     reach = np.minimum(rho * np.maximum(2.0 * h, h.max()) if pair != "harmonic" else rho * 2.0 * h, 0.5)
     lists = tree.query_ball_point(p, reach)
@@ -195,15 +198,23 @@ def layer(p, hcell, spec_layer, pair: str = "harmonic", walls: bool = True, segs
 
 
 def generate(
-    model_path, density, m: int, seed: int = 0, *, pair: str = "harmonic", walls: bool = True, mirror: bool = True
+    model_path,
+    density,
+    m: int,
+    seed: int = 0,
+    *,
+    pair: str = "harmonic",
+    walls: bool = True,
+    mirror: bool = True,
+    glides: bool = True,
 ):
     """The points of dpc_generate_density in float64, with the design's choices as options
-    (mirror: walls are mirrors, as well as stopping steps)."""
+    (mirror: walls are mirrors, as well as stopping steps; glides: the sides' images glide)."""
     model = dpc.load(model_path)
     spec = read_model(dpc.model_path(model_path))
     p = input_points(model, density, seed, m)
     hcell = spacing_grid(density, m)
     segs = wall_segments(hcell) if walls and mirror else None
     for spec_layer in spec.layers:
-        p = layer(p, hcell, spec_layer, pair, walls, segs)
+        p = layer(p, hcell, spec_layer, pair, walls, segs, glides)
     return p

@@ -201,6 +201,25 @@ def test_a_strong_edge_leaves_no_seam(model, ratio):
     assert 0.85 < hi / (seeds * m * rho_hi * hex_hi) < 1.15
 
 
+@pytest.mark.parametrize("kind", ["constant", "ramp"])
+def test_the_count_holds_up_to_the_square_s_sides(model, kind):
+    """The sides are glide mirrors: strips along the four sides a quarter of the local spacing
+    wide, from the side inwards, hold their expected counts (plain mirrors held the points nearest
+    a side in a row: the first strip empty, the next ones twice their count or more)."""
+    d = np.ones((8, 8)) if kind == "constant" else 0.1 + (np.mgrid[0:64, 0:64][1] + 0.5) / 64
+    rho = d / d.mean()
+    m, seeds = 4096, 4
+    strips, want = np.zeros(5), 0.0
+    for seed in range(seeds):
+        p = model.generate_density(d, m, seed=seed).astype(np.float64)
+        c = np.minimum((p * len(d)).astype(int), len(d) - 1)
+        h = 1.0 / np.sqrt(m * rho[c[:, 1], c[:, 0]])
+        gap = np.minimum(np.minimum(p[:, 0], 1 - p[:, 0]), np.minimum(p[:, 1], 1 - p[:, 1])) / h
+        strips += np.histogram(gap, bins=5, range=(0, 1.25))[0]
+        want += sum(m * np.mean(side * 0.25 / np.sqrt(m * side)) for side in (rho[:, 0], rho[:, -1], rho[0], rho[-1]))
+    assert np.all(np.abs(strips / want - 1) < 0.4), strips / want
+
+
 def _parity_densities():
     y, x = (np.mgrid[0:64, 0:64] + 0.5) / 64
     return {

@@ -298,7 +298,9 @@ DPC_API dpc_status dpc_generate_size(const dpc_model *model, size_t count, size_
  * blue-2d, ...; others: DPC_ERROR_UNSUPPORTED). The model's input points are mapped through the
  * density's inverse CDF and every layer runs in units of the local spacing (h_ij, the harmonic
  * mean of the pair's spacings 1/sqrt(n_points * density), or the smaller one where they differ
- * more than 2 times), with mirror edges at the square's sides. Walls, the cell boundaries where
+ * more than 2 times). The square's sides are glide mirrors: across a side a point sees its side's
+ * points mirrored and shifted along it by a few mean spacings (no row of points along the sides).
+ * Walls, the cell boundaries where
  * the density changes more than 4 times or to zero, are mirrors too (no seam along strong
  * edges), and no step crosses one (so strong edges keep their counts): no point ever lies in a
  * zero-density cell. The output balance of a uniform model is not applied. A pure function of (model file, input kind, density, seed, n_points): the same bits

@@ -9,7 +9,10 @@
  *     h_ij = 2 h_i h_j / (h_i + h_j) (the harmonic mean: the pair's two terms are equal and
  *     opposite, and a sparse point does not push back the dense side of an edge), or
  *     h_ij = min(h_i, h_j) where the two differ more than 2 times,
- * with mirror edges: the square's edges reflect the set. No pair farther apart than half the
+ * with glide-mirror edges: across a side of the square a point sees the set mirrored and shifted
+ * along that side by GLIDE mean spacings (at most 1/4) towards the side's middle from the point's
+ * half, where the shifted coordinate stays in [0, 1); at a corner, mirrored across both sides
+ * (density.c, "GLIDE"). No pair farther apart than half the
  * square interacts, and h is at most 1. Walls (walls.h: cell boundaries where the density changes
  * more than 4 times, or to zero) are mirrors too: a point within 2 h of one of its own also sees
  * the mirror images, across the wall's line at its nearest point, of itself and of its pairs of
