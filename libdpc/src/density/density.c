@@ -289,13 +289,13 @@ static void flush(const layer_pass *p, group *g) {
 }
 
 typedef float v8 __attribute__((vector_size(32)));
-typedef int32_t v8i __attribute__((vector_size(32)));
 
 /* Append the waiting range of sorted points, seen through its image, to the chunk. */
 static void append(const layer_pass *p, group *g) {
     uint32_t j0 = g->r0;
     const uint32_t j1 = g->r1;
     const v8 oxv = (v8){0} + g->ax, sxv = (v8){0} + g->bx, oyv = (v8){0} + g->ay, syv = (v8){0} + g->by;
+    const int clip_x = g->clip_x, clip = g->clip_x | g->clip_y;
     while (j0 < j1) {
         if (g->n == RUN_CAP) flush(p, g);
         g->clo = g->wlo < g->clo ? g->wlo : g->clo;
@@ -311,17 +311,14 @@ static void append(const layer_pass *p, group *g) {
             memcpy(&va, p->sa + j0 + k, sizeof va);
             vx = oxv + sxv * vx;
             vy = oyv + syv * vy;
-            if (g->clip_x | g->clip_y) { /* a point whose image leaves the side's span is far away */
-                const v8 c = g->clip_x ? vx : vy;
-                const v8i in = (c >= (v8){0}) & (c < (v8){0} + 1.0f);
-                const v8i far = (v8i)((v8){0} + FAR_AWAY);
-                vx = (v8)(((v8i)vx & in) | (far & ~in));
-                vy = (v8)(((v8i)vy & in) | (far & ~in));
-                va = (v8)((v8i)va & in);
-            }
             memcpy(cx + k, &vx, sizeof vx);
             memcpy(cy + k, &vy, sizeof vy);
             memcpy(ca + k, &va, sizeof va);
+        }
+        if (clip) { /* a point whose image leaves the side's span is far away */
+            const float *c = clip_x ? cx : cy;
+            for (uint32_t k = 0; k < len; k++)
+                if (!(c[k] >= 0.0f && c[k] < 1.0f)) cx[k] = FAR_AWAY, cy[k] = FAR_AWAY, ca[k] = 0.0f;
         }
         g->n += len;
         j0 += len;
