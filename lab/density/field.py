@@ -110,22 +110,6 @@ class Field:
         f = self.cumulative
         return f(x1, y1) - f(x0, y1) - f(x1, y0) + f(x0, y0)
 
-    def spread(self, p: np.ndarray, reach: np.ndarray) -> np.ndarray:
-        """The largest over the smallest density of the cells within a square of half side reach
-        around each point (clipped to the grid); inf where one of them is zero."""
-        from scipy.ndimage import maximum_filter, minimum_filter
-
-        r, c = self.cells(p)
-        n = max(self.h, self.w)
-        R = np.minimum(np.ceil(np.asarray(reach) * n).astype(np.int64), n)
-        out = np.empty(len(p))
-        for k in np.unique(R):
-            sel = R == k
-            hi = maximum_filter(self.grid, size=2 * k + 1, mode="nearest")[r[sel], c[sel]]
-            lo = minimum_filter(self.grid, size=2 * k + 1, mode="nearest")[r[sel], c[sel]]
-            out[sel] = np.where(lo > 0, hi / np.where(lo > 0, lo, 1.0), np.inf)
-        return out
-
     def edge_distance(self, p: np.ndarray) -> np.ndarray:
         """Distance from points to the nearest edge cell (a cell whose density differs from a
         4-neighbour's by more than 2x; zero beside positive counts), measured to the cell's

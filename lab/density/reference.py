@@ -18,6 +18,7 @@ from dpc.model_file import read_model
 WALL = 4.0  # density ratio a step may not cross, and that makes a wall
 WALL_H = np.sqrt(WALL)  # the same for spacings
 WALL_REACH = 2.0  # a point nearer a wall of its own than this many spacings sees mirror images
+WALL_GLIDE = 4.0  # its own spacings: the shift of those images along a straight wall
 H_CAP = 1.0
 
 PAIR_MEANS = {
@@ -57,29 +58,53 @@ def own(hi, hj):
 def wall_segments(hcell: np.ndarray) -> np.ndarray:
     """The walls: boundaries between 4-neighbour cells whose spacings differ more than WALL_H
     times or of which one is zero, as rows (x0, y0, x1, y1, h of the cell left / below, h right /
-    above)."""
+    above); neighbouring boundaries along one line with the same two spacings merged into one
+    segment (vertical ones column by column, then horizontal ones row by row)."""
     Hc, Wc = hcell.shape
     h = hcell.astype(np.float64)
+
+    def divided(a, b):
+        return np.where((a > 0) & (b > 0), ~own(a, b), (a > 0) != (b > 0))
+
     rows = []
-    for a, b, vertical in ((h[:, :-1], h[:, 1:], True), (h[:-1, :], h[1:, :], False)):
-        divided = np.where((a > 0) & (b > 0), ~own(a, b), (a > 0) != (b > 0))
-        r, c = np.nonzero(divided)
-        if vertical:
-            x = (c + 1) / Wc
-            rows.append(np.stack([x, r / Hc, x, (r + 1) / Hc, a[r, c], b[r, c]], axis=1))
-        else:
-            y = (r + 1) / Hc
-            rows.append(np.stack([c / Wc, y, (c + 1) / Wc, y, a[r, c], b[r, c]], axis=1))
-    return np.concatenate(rows)
+    for c in range(Wc - 1):  # vertical walls at x = (c + 1) / W
+        a, b = h[:, c], h[:, c + 1]
+        div = divided(a, b)
+        r = 0
+        while r < Hc:
+            if not div[r]:
+                r += 1
+                continue
+            e = r + 1
+            while e < Hc and a[e] == a[r] and b[e] == b[r]:
+                e += 1
+            rows.append(((c + 1) / Wc, r / Hc, (c + 1) / Wc, e / Hc, a[r], b[r]))
+            r = e
+    for r in range(Hc - 1):  # horizontal walls at y = (r + 1) / H
+        a, b = h[r], h[r + 1]
+        div = divided(a, b)
+        c = 0
+        while c < Wc:
+            if not div[c]:
+                c += 1
+                continue
+            e = c + 1
+            while e < Wc and a[e] == a[c] and b[e] == b[c]:
+                e += 1
+            rows.append((c / Wc, (r + 1) / Hc, e / Wc, (r + 1) / Hc, a[c], b[c]))
+            c = e
+    return np.array(rows, dtype=np.float64).reshape(-1, 6)
 
 
-def nearest_walls(p: np.ndarray, h: np.ndarray, segs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def nearest_walls(p: np.ndarray, h: np.ndarray, segs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per point, the nearest point of its own walls (those with exactly one side its own) closer
-    than WALL_REACH h (at most 1/2), and the unit normal from it to the point; NaN where none."""
+    than WALL_REACH h (at most 1/2), the unit normal from it to the point, and how far its segment
+    runs on from it down and up its axis; NaN where none."""
     w = np.full_like(p, np.nan)
     n = np.full_like(p, np.nan)
+    run = np.full_like(p, np.nan)
     if not len(segs):
-        return w, n
+        return w, n, run
     reach = np.minimum(WALL_REACH * h, 0.5)
     for i in range(len(p)):
         mine = own(h[i], segs[:, 4]) != own(h[i], segs[:, 5])
@@ -90,12 +115,14 @@ def nearest_walls(p: np.ndarray, h: np.ndarray, segs: np.ndarray) -> tuple[np.nd
             continue
         k = int(np.argmin(d))
         w[i] = q[k]
+        axis = 1 if s[k, 0] == s[k, 2] else 0  # vertical segments run along y
+        run[i] = (q[k, axis] - s[k, axis], s[k, axis + 2] - q[k, axis])
         if d[k] > 0:
             n[i] = (p[i] - q[k]) / d[k]
         else:  # on the wall: towards the side of its own spacing
             sign = -1.0 if own(h[i], s[k, 4]) else 1.0
             n[i] = (sign, 0.0) if s[k, 0] == s[k, 2] else (0.0, sign)
-    return w, n
+    return w, n, run
 
 
 GLIDE = 4.0  # mean spacings: the shift along a side of the images across it (at most 1/4)
@@ -153,7 +180,7 @@ def layer(
     lists = tree.query_ball_point(p, reach)
     mirror = walls and segs is not None and len(segs) > 0
     if mirror:
-        wall, normal = nearest_walls(p, h, segs)
+        wall, normal, run = nearest_walls(p, h, segs)
     step = np.zeros_like(p)
 
     def terms(delta, hij):
@@ -177,14 +204,31 @@ def layer(
             hij = np.where(same, hij, np.minimum(h[i], hj))
         step[i], ok = terms(delta, hij)
         if mirror and not np.isnan(wall[i, 0]):
-            # the mirror images of its own side's pairs across the wall's line, and its own image
             n = normal[i]
             D = (p[i] - wall[i]) @ n
-            e = delta @ n + D
-            keep = ok & same & (e > 0)
-            img = delta[keep] - 2.0 * e[keep][:, None] * n
-            mine = np.vstack([img, -2.0 * D * n[None, :]])
-            step[i] += terms(mine, np.append(hij[keep], h[i]))[0]
+            w0 = np.array([-n[1], n[0]])
+            s = WALL_GLIDE * h[i] * (-1.0 if w0 @ (0.5 - p[i]) < 0 else 1.0)
+            up = np.sign(s) * (w0[1] if n[1] == 0 else w0[0])  # the glide's way along the segment's axis
+            if (n[0] != 0 and n[1] != 0) or run[i, int(up > 0)] < abs(s):
+                # a plain mirror: the images of its own side's pairs across the wall's line, and its own
+                e = delta @ n + D
+                keep = ok & same & (e > 0)
+                img = delta[keep] - 2.0 * e[keep][:, None] * n
+                mine = np.vstack([img, -2.0 * D * n[None, :]])
+                step[i] += terms(mine, np.append(hij[keep], h[i]))[0]
+                continue
+            # a glide mirror: the images of its own side's points (itself too) across the wall's
+            # line, shifted along it by s (-n_y, n_x), s = +-WALL_GLIDE h towards the square's
+            # middle, where its segment runs on for that long; their points lie within reach of
+            # x_i + s (-n_y, n_x)
+            src = np.asarray(tree.query_ball_point(p[i] + s * w0, reach[i]), dtype=np.int64)
+            src = src[_seen(fam[src], p[i])]
+            t = imgs[src] - p[i]
+            hs = h[owner[src]]
+            e = t @ n + D
+            keep = own(h[i], hs) & (e > 0)
+            img = t[keep] - 2.0 * e[keep][:, None] * n - s * w0
+            step[i] += terms(img, mean(h[i], hs[keep]))[0]
     new = p + step
     new = np.where(new < 0, -new, np.where(new >= 1, 2.0 - new, new))
     inside = np.all((new >= 0) & (new < 1), axis=1)

@@ -59,6 +59,12 @@ static float cell_h(const density_map *d, float x, float y) { return d->h[cell_i
  * images are other points of the same side and density, as a torus would show them. */
 #define GLIDE 4.0
 
+/* Walls are glide mirrors too: a point near one sees the images of its side's points across the
+ * wall's line shifted along it by WALL_GLIDE of its own spacings, towards the square's middle (so
+ * a plain mirror's row beside a wall does not form); the points of a group near a wall look for
+ * candidates that much farther. */
+#define WALL_GLIDE 4.0f
+
 static double wall_reach(float h) {
     const double r = WALL_REACH * (double)h;
     return r < 0.5 ? r : 0.5;
@@ -399,6 +405,17 @@ static void gather(const layer_pass *p, group *g) {
         box[2] = qy < box[2] ? qy : box[2];
         box[3] = qy > box[3] ? qy : box[3];
     }
+    /* the candidates of a glide along a wall lie around the point shifted by the glide (s (-ny, nx)) */
+    float reach_box[4] = {box[0], box[1], box[2], box[3]};
+    for (unsigned k = 0; k < g->nq; k++) {
+        const float *q = g->q + DPC_DENSITY_QUERY * k;
+        if (q[7] == 0.0f) continue;
+        const float gx = q[0] - q[7] * q[5], gy = q[1] + q[7] * q[4];
+        reach_box[0] = gx < reach_box[0] ? gx : reach_box[0];
+        reach_box[1] = gx > reach_box[1] ? gx : reach_box[1];
+        reach_box[2] = gy < reach_box[2] ? gy : reach_box[2];
+        reach_box[3] = gy > reach_box[3] ? gy : reach_box[3];
+    }
     memset(g->acc, 0, 16 * g->nq * sizeof(float));
     g->n = 0;
     g->wlo = g->clo = INFINITY, g->whi = g->chi = 0.0f;
@@ -408,6 +425,7 @@ static void gather(const layer_pass *p, group *g) {
     /* the images across a side glide along it towards the side's middle (the group lies in one
      * half of each axis: the grid is even) */
     const float sx = box[0] < 0.5f ? -p->glide : p->glide, sy = box[2] < 0.5f ? -p->glide : p->glide;
+    memcpy(box, reach_box, sizeof box);
     for (int iy = 0; iy < 3; iy++) {
         float ylo, yhi, xlo, xhi;
         uint32_t gy0, gy1, gx0, gx1;
@@ -466,10 +484,18 @@ static void run_group(const layer_pass *p, float *slot, uint32_t s0, uint32_t s1
         if (!p->map->walls.n) continue;
         const double x = p->sx[i], y = p->sy[i], far = wall_reach(p->sh[i]);
         if (dpc_walls_far(&p->map->walls, p->sx[i], p->sy[i], far)) continue; /* none near */
-        double wx, wy, nx, ny;
-        if (!dpc_walls_nearest(&p->map->walls, x, y, p->sh[i], far, &wx, &wy, &nx, &ny)) continue;
+        double wx, wy, nx, ny, run[2];
+        if (!dpc_walls_nearest(&p->map->walls, x, y, p->sh[i], far, &wx, &wy, &nx, &ny, run)) continue;
         q[3] = 1.0f, q[4] = (float)nx, q[5] = (float)ny;
         q[6] = (float)((x - wx) * nx + (y - wy) * ny); /* the distance to the mirror's line */
+        /* a glide along the line, (-ny, nx) or its opposite, the one towards the square's middle,
+         * where the nearest point lies along its segment (n on an axis) and the segment runs on
+         * for the glide's length that way */
+        if (nx != 0.0 && ny != 0.0) continue;
+        const double along = -ny * (0.5 - x) + nx * (0.5 - y), sgn = along < 0.0 ? -1.0 : 1.0;
+        const float glide = WALL_GLIDE * p->sh[i];
+        const double up = nx != 0.0 ? sgn * nx : sgn * -ny; /* the glide's direction on the segment's axis */
+        if (run[up > 0.0] >= (double)glide) q[7] = sgn < 0.0 ? -glide : glide;
     }
     g.qlo = hlo, g.qhi = hq;
     gather(p, &g);
@@ -478,7 +504,7 @@ static void run_group(const layer_pass *p, float *slot, uint32_t s0, uint32_t s1
         float *d = p->delta + 2 * (size_t)(s0 + k);
         d[0] = lane_tree(g.acc + 16 * k);
         d[1] = lane_tree(g.acc + 16 * k + 8);
-        if (q[3] != 0.0f) { /* the point's own mirror image, at t = -2 D n */
+        if (q[3] != 0.0f && q[7] == 0.0f) { /* a plain mirror: the point's own image, at t = -2 D n */
             const float f = q[6] + q[6], tx = 0.0f - f * q[4], ty = 0.0f - f * q[5];
             const float k_own = own_term(&p->job, tx, ty, q[2] + q[2]);
             d[0] = d[0] + k_own * tx;

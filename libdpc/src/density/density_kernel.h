@@ -11,9 +11,12 @@
  *              the lane of the r-th one is r mod 8, and each lane adds k tx (and k ty) in order.
  * With walls (job->walls), a pair whose 1/h differ more than W = WALL_H times (big > W small)
  * has a = 2 big (the smaller spacing): its term is that of a and 0 outside the window at a. And a
- * query with a wall (plane != 0) then adds the terms of the mirror images t' = t - 2 e n,
- * e = t . n + D, of the window's candidates with e > 0 whose 1/h are within W of its own, in the
- * window at the pair's a: in chunk order, to lanes 0, 1, .. again. The caller adds the 8 lane sums
+ * query with a wall (plane != 0) then adds the terms of the mirror images, of candidates with
+ * e = t . n + D > 0 whose 1/h are within W of its own, in the window at the pair's a, in chunk
+ * order, to lanes 0, 1, .. again: with s = 0 (a plain mirror) t' = t - 2 e n of the window's
+ * candidates (the caller adds the query's own image); else (a glide mirror) t' = (t - 2 e n) - g,
+ * g = s (-ny, nx) (gx = 0 - s ny, gy = s nx), of every candidate of the chunk, the query's own
+ * position among them. The caller adds the 8 lane sums
  * in the tree (l, l + 4), (l, l + 2), (0, 1). Every step is an IEEE float32 operation (sqrt and
  * division correctly rounded; a multiply then an add, never an FMA) or an exact integer one, in
  * this order, on every path. */
@@ -33,8 +36,9 @@ typedef struct dpc_density_job {
     int walls; /* pairs of spacings more than WALL_H (walls.h) apart see the smaller one */
 } dpc_density_job;
 
-/* Query p is q[8p .. 8p+7] = x, y, 1/h, plane, nx, ny, D, unused (plane != 0: a wall, the line
- * t . n + D = 0 through its nearest point, n the unit normal to the query's side); its lane sums
+/* Query p is q[8p .. 8p+7] = x, y, 1/h, plane, nx, ny, D, s (plane != 0: a wall, the line
+ * t . n + D = 0 through its nearest point, n the unit normal to the query's side, s the glide along
+ * it); its lane sums
  * acc[16p .. 16p+7] (x) and acc[16p+8 .. 16p+15] (y) are added to. The chunk is cx, cy, ca[0 .. n)
  * (x, y, 1/h), n a multiple of 16 (padding out of every window). scratch: 6 * DPC_DENSITY_DENSE
  * floats. */

@@ -102,6 +102,29 @@ static inline __attribute__((always_inline)) uint32_t images(const float *dtx, c
     return k;
 }
 
+/* The glide-mirror images of the chunk's candidates (tx, ty relative to the query, cj) of its own
+ * spacing on its side (e = t . n + D > 0; n = (NX, NY), D >= 0 the query's distance to the line
+ * t . n + D = 0): t' = t - 2 e n - (GX, GY), the glide (GX, GY) along the line; those in the window
+ * packed in order into (itx, ity, ic), their count returned. The query itself is a candidate (t = 0)
+ * and has its image too. */
+static inline __attribute__((always_inline)) uint32_t glide_images(const float *cx, const float *cy, const float *ca,
+                                                                   uint32_t n, vf X, vf Y, vf A, vf WR, vf NX, vf NY,
+                                                                   vf D, vf GX, vf GY, vf c2, vf smin2, vf cut2,
+                                                                   vf umax2, float *itx, float *ity, float *ic) {
+    uint32_t k = 0;
+    const vf zero = vsplat(0.0f);
+    for (uint32_t o = 0; o < n; o += VW) {
+        const vf tx = VLOAD(cx + o) - X, ty = VLOAD(cy + o) - Y, cj = VLOAD(ca + o);
+        vi own;
+        const vf a = pair_a(1, cj, A, WR, &own);
+        const vf e = tx * NX + ty * NY + D, f = e + e;
+        const vf jx = (tx - f * NX) - GX, jy = (ty - f * NY) - GY;
+        const vf v = vselect(own & (e > zero), window_value(jx * jx + jy * jy, a, c2, smin2), umax2);
+        k += PACK3(WINDOW(v, cut2, umax2), jx, jy, cj, itx + k, ity + k, ic + k);
+    }
+    return k;
+}
+
 /* Add the terms of the packed candidates (tx, ty, cj)[0 .. m) to the lane sums (sx, sy). With
  * walls, a pair of spacings more than WR apart (pair_a) is tested again against the window at its
  * smaller spacing, and its term is 0 outside. Lanes of the last vector beyond m compute a finite k
@@ -153,14 +176,18 @@ void KERNEL(const dpc_density_job *job, const float *cx, const float *cy, const 
         vf8 sx, sy;
         memcpy(&sx, acc + 16 * p, sizeof sx);
         memcpy(&sy, acc + 16 * p + 8, sizeof sy);
-        /* (1) the window, packed; (2) the terms: the candidates', then their mirror images' */
+        /* (1) the window, packed; (2) the terms: the candidates', then their (glide-)mirror images' */
         const uint32_t m = window(cx, cy, ca, n, X, Y, A, c2, smin2, cut2, umax2, dtx, dty, dc);
         if (job->walls)
             terms(1, dtx, dty, dc, m, iota, A, WR, c2, smin2, cut2, umax, umax2, qmax, &w_t, &dw_t, &sx, &sy);
         else terms(0, dtx, dty, dc, m, iota, A, WR, c2, smin2, cut2, umax, umax2, qmax, &w_t, &dw_t, &sx, &sy);
         if (qp[3] != 0.0f) {
             const vf NX = vsplat(qp[4]), NY = vsplat(qp[5]), D = vsplat(qp[6]);
-            const uint32_t k = images(dtx, dty, dc, m, iota, A, WR, NX, NY, D, c2, smin2, cut2, umax2, itx, ity, ic);
+            const vf GX = vsplat(0.0f - qp[7] * qp[5]), GY = vsplat(qp[7] * qp[4]); /* glide (-ny, nx) s */
+            const uint32_t k =
+                qp[7] == 0.0f
+                    ? images(dtx, dty, dc, m, iota, A, WR, NX, NY, D, c2, smin2, cut2, umax2, itx, ity, ic)
+                    : glide_images(cx, cy, ca, n, X, Y, A, WR, NX, NY, D, GX, GY, c2, smin2, cut2, umax2, itx, ity, ic);
             terms(0, itx, ity, ic, k, iota, A, WR, c2, smin2, cut2, umax, umax2, qmax, &w_t, &dw_t, &sx, &sy);
         }
         memcpy(acc + 16 * p, &sx, sizeof sx);

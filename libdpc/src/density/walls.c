@@ -232,7 +232,7 @@ static void scan_bucket(const dpc_walls *w, size_t b, float x, float y, float h,
 }
 
 int dpc_walls_nearest(const dpc_walls *w, double x, double y, float h, double R, double *wx, double *wy, double *nx,
-                      double *ny) {
+                      double *ny, double run[2]) {
     if (w->n == 0) return 0;
     const int64_t B = w->B;
     const int64_t bx = bucket_of(x, w->B), by = bucket_of(y, w->B);
@@ -264,6 +264,9 @@ int dpc_walls_nearest(const dpc_walls *w, double x, double y, float h, double R,
     }
     if (found < 0) return 0;
     *wx = fx, *wy = fy;
+    const double *sg = w->seg + 4 * (size_t)found;
+    if (sg[0] == sg[2]) run[0] = (double)fy - sg[1], run[1] = sg[3] - (double)fy; /* vertical */
+    else run[0] = (double)fx - sg[0], run[1] = sg[2] - (double)fx;
     const double d = sqrt((double)best);
     if (d > 0.0) {
         *nx = ((double)xf - fx) / d, *ny = ((double)yf - fy) / d;

@@ -55,11 +55,12 @@ static inline int dpc_walls_far(const dpc_walls *w, float x, float y, double R) 
 void dpc_walls_free(dpc_walls *w);
 
 /* The nearest point of a wall of a point at (x, y) with spacing h (> 0) closer than R: 1 and the
- * point (wx, wy) and the unit normal (nx, ny) pointing to the point's side; 0 when there is none.
+ * point (wx, wy), the unit normal (nx, ny) pointing to the point's side and how far its segment runs
+ * on from that point down and up its axis (run[0], run[1]); 0 when there is none.
  * Buckets are searched in square rings around the point's, each row by row, until no closer one
  * can follow; of equally near segments, the first in the walk (vertical ones column by column,
  * then horizontal ones row by row). */
 int dpc_walls_nearest(const dpc_walls *w, double x, double y, float h, double R, double *wx, double *wy, double *nx,
-                      double *ny);
+                      double *ny, double run[2]);
 
 #endif
