@@ -158,30 +158,42 @@ def main() -> None:
         "",
         "## Walls as mirrors",
         "",
-        "Walls that only stop steps, against walls that are also mirrors (dpc), on 1 : 8 and 1 : 16 "
-        f"steps at x = 1/2 ({MIRROR_M:,} points, mean of {MIRROR_SEEDS} seeds): the count in the strip one "
-        "local hexagonal spacing wide on each side of the edge over its expectation (1 = no seam), and "
-        "the count error in windows of about 16 expected points:",
+        "Walls that only stop steps, against walls that are also plain mirrors, and glide mirrors (dpc: the "
+        f"images shifted along the wall by {reference.WALL_GLIDE:g} of the point's spacings), on 1 : 8 and "
+        f"1 : 16 steps at x = 1/2 ({MIRROR_M:,} points, mean of {MIRROR_SEEDS} seeds): the count in the strip "
+        "one local hexagonal spacing wide on each side of the edge over its expectation (1 = no seam), the "
+        "count in the strips a quarter of a spacing wide on the dense side, from the edge (a row: one far "
+        "from 1), and the count error in windows of about 16 and 64 expected points:",
         "",
-        "| step | walls | sparse strip | dense strip | count error k = 16 |",
-        "|---|---|---|---|---|",
+        "| step | walls | sparse strip | dense strip | dense 0-¼ | ¼-½ | ½-¾ | ¾-1 | count error k = 16 | k = 64 |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     y, x = (np.mgrid[0:G, 0:G] + 0.5) / G
     for ratio in (8.0, 16.0):
         d = np.where(x < 0.5, 1.0, ratio)
         rho = (2.0 / (1.0 + ratio), 2.0 * ratio / (1.0 + ratio))
         hexes = [np.sqrt(2.0 / (np.sqrt(3.0) * MIRROR_M * r)) for r in rho]
-        for mirror in (False, True):
+        for kind, mirror, glide in (
+            ("stop steps", False, False),
+            ("stop steps, plain mirrors", True, False),
+            ("stop steps, glide mirrors (dpc)", True, True),
+        ):
             lo = hi = 0.0
-            errs = []
+            rows = np.zeros(4)
+            errs, errs64 = [], []
             for k in range(MIRROR_SEEDS):
-                p = reference.generate(MODEL, d, MIRROR_M, k, mirror=mirror)
+                p = reference.generate(MODEL, d, MIRROR_M, k, mirror=mirror, wall_glides=glide)
                 lo += np.sum((p[:, 0] >= 0.5 - hexes[0]) & (p[:, 0] < 0.5)) / (MIRROR_M * rho[0] * hexes[0])
                 hi += np.sum((p[:, 0] >= 0.5) & (p[:, 0] < 0.5 + hexes[1])) / (MIRROR_M * rho[1] * hexes[1])
+                mid = (p[:, 1] > 0.1) & (p[:, 1] < 0.9)  # away from the corners with the sides
+                dense = (p[mid, 0] - 0.5) / hexes[1]
+                rows += np.histogram(dense, bins=4, range=(0, 1))[0] / (0.8 * MIRROR_M * rho[1] * 0.25 * hexes[1])
                 errs.append(count_error(p, d, 16, np.random.default_rng(k)))
-            kind = "stop steps and mirror (dpc)" if mirror else "stop steps"
-            strips = f"{lo / MIRROR_SEEDS:.2f} | {hi / MIRROR_SEEDS:.2f}"
-            lines.append(f"| 1 : {ratio:.0f} | {kind} | {strips} | {np.mean(errs):.3f} |")
+                errs64.append(count_error(p, d, 64, np.random.default_rng(k)))
+            strips = f"{lo / MIRROR_SEEDS:.2f} | {hi / MIRROR_SEEDS:.2f} | " + " | ".join(
+                f"{v:.2f}" for v in rows / MIRROR_SEEDS
+            )
+            lines.append(f"| 1 : {ratio:.0f} | {kind} | {strips} | {np.mean(errs):.3f} | {np.mean(errs64):.3f} |")
             print(lines[-1], flush=True)
     lines += [
         "",

@@ -162,12 +162,20 @@ def _seen(fam: np.ndarray, q: np.ndarray) -> np.ndarray:
 
 
 def layer(
-    p, hcell, spec_layer, pair: str = "harmonic", walls: bool = True, segs: np.ndarray | None = None, glides=True
+    p,
+    hcell,
+    spec_layer,
+    pair: str = "harmonic",
+    walls: bool = True,
+    segs: np.ndarray | None = None,
+    glides: bool = True,
+    wall_glides: bool = True,
 ):
     """One layer: every point's step, then the steps taken (mirrored at the sides; none across a
     wall or into a zero cell). walls: pairs of spacings more than WALL_H apart see the smaller one,
     and steps do not cross walls; segs: the walls (wall_segments) when they also mirror; glides:
-    the images across the sides are shifted along them (False: plain mirror images)."""
+    the images across the sides are shifted along them (False: plain mirror images); wall_glides:
+    so are those across long straight walls (False: plain mirrors at every wall)."""
     Hc, Wc = hcell.shape
     h = hcell[cell_of(p[:, 1], Hc), cell_of(p[:, 0], Wc)].astype(np.float64)
     rho = spec_layer.radius[0]
@@ -209,7 +217,7 @@ def layer(
             w0 = np.array([-n[1], n[0]])
             s = WALL_GLIDE * h[i] * (-1.0 if w0 @ (0.5 - p[i]) < 0 else 1.0)
             up = np.sign(s) * (w0[1] if n[1] == 0 else w0[0])  # the glide's way along the segment's axis
-            if (n[0] != 0 and n[1] != 0) or run[i, int(up > 0)] < abs(s):
+            if not wall_glides or (n[0] != 0 and n[1] != 0) or run[i, int(up > 0)] < abs(s):
                 # a plain mirror: the images of its own side's pairs across the wall's line, and its own
                 e = delta @ n + D
                 keep = ok & same & (e > 0)
@@ -251,14 +259,16 @@ def generate(
     walls: bool = True,
     mirror: bool = True,
     glides: bool = True,
+    wall_glides: bool = True,
 ):
     """The points of dpc_generate_density in float64, with the design's choices as options
-    (mirror: walls are mirrors, as well as stopping steps; glides: the sides' images glide)."""
+    (mirror: walls are mirrors, as well as stopping steps; glides: the sides' images glide;
+    wall_glides: so do those of long straight walls)."""
     model = dpc.load(model_path)
     spec = read_model(dpc.model_path(model_path))
     p = input_points(model, density, seed, m)
     hcell = spacing_grid(density, m)
     segs = wall_segments(hcell) if walls and mirror else None
     for spec_layer in spec.layers:
-        p = layer(p, hcell, spec_layer, pair, walls, segs, glides)
+        p = layer(p, hcell, spec_layer, pair, walls, segs, glides, wall_glides)
     return p

@@ -220,6 +220,25 @@ def test_the_count_holds_up_to_the_square_s_sides(model, kind):
     assert np.all(np.abs(strips / want - 1) < 0.4), strips / want
 
 
+@pytest.mark.parametrize("ratio", [8.0, 16.0])
+def test_a_straight_wall_holds_no_row_beside_it(model, ratio):
+    """A long straight wall is a glide mirror: on the dense side of a 1 : 8 and a 1 : 16 step,
+    strips a quarter of the local spacing wide from the edge hold their expected counts (a plain
+    mirror held none in the first and about 2.5 times in the second)."""
+    y, x = (np.mgrid[0:128, 0:128] + 0.5) / 128
+    d = np.where(x < 0.5, 1.0, ratio)
+    m, seeds = 4096, 6
+    rho = 2.0 * ratio / (1.0 + ratio)
+    hexd = np.sqrt(2.0 / (np.sqrt(3.0) * m * rho))
+    strips = np.zeros(4)
+    for seed in range(seeds):
+        p = model.generate_density(d, m, seed=seed).astype(np.float64)
+        mid = (p[:, 1] > 0.1) & (p[:, 1] < 0.9)  # away from the corners with the sides
+        strips += np.histogram((p[mid, 0] - 0.5) / hexd, bins=4, range=(0, 1))[0]
+    strips /= seeds * 0.8 * m * rho * 0.25 * hexd
+    assert np.all(np.abs(strips - 1) < 0.5), strips
+
+
 def _parity_densities():
     y, x = (np.mgrid[0:64, 0:64] + 0.5) / 64
     return {

@@ -300,12 +300,12 @@ DPC_API dpc_status dpc_generate_size(const dpc_model *model, size_t count, size_
  * mean of the pair's spacings 1/sqrt(n_points * density), or the smaller one where they differ
  * more than 2 times). The square's sides are glide mirrors: across a side a point sees its side's
  * points mirrored and shifted along it by a few mean spacings (no row of points along the sides).
- * Walls, the cell boundaries where
- * the density changes more than 4 times or to zero, are mirrors too (no seam along strong
- * edges), and no step crosses one (so strong edges keep their counts): no point ever lies in a
- * zero-density cell. The output balance of a uniform model is not applied. A pure function of (model file, input kind, density, seed, n_points): the same bits
- * on every CPU ISA and thread count; it runs on the CPU whatever the model's backend.
- * docs/density.md states the definition and its measurements. */
+ * Walls, the cell boundaries where the density changes more than 4 times or to zero, are mirrors
+ * too (glide mirrors where they run straight; no seam along strong edges), and no step crosses one
+ * (so strong edges keep their counts): no point ever lies in a zero-density cell. The output
+ * balance of a uniform model is not applied. A pure function of (model file, input kind, density,
+ * seed, n_points): the same bits on every CPU ISA and thread count; it runs on the CPU whatever
+ * the model's backend. docs/density.md states the definition and its measurements. */
 #define DPC_DENSITY_MAX_CELLS (1u << 24)
 DPC_API dpc_status dpc_generate_density(const dpc_model *model, const float *density, uint32_t width, uint32_t height,
                                         uint64_t seed, size_t n_points, float *out);

@@ -12,11 +12,13 @@
  * with glide-mirror edges: across a side of the square a point sees the set mirrored and shifted
  * along that side by GLIDE mean spacings (at most 1/4) towards the side's middle from the point's
  * half, where the shifted coordinate stays in [0, 1); at a corner, mirrored across both sides
- * (density.c, "GLIDE"). No pair farther apart than half the
- * square interacts, and h is at most 1. Walls (walls.h: cell boundaries where the density changes
- * more than 4 times, or to zero) are mirrors too: a point within 2 h of one of its own also sees
- * the mirror images, across the wall's line at its nearest point, of itself and of its pairs of
- * its own spacing on its side. A step that would leave the square is mirrored back; one that
+ * (density.c, "GLIDE"). No pair farther apart than half the square interacts, and h is at most
+ * 1. Walls (walls.h: cell boundaries where the density changes more than 4 times, or to zero) are
+ * mirrors too: a point within 2 h of one of its own also sees the mirror images, across the wall's
+ * line at its nearest point, of itself and of its pairs of its own spacing on its side; where that
+ * point lies along a segment that runs on for WALL_GLIDE h towards the square's middle, a glide
+ * mirror: the images of its side's points shifted that far along the line (density.c,
+ * "WALL_GLIDE"). A step that would leave the square is mirrored back; one that
  * would end in a cell whose density differs more than 4 times from its start (a zero cell among
  * them) is not taken. Everything is float32 in one fixed order (double for the inverse CDF), the
  * same bits for every CPU and thread count. */
