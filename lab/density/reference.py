@@ -63,36 +63,25 @@ def wall_segments(hcell: np.ndarray) -> np.ndarray:
     Hc, Wc = hcell.shape
     h = hcell.astype(np.float64)
 
-    def divided(a, b):
-        return np.where((a > 0) & (b > 0), ~own(a, b), (a > 0) != (b > 0))
+    def runs(g):
+        """Per boundary between columns c and c + 1 of g: its runs of divided cells down the
+        column with the same two spacings, as (c, first row, end row, left, right)."""
+        for c in range(g.shape[1] - 1):
+            a, b = g[:, c], g[:, c + 1]
+            div = np.where((a > 0) & (b > 0), ~own(a, b), (a > 0) != (b > 0))
+            r = 0
+            while r < len(a):
+                if not div[r]:
+                    r += 1
+                    continue
+                e = r + 1
+                while e < len(a) and a[e] == a[r] and b[e] == b[r]:
+                    e += 1
+                yield c, r, e, a[r], b[r]
+                r = e
 
-    rows = []
-    for c in range(Wc - 1):  # vertical walls at x = (c + 1) / W
-        a, b = h[:, c], h[:, c + 1]
-        div = divided(a, b)
-        r = 0
-        while r < Hc:
-            if not div[r]:
-                r += 1
-                continue
-            e = r + 1
-            while e < Hc and a[e] == a[r] and b[e] == b[r]:
-                e += 1
-            rows.append(((c + 1) / Wc, r / Hc, (c + 1) / Wc, e / Hc, a[r], b[r]))
-            r = e
-    for r in range(Hc - 1):  # horizontal walls at y = (r + 1) / H
-        a, b = h[r], h[r + 1]
-        div = divided(a, b)
-        c = 0
-        while c < Wc:
-            if not div[c]:
-                c += 1
-                continue
-            e = c + 1
-            while e < Wc and a[e] == a[c] and b[e] == b[c]:
-                e += 1
-            rows.append((c / Wc, (r + 1) / Hc, e / Wc, (r + 1) / Hc, a[c], b[c]))
-            c = e
+    rows = [((c + 1) / Wc, r / Hc, (c + 1) / Wc, e / Hc, a, b) for c, r, e, a, b in runs(h)]
+    rows += [(c / Wc, (r + 1) / Hc, e / Wc, (r + 1) / Hc, a, b) for r, c, e, a, b in runs(h.T)]
     return np.array(rows, dtype=np.float64).reshape(-1, 6)
 
 
