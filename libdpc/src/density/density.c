@@ -59,10 +59,11 @@ static float cell_h(const density_map *d, float x, float y) { return d->h[cell_i
  * images are other points of the same side and density, as a torus would show them. */
 #define GLIDE 4.0
 
-/* Walls are glide mirrors too: a point near one sees the images of its side's points across the
- * wall's line shifted along it by WALL_GLIDE of its own spacings, towards the square's middle (so
- * a plain mirror's row beside a wall does not form); the points of a group near a wall look for
- * candidates that much farther. */
+/* Where a wall runs straight it is a glide mirror too: when a point's nearest wall point lies
+ * along a segment that goes on for WALL_GLIDE of the point's spacings towards the square's middle,
+ * the point sees the images of its side's points across the wall's line shifted that far along
+ * it, so that no row forms beside the wall; its group gathers candidates around the point's
+ * shifted position as well. Elsewhere (a staircase of short segments) a wall is a plain mirror. */
 #define WALL_GLIDE 4.0f
 
 static double wall_reach(float h) {
