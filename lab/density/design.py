@@ -14,6 +14,7 @@ import numpy as np
 
 from lab.common import report_header
 from lab.density import reference
+from lab.density.field import hex_spacing
 
 REPO = Path(__file__).resolve().parents[2]
 OUT = REPO / "docs" / "reports" / "density-design.md"
@@ -70,29 +71,24 @@ def count_error_at(p, d, k, centres):
     return float(np.mean(err) / np.mean(exp))
 
 
-def strip_counts(d, m, sub=64):
+def strip_count(d, m):
     """The expected count of a strip along the four sides a quarter of the local hexagonal spacing
     wide (the density along each side taken as constant across the strip; corners counted twice)."""
     rho = d / d.mean()
-    total = 0.0
-    for side in (rho[:, 0], rho[:, -1], rho[0, :], rho[-1, :]):
-        r = np.repeat(side, sub)
-        total += m * (r * np.sqrt(2.0 / (np.sqrt(3.0) * m * r)) * 0.25).sum() / len(r)
-    return total
+    return sum(m * np.mean(side * 0.25 * hex_spacing(m, side)) for side in (rho[:, 0], rho[:, -1], rho[0], rho[-1]))
 
 
-def side_count_error(p, d, k, rng, windows=3000):
+def side_count_error(p, d, k, rng, windows=1000):
     """count_error over windows whose edge lies within one local mean spacing of a side."""
     m = len(p)
     keep = []
-    for c in rng.random((windows * 8, 2)):
+    for c in rng.random((windows * 24, 2)):
         a = np.sqrt(k / (m * d[min(int(c[1] * G), G - 1), min(int(c[0] * G), G - 1)] / d.mean()))
         lo = c - a / 2
-        gap = min(lo[0], lo[1], 1 - lo[0] - a, 1 - lo[1] - a)
-        if 0 <= gap < a / np.sqrt(k):
+        if 0 <= min(lo[0], lo[1], 1 - lo[0] - a, 1 - lo[1] - a) < a / np.sqrt(k):
             keep.append(c)
-        if len(keep) == windows // 3:
-            break
+            if len(keep) == windows:
+                break
     return count_error_at(p, d, k, np.array(keep))
 
 
@@ -172,7 +168,7 @@ def main() -> None:
     for ratio in (8.0, 16.0):
         d = np.where(x < 0.5, 1.0, ratio)
         rho = (2.0 / (1.0 + ratio), 2.0 * ratio / (1.0 + ratio))
-        hexes = [np.sqrt(2.0 / (np.sqrt(3.0) * MIRROR_M * r)) for r in rho]
+        hexes = [hex_spacing(MIRROR_M, r) for r in rho]
         for kind, mirror, glide in (
             ("stop steps", False, False),
             ("stop steps, plain mirrors", True, False),
@@ -213,16 +209,15 @@ def main() -> None:
         rho_of = d / d.mean()
         for glides in (False, True):
             strips = np.zeros(5)
-            want = np.zeros(5)
             errs = []
             for k in range(SIDE_SEEDS):
                 p = reference.generate(MODEL, d, SIDE_M, k, glides=glides)
                 c = np.minimum((p * G).astype(int), G - 1)
-                hexp = np.sqrt(2.0 / (np.sqrt(3.0) * SIDE_M * rho_of[c[:, 1], c[:, 0]]))
+                hexp = hex_spacing(SIDE_M, rho_of[c[:, 1], c[:, 0]])
                 gap = np.minimum(np.minimum(p[:, 0], 1 - p[:, 0]), np.minimum(p[:, 1], 1 - p[:, 1])) / hexp
                 strips += np.histogram(gap, bins=5, range=(0, 1.25))[0]
-                want += strip_counts(d, SIDE_M)
                 errs.append(side_count_error(p, d, 64, np.random.default_rng(k)))
+            want = SIDE_SEEDS * strip_count(d, SIDE_M)
             kind = "glide mirrors (dpc)" if glides else "mirrors"
             lines.append(
                 f"| {name} | {kind} | " + " | ".join(f"{v:.2f}" for v in strips / want) + f" | {np.mean(errs):.3f} |"

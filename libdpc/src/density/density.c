@@ -398,24 +398,24 @@ static float own_term(const dpc_density_job *job, float tx, float ty, float a) {
  * bounding box: the runs of each mirror image of the set in turn. */
 static void gather(const layer_pass *p, group *g) {
     const float hq = g->qhi;
+    /* the queries' box, and the box of where their candidates lie: around each query, and around
+     * its position shifted by its glide along a wall (s (-ny, nx)) */
     float box[4] = {g->q[0], g->q[0], g->q[1], g->q[1]}; /* x0, x1, y0, y1 */
-    for (unsigned k = 1; k < g->nq; k++) {
-        const float qx = g->q[DPC_DENSITY_QUERY * k], qy = g->q[DPC_DENSITY_QUERY * k + 1];
-        box[0] = qx < box[0] ? qx : box[0];
-        box[1] = qx > box[1] ? qx : box[1];
-        box[2] = qy < box[2] ? qy : box[2];
-        box[3] = qy > box[3] ? qy : box[3];
-    }
-    /* the candidates of a glide along a wall lie around the point shifted by the glide (s (-ny, nx)) */
-    float reach_box[4] = {box[0], box[1], box[2], box[3]};
+    float reach_box[4];
+    memcpy(reach_box, box, sizeof box);
     for (unsigned k = 0; k < g->nq; k++) {
         const float *q = g->q + DPC_DENSITY_QUERY * k;
-        if (q[7] == 0.0f) continue;
-        const float gx = q[0] - q[7] * q[5], gy = q[1] + q[7] * q[4];
-        reach_box[0] = gx < reach_box[0] ? gx : reach_box[0];
-        reach_box[1] = gx > reach_box[1] ? gx : reach_box[1];
-        reach_box[2] = gy < reach_box[2] ? gy : reach_box[2];
-        reach_box[3] = gy > reach_box[3] ? gy : reach_box[3];
+        const float gx = q[0] - q[7] * q[5], gy = q[1] + q[7] * q[4]; /* q[7] = 0: the query itself */
+        box[0] = q[0] < box[0] ? q[0] : box[0];
+        box[1] = q[0] > box[1] ? q[0] : box[1];
+        box[2] = q[1] < box[2] ? q[1] : box[2];
+        box[3] = q[1] > box[3] ? q[1] : box[3];
+        const float x0 = gx < q[0] ? gx : q[0], x1 = gx > q[0] ? gx : q[0];
+        const float y0 = gy < q[1] ? gy : q[1], y1 = gy > q[1] ? gy : q[1];
+        reach_box[0] = x0 < reach_box[0] ? x0 : reach_box[0];
+        reach_box[1] = x1 > reach_box[1] ? x1 : reach_box[1];
+        reach_box[2] = y0 < reach_box[2] ? y0 : reach_box[2];
+        reach_box[3] = y1 > reach_box[3] ? y1 : reach_box[3];
     }
     memset(g->acc, 0, 16 * g->nq * sizeof(float));
     g->n = 0;

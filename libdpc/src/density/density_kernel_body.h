@@ -78,49 +78,37 @@ static inline __attribute__((always_inline)) vf pair_a(const int walls, vf cj, v
 }
 
 /* The mirror images, across the line t . n + D = 0 (n = (NX, NY), D >= 0 the query's distance to
- * it), of the packed candidates (tx, ty, cj)[0 .. m) of its own spacing on its side
- * (t . n + D > 0), packed in order into (itx, ity, ic) where in the window:
- * t' = t - 2 (t . n + D) n. An image is never nearer than its candidate, so the packed
- * candidates hold every image in reach but the query's own (t = 0: density.c adds it). Returns
- * their count. */
-static inline __attribute__((always_inline)) uint32_t images(const float *dtx, const float *dty, const float *dc,
-                                                             uint32_t m, vi iota, vf A, vf WR, vf NX, vf NY, vf D,
-                                                             vf c2, vf smin2, vf cut2, vf umax2, float *itx, float *ity,
-                                                             float *ic) {
-    uint32_t k = 0;
-    const vf zero = vsplat(0.0f);
-    for (uint32_t r = 0; r < m; r += VW) {
-        const vi live = VLIVE(iota, (int32_t)(m - r));
-        const vf tx = VLOAD(dtx + r), ty = VLOAD(dty + r), cj = VLOAD(dc + r);
-        vi own;
-        const vf a = pair_a(1, cj, A, WR, &own);
-        const vf e = tx * NX + ty * NY + D, f = e + e;
-        const vf jx = tx - f * NX, jy = ty - f * NY;
-        const vf v = vselect(live & own & (e > zero), window_value(jx * jx + jy * jy, a, c2, smin2), umax2);
-        k += PACK3(WINDOW(v, cut2, umax2), jx, jy, cj, itx + k, ity + k, ic + k);
-    }
-    return k;
+ * it), of the live lanes of one vector of candidates (tx, ty relative to the query, cj) of its own
+ * spacing on its side (e = t . n + D > 0): t' = t - 2 e n, less the glide (GX, GY) along the line
+ * when glide; those in the window packed in order at (itx, ity, ic), their count returned. */
+static inline __attribute__((always_inline)) uint32_t mirror_vector(vf tx, vf ty, vf cj, vi live, const int glide, vf A,
+                                                                    vf WR, vf NX, vf NY, vf D, vf GX, vf GY, vf c2,
+                                                                    vf smin2, vf cut2, vf umax2, float *itx, float *ity,
+                                                                    float *ic) {
+    vi own;
+    const vf a = pair_a(1, cj, A, WR, &own);
+    const vf e = tx * NX + ty * NY + D, f = e + e;
+    vf jx = tx - f * NX, jy = ty - f * NY;
+    if (glide) jx = jx - GX, jy = jy - GY;
+    const vf v = vselect(live & own & (e > vsplat(0.0f)), window_value(jx * jx + jy * jy, a, c2, smin2), umax2);
+    return PACK3(WINDOW(v, cut2, umax2), jx, jy, cj, itx, ity, ic);
 }
 
-/* The glide-mirror images of the chunk's candidates (tx, ty relative to the query, cj) of its own
- * spacing on its side (e = t . n + D > 0; n = (NX, NY), D >= 0 the query's distance to the line
- * t . n + D = 0): t' = t - 2 e n - (GX, GY), the glide (GX, GY) along the line; those in the window
- * packed in order into (itx, ity, ic), their count returned. The query itself is a candidate (t = 0)
- * and has its image too. */
-static inline __attribute__((always_inline)) uint32_t glide_images(const float *cx, const float *cy, const float *ca,
-                                                                   uint32_t n, vf X, vf Y, vf A, vf WR, vf NX, vf NY,
-                                                                   vf D, vf GX, vf GY, vf c2, vf smin2, vf cut2,
-                                                                   vf umax2, float *itx, float *ity, float *ic) {
+/* A plain mirror: the images of the packed candidates (tx, ty, cj)[0 .. m). An image is never
+ * nearer than its candidate, so the packed candidates hold every image in reach but the query's
+ * own (t = 0: density.c adds it). A glide mirror: the images of the chunk's candidates (cx, cy,
+ * ca)[0 .. n), shifted by (GX, GY) along the line; the query itself is one of them. */
+static inline __attribute__((always_inline)) uint32_t images(const int glide, const float *px, const float *py,
+                                                             const float *pc, uint32_t n, vi iota, vf X, vf Y, vf A,
+                                                             vf WR, vf NX, vf NY, vf D, vf GX, vf GY, vf c2, vf smin2,
+                                                             vf cut2, vf umax2, float *itx, float *ity, float *ic) {
     uint32_t k = 0;
-    const vf zero = vsplat(0.0f);
-    for (uint32_t o = 0; o < n; o += VW) {
-        const vf tx = VLOAD(cx + o) - X, ty = VLOAD(cy + o) - Y, cj = VLOAD(ca + o);
-        vi own;
-        const vf a = pair_a(1, cj, A, WR, &own);
-        const vf e = tx * NX + ty * NY + D, f = e + e;
-        const vf jx = (tx - f * NX) - GX, jy = (ty - f * NY) - GY;
-        const vf v = vselect(own & (e > zero), window_value(jx * jx + jy * jy, a, c2, smin2), umax2);
-        k += PACK3(WINDOW(v, cut2, umax2), jx, jy, cj, itx + k, ity + k, ic + k);
+    for (uint32_t r = 0; r < n; r += VW) {
+        /* the packed streams are relative to the query and end at n; the chunk is absolute and padded */
+        const vf tx = glide ? VLOAD(px + r) - X : VLOAD(px + r), ty = glide ? VLOAD(py + r) - Y : VLOAD(py + r);
+        const vi live = glide ? visplat(-1) : VLIVE(iota, (int32_t)(n - r));
+        k += mirror_vector(tx, ty, VLOAD(pc + r), live, glide, A, WR, NX, NY, D, GX, GY, c2, smin2, cut2, umax2,
+                           itx + k, ity + k, ic + k);
     }
     return k;
 }
@@ -184,10 +172,10 @@ void KERNEL(const dpc_density_job *job, const float *cx, const float *cy, const 
         if (qp[3] != 0.0f) {
             const vf NX = vsplat(qp[4]), NY = vsplat(qp[5]), D = vsplat(qp[6]);
             const vf GX = vsplat(0.0f - qp[7] * qp[5]), GY = vsplat(qp[7] * qp[4]); /* glide (-ny, nx) s */
-            const uint32_t k =
-                qp[7] == 0.0f
-                    ? images(dtx, dty, dc, m, iota, A, WR, NX, NY, D, c2, smin2, cut2, umax2, itx, ity, ic)
-                    : glide_images(cx, cy, ca, n, X, Y, A, WR, NX, NY, D, GX, GY, c2, smin2, cut2, umax2, itx, ity, ic);
+            const uint32_t k = qp[7] == 0.0f ? images(0, dtx, dty, dc, m, iota, X, Y, A, WR, NX, NY, D, GX, GY, c2,
+                                                      smin2, cut2, umax2, itx, ity, ic)
+                                             : images(1, cx, cy, ca, n, iota, X, Y, A, WR, NX, NY, D, GX, GY, c2, smin2,
+                                                      cut2, umax2, itx, ity, ic);
             terms(0, itx, ity, ic, k, iota, A, WR, c2, smin2, cut2, umax, umax2, qmax, &w_t, &dw_t, &sx, &sy);
         }
         memcpy(acc + 16 * p, &sx, sizeof sx);

@@ -264,17 +264,17 @@ int dpc_walls_nearest(const dpc_walls *w, double x, double y, float h, double R,
     }
     if (found < 0) return 0;
     *wx = fx, *wy = fy;
-    const double *sg = w->seg + 4 * (size_t)found;
-    if (sg[0] == sg[2]) run[0] = (double)fy - sg[1], run[1] = sg[3] - (double)fy; /* vertical */
-    else run[0] = (double)fx - sg[0], run[1] = sg[2] - (double)fx;
+    const double *s = w->seg + 4 * (size_t)found;
+    const int vertical = s[0] == s[2];
+    if (vertical) run[0] = (double)fy - s[1], run[1] = s[3] - (double)fy;
+    else run[0] = (double)fx - s[0], run[1] = s[2] - (double)fx;
     const double d = sqrt((double)best);
     if (d > 0.0) {
         *nx = ((double)xf - fx) / d, *ny = ((double)yf - fy) / d;
     } else { /* on the wall: towards the side of its own spacing */
-        const double *s = w->seg + 4 * (size_t)found;
         const double sgn = dpc_wall_compatible(h, w->side[2 * (size_t)found]) ? -1.0 : 1.0;
-        *nx = s[0] == s[2] ? sgn : 0.0;
-        *ny = s[0] == s[2] ? 0.0 : sgn;
+        *nx = vertical ? sgn : 0.0;
+        *ny = vertical ? 0.0 : sgn;
     }
     return 1;
 }
