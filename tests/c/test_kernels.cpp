@@ -2,7 +2,8 @@
 // ISA path and the 16-lane arrangement of the AVX-512 path (dpc_block_packed16, portable, so it
 // runs here even without AVX-512) give the same bits as the scalar path on random jobs: subspace
 // sizes 1-6, small (register) and large (gathered) tables, one range or many (concatenated in
-// chunks past DPC_GATHER_CAP), odd and even numbers of query points. The list kernels (one query
+// chunks past DPC_GATHER_CAP), odd and even numbers of query points, and local blocks (which skip
+// the minimum image) the bits of those that do not. The list kernels (one query
 // over an explicit candidate list, the neighbour lists' path) give the all-pairs bits for any
 // candidate list that holds the points in the window. And the sums match a float64 evaluation of
 // the formula to float rounding.
@@ -20,7 +21,7 @@ extern "C" {
 // The AVX-512 path's 16-lane arrangement with portable primitives (cpu_kernel_packed16.c, built
 // into this test only).
 void dpc_block_packed16(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
-                        unsigned n_ranges, float *acc, float *scratch);
+                        unsigned n_ranges, int local, float *acc, float *scratch);
 void dpc_list_packed16(const dpc_sub_job *job, const float *x, const uint32_t *cand, unsigned n, float *acc);
 }
 
@@ -88,10 +89,10 @@ Job make_job(std::mt19937 &rng, unsigned k, unsigned bins, unsigned n_cand, unsi
     return j;
 }
 
-std::vector<float> run(dpc_block_fn fn, Job &j) {
+std::vector<float> run(dpc_block_fn fn, Job &j, int local = 0) {
     std::vector<float> acc(j.count * j.k, -7.0f);
     std::vector<float> scratch(4 * DPC_GATHER_STRIDE);
-    fn(&j.job, j.xs.data(), j.count, j.ranges.data(), (unsigned)j.ranges.size() / 2, acc.data(),
+    fn(&j.job, j.xs.data(), j.count, j.ranges.data(), (unsigned)j.ranges.size() / 2, local, acc.data(),
        j.k <= 4 ? scratch.data() : nullptr);
     return acc;
 }
@@ -154,6 +155,44 @@ TEST(Kernels, EveryArrangementGivesTheScalarBits) {
                     cases++;
                 }
     EXPECT_GT(cases, 200);
+}
+
+// A local block (every candidate within 1/2 of every query on every axis, as a grid cell away
+// from the domain's edges) skips the minimum image: the bits of the full computation, on every
+// path. The points lie in [0.2, 0.7) on each axis, so differences go up to the promise's 1/2;
+// the radius reaches most of them, so most terms count.
+TEST(Kernels, LocalBlocksGiveTheBitsOfTheMinimumImage) {
+    std::mt19937 rng(2024);
+    std::vector<std::pair<const char *, dpc_block_fn>> paths = {{"scalar", dpc_block_scalar},
+                                                                {"packed16", dpc_block_packed16}};
+#if defined(DPC_HAVE_AVX2)
+    if (has_avx2()) paths.push_back({"scalar with fma", dpc_block_scalar_fma});
+    if (has_avx2()) paths.push_back({"avx2", dpc_block_avx2});
+    if (has_avx512()) paths.push_back({"avx512", dpc_block_avx512});
+#endif
+    std::uniform_real_distribution<float> u(0.2f, 0.7f);
+    int cases = 0;
+    for (unsigned k : {1u, 2u, 3u, 4u})
+        for (unsigned bins : {4u, 32u, 200u})
+            for (unsigned n_ranges : {1u, 5u})
+                for (unsigned count : {1u, 2u, 5u}) {
+                    Job j = make_job(rng, k, bins, 600, n_ranges, count);
+                    for (auto &c : j.cols)
+                        for (float &v : c) v = u(rng);
+                    for (float &v : j.xs) v = u(rng);
+                    if (cases % 5 == 0) j.cols[0][j.ranges[0]] = 0.7f, j.xs[0] = 0.2f; // a difference of exactly 1/2
+                    j.job.radius = 0.5f;
+                    j.job.scale = (float)(bins - 1) / j.job.radius;
+                    const std::vector<float> want = run(dpc_block_scalar, j);
+                    for (auto &p : paths) {
+                        const std::vector<float> got = run(p.second, j, 1);
+                        ASSERT_EQ(std::memcmp(got.data(), want.data(), want.size() * sizeof(float)), 0)
+                            << p.first << ": k " << k << ", bins " << bins << ", ranges " << n_ranges << ", count "
+                            << count;
+                    }
+                    cases++;
+                }
+    EXPECT_EQ(cases, 72);
 }
 
 TEST(Kernels, ListKernelsGiveTheBitsOfAllPairs) {

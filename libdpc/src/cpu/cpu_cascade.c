@@ -139,6 +139,10 @@ typedef struct sub_pass {
     float h;             /* mean spacing of the subspace */
     int grid;            /* 0: all pairs */
     uint32_t G, R;       /* cells per axis, cell offsets searched per axis */
+    int local_cells;     /* 2R + 3 <= G: the cells searched around a cell that stay inside the grid
+                          * lie less than (R + 1) / G <= 1/2 from it on every axis (plus the cell
+                          * coordinates' rounding, a thousandth of a cell: plan.h), so its block
+                          * is local (cpu_kernels.h) */
     int near;            /* all pairs through the prefilter */
     dpc_near_job near_job;
     int lists; /* near, through the workspace's lists */
@@ -155,14 +159,21 @@ static void sort_cells(sub_pass *p, const float *x) {
         const uint32_t G = p->G;
         size_t cells = 1;
         for (unsigned q = 0; q < k; q++) cells *= G;
-        for (size_t i = 0; i < m; i++) {
-            uint32_t id = 0;
-            for (unsigned q = k; q-- > 0;) {
-                uint32_t c = (uint32_t)(x[i * n + p->dim[q]] * (float)G);
-                id = id * G + (c < G ? c : G - 1);
+        if (k == 2) { /* the common case unrolled: the same operations */
+            const unsigned d0 = p->dim[0], d1 = p->dim[1];
+            for (size_t i = 0; i < m; i++) {
+                const uint32_t c0 = (uint32_t)(x[i * n + d0] * (float)G), c1 = (uint32_t)(x[i * n + d1] * (float)G);
+                ws->cell_of[i] = (c1 < G ? c1 : G - 1) * G + (c0 < G ? c0 : G - 1);
             }
-            ws->cell_of[i] = id;
-        }
+        } else
+            for (size_t i = 0; i < m; i++) {
+                uint32_t id = 0;
+                for (unsigned q = k; q-- > 0;) {
+                    uint32_t c = (uint32_t)(x[i * n + p->dim[q]] * (float)G);
+                    id = id * G + (c < G ? c : G - 1);
+                }
+                ws->cell_of[i] = id;
+            }
         dpc_grid_sort(ws->cell_of, m, cells, ws->cell_start, ws->perm);
     }
 }
@@ -272,7 +283,7 @@ static void sub_pass_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
                     ranges[1] = (uint32_t)m;
                     n_ranges = 1;
                 }
-                p->engine->block(&p->job, xs, 1, ranges, n_ranges, acc, NULL);
+                p->engine->block(&p->job, xs, 1, ranges, n_ranges, 0, acc, NULL);
             }
             float *d = ws->delta + (size_t)ws->perm[s] * n;
             for (unsigned q = 0; q < k; q++) d[p->dim[q]] += p->h * acc[q];
@@ -293,10 +304,12 @@ static void sub_pass_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
         }
         /* A block: consecutive sorted points of one cell (they share candidate ranges). */
         size_t e = s + 1;
+        int local = 0;
         if (p->grid) {
             const uint32_t cell = ws->cell_of[ws->perm[s]];
             while (e < hi && e - s < block_cap && ws->cell_of[ws->perm[e]] == cell) e++;
-            n_ranges = dpc_grid_ranges(k, p->G, p->R, ws->cell_start, cell, ranges);
+            n_ranges = dpc_grid_ranges(k, p->G, p->R, ws->cell_start, cell, ranges, &local);
+            local &= p->local_cells;
         } else {
             e = s + block_cap < hi ? s + block_cap : hi;
         }
@@ -311,7 +324,7 @@ static void sub_pass_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
             for (unsigned q = 0; q < k; q++) xs[count * k + q] = p->job.coord[q][t];
             count++;
         }
-        if (count) p->engine->block(&p->job, xs, count, ranges, n_ranges, acc, scratch);
+        if (count) p->engine->block(&p->job, xs, count, ranges, n_ranges, local, acc, scratch);
         for (unsigned b = 0; b < count; b++) {
             float *d = ws->delta + (size_t)ws->perm[which[b]] * n;
             for (unsigned q = 0; q < k; q++) d[p->dim[q]] += p->h * acc[b * k + q];
@@ -328,11 +341,36 @@ typedef struct apply_pass {
     const uint32_t *order; /* working point -> caller index */
     size_t n, frozen;
     float count[DPC_MAX_DIMS]; /* c_k, 0 for dimensions that do not move */
+    int all_ones;              /* no held points and every c_k = 1 (apply_all) */
 } apply_pass;
+
+/* y = x + step wrapped into [0, 1) as apply_range does, for every coordinate of points lo..hi
+ * (no held points, every dimension in one subspace): the two usual cases as selects, which the
+ * compiler vectorises, then the rare rest (a step of more than one period, inf or NaN) one by
+ * one: the same operations, so the same bits. */
+static void apply_all(const apply_pass *a, size_t lo, size_t hi) {
+    float *x = a->x + lo * a->n;
+    const float *step = a->delta + lo * a->n;
+    const size_t count = (hi - lo) * a->n;
+    for (size_t j = 0; j < count; j++) {
+        float y = x[j] + step[j];
+        y = y >= 1.0f && y < 2.0f ? y - 1.0f : y;
+        x[j] = y < 0.0f && y >= -1.0f ? y + 1.0f : y;
+    }
+    for (size_t j = 0; j < count; j++)
+        if (!(x[j] >= 0.0f && x[j] < 1.0f)) { /* past a period, inf, NaN, or -tiny + 1 = 1 */
+            const float y = x[j] == 1.0f ? 0.0f : x[j] - floorf(x[j]);
+            x[j] = (y >= 0.0f && y < 1.0f) ? y : 0.0f;
+        }
+}
 
 static void apply_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
     (void)slot;
     const apply_pass *a = (const apply_pass *)ctx;
+    if (a->all_ones) {
+        apply_all(a, lo, hi);
+        return;
+    }
     for (size_t i = lo; i < hi; i++) {
         if (a->frozen && a->order[i] < a->frozen) continue;
         for (size_t d = 0; d < a->n; d++) {
@@ -356,7 +394,12 @@ static void reorder_points(workspace *ws) {
     const size_t m = ws->m, n = ws->n;
     for (size_t s = 0; s < m; s++) {
         const uint32_t i = ws->perm[s];
-        for (size_t d = 0; d < n; d++) ws->x_tmp[s * n + d] = ws->x[(size_t)i * n + d]; /* n is small: no memcpy call */
+        if (n == 2) { /* the common case unrolled */
+            ws->x_tmp[2 * s] = ws->x[2 * (size_t)i];
+            ws->x_tmp[2 * s + 1] = ws->x[2 * (size_t)i + 1];
+        } else
+            for (size_t d = 0; d < n; d++)
+                ws->x_tmp[s * n + d] = ws->x[(size_t)i * n + d]; /* n is small: no memcpy call */
         ws->order_tmp[s] = ws->order[i];
         ws->cell_tmp[s] = ws->cell_of[i];
     }
@@ -403,6 +446,7 @@ static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws
         p.grid = plan.grid;
         p.G = plan.G;
         p.R = plan.R;
+        p.local_cells = plan.grid && 2 * plan.R + 3 <= plan.G;
         p.near = e->prefilter && !plan.grid && plan.k >= PREFILTER_MIN_DIMS && m >= PREFILTER_MIN_POINTS &&
                  dpc_plan_in_reach(plan.k, L->radius[t]) <= (double)m / 16.0;
         sort_cells(&p, ws->x);
@@ -423,6 +467,8 @@ static void run_layer(const dpc_layer *L, const dpc_cpu_engine *e, workspace *ws
     a.order = ws->order;
     a.n = n;
     a.frozen = ws->frozen;
+    a.all_ones = !ws->frozen;
+    for (size_t d = 0; d < n; d++) a.all_ones &= a.count[d] == 1.0f;
     parallel_for(e->threads, m, apply_range, &a);
 }
 

@@ -24,15 +24,31 @@ static inline void dpc_grid_sort(const uint32_t *cell_of, size_t m, size_t cells
 /* Candidate index ranges for a point in cell `id` of a k-D grid with G cells per axis: the
  * (2R+1)^(k-1) rows of 2R+1 cells around it, in a fixed order. start[c] is the first sorted
  * index of cell c. Needs 2R+1 <= G (each row wraps at most once) and k <= 8; ranges has room
- * for 2 (2R+1)^(k-1) pairs. Returns the number of non-empty ranges written. */
+ * for 2 (2R+1)^(k-1) pairs. Returns the number of non-empty ranges written; *inside (unless
+ * NULL) says whether those cells stay inside the grid on every axis, without going round. */
 static inline unsigned dpc_grid_ranges(unsigned k, uint32_t G_, uint32_t R_, const uint32_t *start, uint32_t id,
-                                       uint32_t *ranges) {
+                                       uint32_t *ranges, int *inside) {
     const int32_t G = (int32_t)G_, R = (int32_t)R_;
     int32_t c[8], off[8];
+    int in = 1;
     for (unsigned q = 0; q < k; q++) {
         c[q] = (int32_t)(id % (uint32_t)G);
         id /= (uint32_t)G;
         off[q] = -R;
+        in &= c[q] >= R && c[q] + R < G;
+    }
+    if (inside) *inside = in;
+    /* Each row's cells along axis 0, as offsets from its start: one span, or two where it goes
+     * round (the same for every row). */
+    const int32_t lo = c[0] - R, hi = c[0] + R;
+    uint32_t a[2], b[2];
+    unsigned parts = 1;
+    if (lo < 0) {
+        a[0] = (uint32_t)(lo + G), b[0] = (uint32_t)G, a[1] = 0, b[1] = (uint32_t)(hi + 1), parts = 2;
+    } else if (hi >= G) {
+        a[0] = (uint32_t)lo, b[0] = (uint32_t)G, a[1] = 0, b[1] = (uint32_t)(hi - G + 1), parts = 2;
+    } else {
+        a[0] = (uint32_t)lo, b[0] = (uint32_t)(hi + 1);
     }
     unsigned n = 0;
     for (;;) {
@@ -43,23 +59,11 @@ static inline unsigned dpc_grid_ranges(unsigned k, uint32_t G_, uint32_t R_, con
             base = base * (uint32_t)G + (uint32_t)v;
         }
         base *= (uint32_t)G;
-        const int32_t lo = c[0] - R, hi = c[0] + R;
-        uint32_t a[2], b[2];
-        unsigned parts = 1;
-        if (lo < 0) {
-            a[0] = (uint32_t)(lo + G), b[0] = (uint32_t)G, a[1] = 0, b[1] = (uint32_t)(hi + 1), parts = 2;
-        } else if (hi >= G) {
-            a[0] = (uint32_t)lo, b[0] = (uint32_t)G, a[1] = 0, b[1] = (uint32_t)(hi - G + 1), parts = 2;
-        } else {
-            a[0] = (uint32_t)lo, b[0] = (uint32_t)(hi + 1);
-        }
-        for (unsigned z = 0; z < parts; z++) {
+        for (unsigned z = 0; z < parts; z++) { /* written always, kept when not empty: no branch */
             const uint32_t s0 = start[base + a[z]], s1 = start[base + b[z]];
-            if (s1 > s0) {
-                ranges[2 * n] = s0;
-                ranges[2 * n + 1] = s1;
-                n++;
-            }
+            ranges[2 * n] = s0;
+            ranges[2 * n + 1] = s1;
+            n += s1 > s0;
         }
         unsigned q = 1; /* odometer over axes 1..k-1 */
         while (q < k && ++off[q] > R) off[q++] = -R;

@@ -36,15 +36,18 @@ typedef struct dpc_sub_job {
  * copy up to DPC_GATHER_CAP candidates of several ranges into one run there, so vectors are
  * full and the loop has one predictable trip count; the sums are those of the ranges in order.
  * Without scratch, several ranges are read in place and each but the last must be a multiple of
- * 8 long (cpu_near.h), so candidates keep their lanes in the concatenation. */
+ * 8 long (cpu_near.h), so candidates keep their lanes in the concatenation. local (k <= 4): the
+ * caller promises that every candidate differs from every query by at most 1/2 in each
+ * coordinate without going round the torus (a grid cell away from the domain's edges), so the
+ * minimum-image step is skipped: the same bits, two operations fewer per dimension. */
 #define DPC_BLOCK_MAX 64u
 #define DPC_GATHER_CAP 4096u
 #define DPC_GATHER_STRIDE (DPC_GATHER_CAP + 32u)
 typedef void (*dpc_block_fn)(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
-                             unsigned n_ranges, float *acc, float *scratch);
+                             unsigned n_ranges, int local, float *acc, float *scratch);
 
 void dpc_block_scalar(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
-                      unsigned n_ranges, float *acc, float *scratch);
+                      unsigned n_ranges, int local, float *acc, float *scratch);
 /* Sums for one query point x (k floats) over an explicit candidate list: cand[0 .. n), ascending
  * indices without repeats, holding every point in the window eps < d < r (the neighbour lists of
  * cpu_lists.h), read from job->row. Each candidate's term is computed with the block kernel's
@@ -61,11 +64,11 @@ void dpc_list_avx512(const dpc_sub_job *job, const float *x, const uint32_t *can
 #endif
 #if defined(DPC_HAVE_AVX2)
 void dpc_block_scalar_fma(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
-                          unsigned n_ranges, float *acc, float *scratch);
+                          unsigned n_ranges, int local, float *acc, float *scratch);
 void dpc_block_avx2(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges, unsigned n_ranges,
-                    float *acc, float *scratch);
+                    int local, float *acc, float *scratch);
 void dpc_block_avx512(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
-                      unsigned n_ranges, float *acc, float *scratch);
+                      unsigned n_ranges, int local, float *acc, float *scratch);
 #endif
 
 #endif

@@ -95,7 +95,7 @@ ALWAYS_INLINE void chunk_body(const dpc_train_pass *ps, size_t lo, size_t hi, do
         /* K <= 8: grids have k <= 4 (dpc_plan_search); the bound lets the compiler see dpc_grid_ranges in bounds. */
         if (K <= 8 && sp->grid && ws->cell[s] != cur) { /* a cell's consecutive points share ranges */
             cur = ws->cell[s];
-            nr = dpc_grid_ranges(sp->k, sp->G, sp->R, ws->cell_start, cur, ranges);
+            nr = dpc_grid_ranges(sp->k, sp->G, sp->R, ws->cell_start, cur, ranges, NULL);
         }
         double xi[DPC_MAX_DIMS], a[DPC_MAX_DIMS];
         for (unsigned q = 0; q < K; q++) {

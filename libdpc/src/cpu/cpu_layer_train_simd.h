@@ -173,7 +173,7 @@ ALWAYS_INLINE void point_pairs(const dpc_train_pass *ps, pair_walk *wk, size_t s
     /* K <= 8: grids have k <= 4 (dpc_plan_search); the bound lets the compiler see dpc_grid_ranges in bounds. */
     if (K <= 8 && sp->grid && ws->cell[s] != wk->cur) { /* a cell's consecutive points share ranges */
         wk->cur = ws->cell[s];
-        wk->nr = dpc_grid_ranges(sp->k, sp->G, sp->R, ws->cell_start, wk->cur, wk->ranges);
+        wk->nr = dpc_grid_ranges(sp->k, sp->G, sp->R, ws->cell_start, wk->cur, wk->ranges, NULL);
     }
     for (unsigned q = 0; q < K; q++) acc[q] = V_ZERO();
     unsigned len = 0;
