@@ -257,39 +257,13 @@ static int fill_rows(sub_pass *p) {
     return 1;
 }
 
-static void sub_pass_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
-    const sub_pass *p = (const sub_pass *)ctx;
+/* The blocks of points lo..hi: a grid cell's points (which share candidate ranges), or runs of
+ * points over all pairs. k is the subspace's size: a constant where the caller specialises. */
+static inline __attribute__((always_inline)) void block_range(const sub_pass *p, unsigned slot, size_t lo, size_t hi,
+                                                              unsigned k) {
     workspace *ws = p->ws;
-    const unsigned k = p->job.k;
     const size_t m = ws->m, n = ws->n;
     uint32_t ranges[2 * MAX_RANGES];
-    if (p->near) { /* one point at a time, each with its own ranges */
-        float xs[DPC_MAX_DIMS], acc[DPC_MAX_DIMS];
-        uint32_t cand[MAX_CANDIDATES];
-        for (size_t s = lo; s < hi; s++) {
-            if (((s - lo) & (DPC_CPU_POLL_POINTS - 1)) == DPC_CPU_POLL_POINTS - 1 && poll_stop(ws, 0)) return;
-            if (ws->frozen && ws->order[ws->perm[s]] < ws->frozen) continue;
-            for (unsigned q = 0; q < k; q++) xs[q] = p->job.coord[q][s];
-            unsigned n_cand = 0;
-            const uint32_t *cands =
-                p->lists ? dpc_lists_candidates(&ws->lists, (uint32_t)s, cand, MAX_CANDIDATES, &n_cand) : NULL;
-            if (cands) {
-                p->engine->list(&p->job, xs, cands, n_cand, acc);
-            } else {
-                unsigned n_ranges =
-                    p->lists ? MAX_RANGES + 1 : p->engine->near(&p->near_job, (uint32_t)s, ranges, MAX_RANGES);
-                if (n_ranges > MAX_RANGES) { /* too many blocks pass: all of them */
-                    ranges[0] = 0;
-                    ranges[1] = (uint32_t)m;
-                    n_ranges = 1;
-                }
-                p->engine->block(&p->job, xs, 1, ranges, n_ranges, 0, acc, NULL);
-            }
-            float *d = ws->delta + (size_t)ws->perm[s] * n;
-            for (unsigned q = 0; q < k; q++) d[p->dim[q]] += p->h * acc[q];
-        }
-        return;
-    }
     float xs[DPC_BLOCK_MAX * 4], acc[DPC_BLOCK_MAX * 4]; /* blocks hold DPC_BLOCK_MAX * 4 floats */
     const unsigned block_cap = k <= 4 ? DPC_BLOCK_MAX : (DPC_BLOCK_MAX * 4) / k;
     float *scratch = p->grid ? ws->gather + (size_t)slot * 4 * DPC_GATHER_STRIDE : NULL; /* grid: k <= 4 */
@@ -331,6 +305,43 @@ static void sub_pass_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
         }
         s = e;
     }
+}
+
+static void sub_pass_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
+    const sub_pass *p = (const sub_pass *)ctx;
+    workspace *ws = p->ws;
+    const unsigned k = p->job.k;
+    const size_t m = ws->m, n = ws->n;
+    uint32_t ranges[2 * MAX_RANGES];
+    if (p->near) { /* one point at a time, each with its own ranges */
+        float xs[DPC_MAX_DIMS], acc[DPC_MAX_DIMS];
+        uint32_t cand[MAX_CANDIDATES];
+        for (size_t s = lo; s < hi; s++) {
+            if (((s - lo) & (DPC_CPU_POLL_POINTS - 1)) == DPC_CPU_POLL_POINTS - 1 && poll_stop(ws, 0)) return;
+            if (ws->frozen && ws->order[ws->perm[s]] < ws->frozen) continue;
+            for (unsigned q = 0; q < k; q++) xs[q] = p->job.coord[q][s];
+            unsigned n_cand = 0;
+            const uint32_t *cands =
+                p->lists ? dpc_lists_candidates(&ws->lists, (uint32_t)s, cand, MAX_CANDIDATES, &n_cand) : NULL;
+            if (cands) {
+                p->engine->list(&p->job, xs, cands, n_cand, acc);
+            } else {
+                unsigned n_ranges =
+                    p->lists ? MAX_RANGES + 1 : p->engine->near(&p->near_job, (uint32_t)s, ranges, MAX_RANGES);
+                if (n_ranges > MAX_RANGES) { /* too many blocks pass: all of them */
+                    ranges[0] = 0;
+                    ranges[1] = (uint32_t)m;
+                    n_ranges = 1;
+                }
+                p->engine->block(&p->job, xs, 1, ranges, n_ranges, 0, acc, NULL);
+            }
+            float *d = ws->delta + (size_t)ws->perm[s] * n;
+            for (unsigned q = 0; q < k; q++) d[p->dim[q]] += p->h * acc[q];
+        }
+        return;
+    }
+    if (k == 2) block_range(p, slot, lo, hi, 2); /* the common case, unrolled */
+    else block_range(p, slot, lo, hi, k);
 }
 
 /* ---- applying a layer -------------------------------------------------------------------- */

@@ -169,7 +169,9 @@ static inline uint32_t next_chunk(run *rn, const dpc_sub_job *job, unsigned k, f
         rn->r++;
         return rn->ranges[2 * rn->r - 1] - *first;
     }
-    uint32_t got = 0; /* several ranges: the grid, which always passes scratch (k <= 4) */
+    uint32_t got = 0;    /* several ranges: the grid, which always passes scratch (k <= 4) */
+    const float *col[4]; /* in locals: the copies' stores cannot change them */
+    for (unsigned q = 0; q < 4; q++) col[q] = job->coord[q < k ? q : 0];
     while (rn->r < rn->n_ranges && got < DPC_GATHER_CAP) {
         const uint32_t a = rn->ranges[2 * rn->r] + rn->at, b = rn->ranges[2 * rn->r + 1];
         uint32_t len = b - a;
@@ -179,7 +181,7 @@ static inline uint32_t next_chunk(run *rn, const dpc_sub_job *job, unsigned k, f
          * the overrun */
         for (uint32_t o = 0; o < len; o += 16)
             for (unsigned q = 0; q < k; q++)
-                memcpy(scratch + q * DPC_GATHER_STRIDE + got + o, job->coord[q] + a + o, 16 * sizeof(float));
+                memcpy(scratch + q * DPC_GATHER_STRIDE + got + o, col[q] + a + o, 16 * sizeof(float));
         got += len;
         if (a + len == b) rn->r++, rn->at = 0;
         else rn->at += len;
