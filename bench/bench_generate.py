@@ -16,6 +16,12 @@ Builds libdpc and bench/bench_generate.c in build/bench (Release), then measures
    / the core's peak rate of float vector operations, bench/bench_peak.c).
 Medians over repeated runs; ratios are taken within this one run.
 
+    python bench/bench_generate.py --pmj-src PMJ_CPP
+
+also builds bench/bench_pmj.cpp against a checkout of pmj-cpp (github.com/Andrew-Helmer/pmj-cpp)
+and times bnot-2d beside its PMJ02BN at 1,024 and 65,536 points on each vector ISA: the section
+"bnot-2d beside PMJ02BN" (goal: dpc at least 2.5x faster).
+
     python bench/bench_generate.py --against REV
 
 also builds the benchmark from git revision REV (e.g. the commit before a kernel change) and
@@ -77,6 +83,38 @@ def against(rev: str, exe: Path, isas: list[str]) -> list[str]:
             for m in counts:
                 ta, tb = a[m], b[m]
                 lines.append(f"| `{name}` | {isa} | {m:,} | {ta * 1e3:.2f} ms | {tb * 1e3:.2f} ms | {tb / ta:.2f}x |")
+    return lines
+
+
+def pmj_section(src: str, isas: list[str]) -> list[str]:
+    """bnot-2d beside PMJ02BN (pmj-cpp, built from the checkout src in the bench's build folder),
+    one process per vector ISA, each generator warmed up and timed in turn, seven rounds."""
+    exe = build("dpc_bench_pmj", ROOT, BUILD, f"-DDPC_PMJ_SRC={Path(src).resolve()}")
+    model = ROOT / "models" / "bnot-2d.onnx"
+    lines = [
+        "",
+        "## bnot-2d beside PMJ02BN (pmj-cpp)",
+        "",
+        "`python bench/bench_generate.py --pmj-src PMJ_CPP`: Christensen et al. 2018's PMJ02BN as "
+        "`pmj::GetPMJ02SamplesWithBlueNoise` of Andrew Helmer's pmj-cpp (github.com/Andrew-Helmer/pmj-cpp, "
+        "MIT; its sources built by bench/CMakeLists.txt from the checkout given, never copied into this "
+        "repository), and dpc_generate_n of bnot-2d, in one process (`bench/bench_pmj.cpp`): seven rounds, "
+        "each generator warmed up and timed in turn; medians of thread CPU time. Goal: dpc at least 2.5x "
+        "faster.",
+        "",
+        "| ISA | points | bnot-2d | PMJ02BN | PMJ02BN / bnot-2d | >= 2.5x |",
+        "|---|---:|---:|---:|---:|---|",
+    ]
+    for isa in isas:
+        out = subprocess.run(
+            [str(exe), str(model), isa, "7", "1024", "65536"], check=True, capture_output=True, text=True
+        ).stdout
+        for r in (json.loads(line) for line in out.splitlines() if line.startswith("{")):
+            t, p = r["dpc_cpu_median_s"], r["pmj02bn_cpu_median_s"]
+            lines.append(
+                f"| {isa} | {r['m']:,} | {t * 1e3:.2f} ms | {p * 1e3:.2f} ms | {p / t:.2f}x | "
+                f"{'yes' if p >= 2.5 * t else '**no**'} |"
+            )
     return lines
 
 
@@ -216,11 +254,22 @@ def limit_section(measured: dict) -> tuple[list[str], list[tuple[str, str, bool]
     return lines, checks
 
 
+def kept_section(previous: str, heading: str) -> list[str]:
+    """The section of the previous page under the heading (a regex), kept until the next run that
+    measures it; none if it has none."""
+    kept = re.search(heading, previous)
+    if not kept:
+        return []
+    end = previous.find("\n## ", kept.start() + 1)
+    return previous[kept.start() : end if end >= 0 else None].rstrip("\n").split("\n")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="skip the 1,048,576-point runs")
     ap.add_argument("--out", default=str(ROOT / "docs" / "performance.md"))
     ap.add_argument("--against", metavar="REV", help="also time git revision REV's build, alternately")
+    ap.add_argument("--pmj-src", metavar="PMJ_CPP", help="a pmj-cpp checkout: also time PMJ02BN beside bnot-2d")
     args = ap.parse_args()
     exe = build("dpc_bench_generate")
     counts = [1024, 16384, 262144] + ([] if args.quick else [1048576])
@@ -317,12 +366,14 @@ def main() -> None:
     ]
     out = Path(args.out)
     previous = out.read_text() if out.exists() else ""
+    if args.pmj_src:
+        lines += pmj_section(args.pmj_src, [isa for isa in isas if isa != "scalar"])
+    else:
+        lines += kept_section(previous, r"\n## bnot-2d beside PMJ02BN")
     if args.against:
         lines += against(args.against, exe, isas[1:] or ["scalar"])
-    elif kept := re.search(r"\n## Against (?!the )", previous):  # keep the last comparison until the next one
-        start = kept.start()
-        end = previous.find("\n## ", start + 1)
-        lines += previous[start : end if end >= 0 else None].rstrip("\n").split("\n")
+    else:
+        lines += kept_section(previous, r"\n## Against (?!the )")
     lines.append("")
     text = "\n".join(lines)
     print(text)
