@@ -363,12 +363,15 @@ static void apply_all(const apply_pass *a, size_t lo, size_t hi) {
     float *x = a->x + lo * a->n;
     const float *step = a->delta + lo * a->n;
     const size_t count = (hi - lo) * a->n;
+    int rare = 0;
     for (size_t j = 0; j < count; j++) {
         float y = x[j] + step[j];
         y = y >= 1.0f && y < 2.0f ? y - 1.0f : y;
-        x[j] = y < 0.0f && y >= -1.0f ? y + 1.0f : y;
+        y = y < 0.0f && y >= -1.0f ? y + 1.0f : y;
+        rare |= !(y >= 0.0f && y < 1.0f);
+        x[j] = y;
     }
-    for (size_t j = 0; j < count; j++)
+    for (size_t j = 0; rare && j < count; j++)
         if (!(x[j] >= 0.0f && x[j] < 1.0f)) { /* past a period, inf, NaN, or -tiny + 1 = 1 */
             const float y = x[j] == 1.0f ? 0.0f : x[j] - floorf(x[j]);
             x[j] = (y >= 0.0f && y < 1.0f) ? y : 0.0f;
