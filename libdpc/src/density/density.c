@@ -231,7 +231,7 @@ typedef struct layer_pass {
     float *delta;   /* m x 2, sorted order */
 } layer_pass;
 
-#define SLOT_FLOATS (3u * (RUN_CAP + 16u) + (DPC_DENSITY_QUERY + 16u) * GROUP_MAX + 6u * DPC_DENSITY_DENSE)
+#define SLOT_FLOATS (3u * (RUN_CAP + 16u) + (DPC_DENSITY_QUERY + 16u) * GROUP_MAX + 9u * DPC_DENSITY_DENSE)
 
 /* The distance from the span [a, b] to the span [lo, hi] (0 where they meet). */
 static float span_gap(float a, float b, float lo, float hi) { return b < lo ? lo - b : a > hi ? a - hi : 0.0f; }

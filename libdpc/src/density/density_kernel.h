@@ -40,7 +40,7 @@ typedef struct dpc_density_job {
  * t . n + D = 0 through its nearest point, n the unit normal to the query's side, s the glide along
  * it); its lane sums
  * acc[16p .. 16p+7] (x) and acc[16p+8 .. 16p+15] (y) are added to. The chunk is cx, cy, ca[0 .. n)
- * (x, y, 1/h), n a multiple of 16 (padding out of every window). scratch: 6 * DPC_DENSITY_DENSE
+ * (x, y, 1/h), n a multiple of 16 (padding out of every window). scratch: 9 * DPC_DENSITY_DENSE
  * floats. */
 typedef void dpc_density_kernel(const dpc_density_job *job, const float *cx, const float *cy, const float *ca,
                                 uint32_t n, const float *q, unsigned nq, float *acc, float *scratch);

@@ -153,19 +153,32 @@ void KERNEL(const dpc_density_job *job, const float *cx, const float *cy, const 
     const vi iota = {0, 1, 2, 3, 4, 5, 6, 7};
 #endif
     const vi qmax = visplat(job->qmax);
-    float *dtx = scratch, *dty = scratch + DPC_DENSITY_DENSE, *dc = scratch + 2 * DPC_DENSITY_DENSE;
-    float *itx = dc + DPC_DENSITY_DENSE, *ity = itx + DPC_DENSITY_DENSE, *ic = ity + DPC_DENSITY_DENSE;
+    float *itx = scratch + 6 * DPC_DENSITY_DENSE, *ity = itx + DPC_DENSITY_DENSE, *ic = ity + DPC_DENSITY_DENSE;
     table_regs w_t, dw_t;
     LOAD_TABLE(&w_t, job->w, job->qmax + 2);
     LOAD_TABLE(&dw_t, job->dw, job->qmax + 2);
-    for (unsigned p = 0; p < nq; p++) {
-        const float *qp = q + DPC_DENSITY_QUERY * p;
+    /* Query p's window is packed while query p - 1's terms are summed: the terms read what the
+     * window stored one query earlier, when those stores have reached the cache (reading them at
+     * once waits for them: one load spans several stores), 0.8x the kernel's time on AMD Zen 5. */
+    uint32_t packed[2] = {0, 0};
+    for (unsigned p = 0; p <= nq; p++) {
+        if (p < nq) {
+            const float *qp = q + DPC_DENSITY_QUERY * p;
+            float *d = scratch + 3 * DPC_DENSITY_DENSE * (p & 1);
+            packed[p & 1] = window(cx, cy, ca, n, vsplat(qp[0]), vsplat(qp[1]), vsplat(qp[2]), c2, smin2, cut2, umax2,
+                                   d, d + DPC_DENSITY_DENSE, d + 2 * DPC_DENSITY_DENSE);
+        }
+        if (p == 0) continue;
+        const unsigned o = p - 1; /* the query whose terms are summed now */
+        const float *qp = q + DPC_DENSITY_QUERY * o;
         const vf X = vsplat(qp[0]), Y = vsplat(qp[1]), A = vsplat(qp[2]);
+        const float *dtx = scratch + 3 * DPC_DENSITY_DENSE * (o & 1), *dty = dtx + DPC_DENSITY_DENSE,
+                    *dc = dty + DPC_DENSITY_DENSE;
+        const uint32_t m = packed[o & 1];
         vf8 sx, sy;
-        memcpy(&sx, acc + 16 * p, sizeof sx);
-        memcpy(&sy, acc + 16 * p + 8, sizeof sy);
-        /* (1) the window, packed; (2) the terms: the candidates', then their (glide-)mirror images' */
-        const uint32_t m = window(cx, cy, ca, n, X, Y, A, c2, smin2, cut2, umax2, dtx, dty, dc);
+        memcpy(&sx, acc + 16 * o, sizeof sx);
+        memcpy(&sy, acc + 16 * o + 8, sizeof sy);
+        /* the terms: the candidates', then their (glide-)mirror images' */
         if (job->walls)
             terms(1, dtx, dty, dc, m, iota, A, WR, c2, smin2, cut2, umax, umax2, qmax, &w_t, &dw_t, &sx, &sy);
         else terms(0, dtx, dty, dc, m, iota, A, WR, c2, smin2, cut2, umax, umax2, qmax, &w_t, &dw_t, &sx, &sy);
@@ -178,7 +191,7 @@ void KERNEL(const dpc_density_job *job, const float *cx, const float *cy, const 
                                                       cut2, umax2, itx, ity, ic);
             terms(0, itx, ity, ic, k, iota, A, WR, c2, smin2, cut2, umax, umax2, qmax, &w_t, &dw_t, &sx, &sy);
         }
-        memcpy(acc + 16 * p, &sx, sizeof sx);
-        memcpy(acc + 16 * p + 8, &sy, sizeof sy);
+        memcpy(acc + 16 * o, &sx, sizeof sx);
+        memcpy(acc + 16 * o + 8, &sy, sizeof sy);
     }
 }
