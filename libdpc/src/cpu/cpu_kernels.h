@@ -43,11 +43,11 @@ typedef struct dpc_sub_job {
 #define DPC_BLOCK_MAX 64u
 #define DPC_GATHER_CAP 4096u
 #define DPC_GATHER_STRIDE (DPC_GATHER_CAP + 32u)
-typedef void (*dpc_block_fn)(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
-                             unsigned n_ranges, int local, float *acc, float *scratch);
+typedef void dpc_block_kernel(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
+                              unsigned n_ranges, int local, float *acc, float *scratch);
+typedef dpc_block_kernel *dpc_block_fn;
 
-void dpc_block_scalar(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
-                      unsigned n_ranges, int local, float *acc, float *scratch);
+dpc_block_kernel dpc_block_scalar;
 /* Sums for one query point x (k floats) over an explicit candidate list: cand[0 .. n), ascending
  * indices without repeats, holding every point in the window eps < d < r (the neighbour lists of
  * cpu_lists.h), read from job->row. Each candidate's term is computed with the block kernel's
@@ -55,20 +55,12 @@ void dpc_block_scalar(const dpc_sub_job *job, const float *xs, unsigned count, c
  * order: the sums of all pairs [0, m) bit for bit, since every candidate left out is outside the
  * window and would add +0 (and a sum that starts at +0 never becomes -0, so adding +0 or -0
  * changes no bit either). */
-typedef void (*dpc_list_fn)(const dpc_sub_job *job, const float *x, const uint32_t *cand, unsigned n, float *acc);
-void dpc_list_scalar(const dpc_sub_job *job, const float *x, const uint32_t *cand, unsigned n, float *acc);
+typedef void dpc_list_kernel(const dpc_sub_job *job, const float *x, const uint32_t *cand, unsigned n, float *acc);
+typedef dpc_list_kernel *dpc_list_fn;
+dpc_list_kernel dpc_list_scalar;
 #if defined(DPC_HAVE_AVX2)
-void dpc_list_scalar_fma(const dpc_sub_job *job, const float *x, const uint32_t *cand, unsigned n, float *acc);
-void dpc_list_avx2(const dpc_sub_job *job, const float *x, const uint32_t *cand, unsigned n, float *acc);
-void dpc_list_avx512(const dpc_sub_job *job, const float *x, const uint32_t *cand, unsigned n, float *acc);
-#endif
-#if defined(DPC_HAVE_AVX2)
-void dpc_block_scalar_fma(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
-                          unsigned n_ranges, int local, float *acc, float *scratch);
-void dpc_block_avx2(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges, unsigned n_ranges,
-                    int local, float *acc, float *scratch);
-void dpc_block_avx512(const dpc_sub_job *job, const float *xs, unsigned count, const uint32_t *ranges,
-                      unsigned n_ranges, int local, float *acc, float *scratch);
+dpc_list_kernel dpc_list_scalar_fma, dpc_list_avx2, dpc_list_avx512;
+dpc_block_kernel dpc_block_scalar_fma, dpc_block_avx2, dpc_block_avx512;
 #endif
 
 #endif
