@@ -127,16 +127,22 @@ std::vector<double> reference(const Job &j, std::vector<double> &mag) {
     return out;
 }
 
-} // namespace
-
-TEST(Kernels, EveryArrangementGivesTheScalarBits) {
-    std::mt19937 rng(12345);
+// Every block kernel this machine runs but the scalar path's.
+std::vector<std::pair<const char *, dpc_block_fn>> block_paths() {
     std::vector<std::pair<const char *, dpc_block_fn>> paths = {{"packed16", dpc_block_packed16}};
 #if defined(DPC_HAVE_AVX2)
     if (has_avx2()) paths.push_back({"scalar with fma", dpc_block_scalar_fma});
     if (has_avx2()) paths.push_back({"avx2", dpc_block_avx2});
     if (has_avx512()) paths.push_back({"avx512", dpc_block_avx512});
 #endif
+    return paths;
+}
+
+} // namespace
+
+TEST(Kernels, EveryArrangementGivesTheScalarBits) {
+    std::mt19937 rng(12345);
+    const auto paths = block_paths();
     int cases = 0;
     for (unsigned k : {1u, 2u, 3u, 4u, 5u, 6u})
         for (unsigned bins : {4u, 32u, 33u, 200u})
@@ -163,13 +169,8 @@ TEST(Kernels, EveryArrangementGivesTheScalarBits) {
 // the radius reaches most of them, so most terms count.
 TEST(Kernels, LocalBlocksGiveTheBitsOfTheMinimumImage) {
     std::mt19937 rng(2024);
-    std::vector<std::pair<const char *, dpc_block_fn>> paths = {{"scalar", dpc_block_scalar},
-                                                                {"packed16", dpc_block_packed16}};
-#if defined(DPC_HAVE_AVX2)
-    if (has_avx2()) paths.push_back({"scalar with fma", dpc_block_scalar_fma});
-    if (has_avx2()) paths.push_back({"avx2", dpc_block_avx2});
-    if (has_avx512()) paths.push_back({"avx512", dpc_block_avx512});
-#endif
+    auto paths = block_paths();
+    paths.insert(paths.begin(), {"scalar", dpc_block_scalar}); // local: the scalar path's own variant too
     std::uniform_real_distribution<float> u(0.2f, 0.7f);
     int cases = 0;
     for (unsigned k : {1u, 2u, 3u, 4u})
