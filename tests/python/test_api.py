@@ -65,6 +65,25 @@ def test_filter_returns_a_new_array_and_accepts_any_layout():
         m.filter(np.zeros(10, np.float32))
 
 
+@pytest.mark.parametrize("scale", [1e3, 1e37])
+def test_steps_past_a_period_and_overflowing_ones_stay_in_the_torus(tmp_path, scale):
+    """Kernels so strong that points step several periods (1e3), or overflow to inf and NaN
+    (1e37): every coordinate still ends in [0, 1) (the rare path of the layer's wrap; an
+    overflowed one at 0), the same bits on every ISA path and thread count."""
+    from dpc.model_file import Layer, ModelSpec, write_model
+
+    rng = np.random.default_rng(3)
+    layers = [Layer([0b11], [4.0], scale * rng.standard_normal((1, 32))) for _ in range(6)]
+    path = tmp_path / "strong.onnx"
+    write_model(ModelSpec(dims=2, n_points=1024, layers=layers, name="strong"), path)
+    want = dpc.load(str(path), isa="scalar", threads=1).generate(seed=1, n_points=4096)
+    assert np.isfinite(want).all() and (want >= 0).all() and (want < 1).all()
+    assert (want != 0).any() if scale < 1e10 else (want == 0).all()
+    for isa in ["scalar", *VECTOR_ISAS]:
+        got = dpc.load(str(path), isa=isa, threads=2).generate(seed=1, n_points=4096)
+        assert np.array_equal(got, want), isa
+
+
 def test_same_seed_same_bits_and_seeds_differ():
     m = dpc.load(M2D)
     assert np.array_equal(m.generate(9), m.generate(9))

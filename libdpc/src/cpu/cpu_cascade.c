@@ -356,22 +356,38 @@ typedef struct apply_pass {
 } apply_pass;
 
 /* y = x + step wrapped into [0, 1) as apply_range does, for every coordinate of points lo..hi
- * (no held points, every dimension in one subspace): the two usual cases as selects, which the
- * compiler vectorises, then the rare rest (a step of more than one period, inf or NaN) one by
- * one: the same operations, so the same bits. */
+ * (no held points, every dimension in one subspace): the two usual cases as selects on vectors,
+ * then the rare rest (a step of more than one period, inf or NaN) one by one: the same
+ * operations, so the same bits. */
 static void apply_all(const apply_pass *a, size_t lo, size_t hi) {
     float *x = a->x + lo * a->n;
     const float *step = a->delta + lo * a->n;
     const size_t count = (hi - lo) * a->n;
-    int rare = 0;
-    for (size_t j = 0; j < count; j++) {
+    typedef float v4 __attribute__((vector_size(16)));
+    typedef int32_t i4 __attribute__((vector_size(16)));
+    i4 out = {0, 0, 0, 0}; /* lanes with a coordinate left outside [0, 1) */
+    size_t j = 0;
+    for (; j + 4 <= count; j += 4) { /* 4 at a time in GCC vectors (SSE2 everywhere): selects, no branch */
+        v4 y, s;
+        memcpy(&y, x + j, sizeof y);
+        memcpy(&s, step + j, sizeof s);
+        y = y + s;
+        const i4 down = (y >= 1.0f) & (y < 2.0f);
+        y = (v4)((down & (i4)(y - 1.0f)) | (~down & (i4)y));
+        const i4 up = (y < 0.0f) & (y >= -1.0f);
+        y = (v4)((up & (i4)(y + 1.0f)) | (~up & (i4)y));
+        out |= ~((y >= 0.0f) & (y < 1.0f));
+        memcpy(x + j, &y, sizeof y);
+    }
+    int rare = (out[0] | out[1] | out[2] | out[3]) != 0;
+    for (; j < count; j++) { /* the tail: the same operations */
         float y = x[j] + step[j];
         y = y >= 1.0f && y < 2.0f ? y - 1.0f : y;
         y = y < 0.0f && y >= -1.0f ? y + 1.0f : y;
         rare |= !(y >= 0.0f && y < 1.0f);
         x[j] = y;
     }
-    for (size_t j = 0; rare && j < count; j++)
+    for (j = 0; rare && j < count; j++)
         if (!(x[j] >= 0.0f && x[j] < 1.0f)) { /* past a period, inf, NaN, or -tiny + 1 = 1 */
             const float y = x[j] == 1.0f ? 0.0f : x[j] - floorf(x[j]);
             x[j] = (y >= 0.0f && y < 1.0f) ? y : 0.0f;
