@@ -148,32 +148,33 @@ typedef struct sub_pass {
     int lists; /* near, through the workspace's lists */
 } sub_pass;
 
+/* The grid cell id of each point (k a constant where the caller specialises). */
+static inline __attribute__((always_inline)) void cell_ids(sub_pass *p, const float *x, unsigned k) {
+    workspace *ws = p->ws;
+    const size_t m = ws->m, n = ws->n;
+    const uint32_t G = p->G;
+    for (size_t i = 0; i < m; i++) {
+        uint32_t id = 0;
+        for (unsigned q = k; q-- > 0;) {
+            uint32_t c = (uint32_t)(x[i * n + p->dim[q]] * (float)G);
+            id = id * G + (c < G ? c : G - 1);
+        }
+        ws->cell_of[i] = id;
+    }
+}
+
 /* Sort points by cell (stable counting sort): cell_of, cell_start and perm. */
 static void sort_cells(sub_pass *p, const float *x) {
     workspace *ws = p->ws;
-    const size_t m = ws->m, n = ws->n;
+    const size_t m = ws->m;
     const unsigned k = p->job.k;
     if (!p->grid) {
         for (size_t i = 0; i < m; i++) ws->perm[i] = (uint32_t)i;
     } else {
-        const uint32_t G = p->G;
         size_t cells = 1;
-        for (unsigned q = 0; q < k; q++) cells *= G;
-        if (k == 2) { /* the common case unrolled: the same operations */
-            const unsigned d0 = p->dim[0], d1 = p->dim[1];
-            for (size_t i = 0; i < m; i++) {
-                const uint32_t c0 = (uint32_t)(x[i * n + d0] * (float)G), c1 = (uint32_t)(x[i * n + d1] * (float)G);
-                ws->cell_of[i] = (c1 < G ? c1 : G - 1) * G + (c0 < G ? c0 : G - 1);
-            }
-        } else
-            for (size_t i = 0; i < m; i++) {
-                uint32_t id = 0;
-                for (unsigned q = k; q-- > 0;) {
-                    uint32_t c = (uint32_t)(x[i * n + p->dim[q]] * (float)G);
-                    id = id * G + (c < G ? c : G - 1);
-                }
-                ws->cell_of[i] = id;
-            }
+        for (unsigned q = 0; q < k; q++) cells *= p->G;
+        if (k == 2) cell_ids(p, x, 2); /* the common case, unrolled */
+        else cell_ids(p, x, k);
         dpc_grid_sort(ws->cell_of, m, cells, ws->cell_start, ws->perm);
     }
 }
@@ -355,19 +356,29 @@ typedef struct apply_pass {
     int all_ones;              /* no held points and every c_k = 1 (apply_all) */
 } apply_pass;
 
-/* y = x + step wrapped into [0, 1) as apply_range does, for every coordinate of points lo..hi
- * (no held points, every dimension in one subspace): the two usual cases as selects on vectors,
- * then the rare rest (a step of more than one period, inf or NaN) one by one: the same
- * operations, so the same bits. */
+/* y (a coordinate plus its step) wrapped into [0, 1): y - floor(y), with the usual cases first
+ * (the same operations, so the same bits). -tiny + 1 rounds to 1: mapped to 0. Overflow (inf or
+ * NaN, only from absurd kernels) also maps to 0, so every output and every cell index stays in
+ * range. */
+static inline float wrapped(float y) {
+    if (y >= 1.0f && y < 2.0f) y -= 1.0f;
+    else if (y < 0.0f && y >= -1.0f) y += 1.0f;
+    else if (!(y >= 0.0f && y < 1.0f)) y -= floorf(y);
+    return (y >= 0.0f && y < 1.0f) ? y : 0.0f;
+}
+
+/* wrapped(x + step) for every coordinate of points lo..hi (no held points, every dimension in
+ * one subspace), 4 at a time in GCC vectors (SSE2 everywhere): the two usual cases as selects,
+ * which give wrapped()'s value wherever they land in [0, 1); a vector with a lane elsewhere (a
+ * step past a period, inf, NaN, or -tiny + 1 = 1) and the tail go through wrapped() itself. */
 static void apply_all(const apply_pass *a, size_t lo, size_t hi) {
+    typedef float v4 __attribute__((vector_size(16)));
+    typedef int32_t i4 __attribute__((vector_size(16)));
     float *x = a->x + lo * a->n;
     const float *step = a->delta + lo * a->n;
     const size_t count = (hi - lo) * a->n;
-    typedef float v4 __attribute__((vector_size(16)));
-    typedef int32_t i4 __attribute__((vector_size(16)));
-    i4 out = {0, 0, 0, 0}; /* lanes with a coordinate left outside [0, 1) */
     size_t j = 0;
-    for (; j + 4 <= count; j += 4) { /* 4 at a time in GCC vectors (SSE2 everywhere): selects, no branch */
+    for (; j + 4 <= count; j += 4) {
         v4 y, s;
         memcpy(&y, x + j, sizeof y);
         memcpy(&s, step + j, sizeof s);
@@ -376,22 +387,12 @@ static void apply_all(const apply_pass *a, size_t lo, size_t hi) {
         y = (v4)((down & (i4)(y - 1.0f)) | (~down & (i4)y));
         const i4 up = (y < 0.0f) & (y >= -1.0f);
         y = (v4)((up & (i4)(y + 1.0f)) | (~up & (i4)y));
-        out |= ~((y >= 0.0f) & (y < 1.0f));
-        memcpy(x + j, &y, sizeof y);
+        const i4 out = ~((y >= 0.0f) & (y < 1.0f));
+        if (out[0] | out[1] | out[2] | out[3])
+            for (size_t l = j; l < j + 4; l++) x[l] = wrapped(x[l] + step[l]);
+        else memcpy(x + j, &y, sizeof y);
     }
-    int rare = (out[0] | out[1] | out[2] | out[3]) != 0;
-    for (; j < count; j++) { /* the tail: the same operations */
-        float y = x[j] + step[j];
-        y = y >= 1.0f && y < 2.0f ? y - 1.0f : y;
-        y = y < 0.0f && y >= -1.0f ? y + 1.0f : y;
-        rare |= !(y >= 0.0f && y < 1.0f);
-        x[j] = y;
-    }
-    for (j = 0; rare && j < count; j++)
-        if (!(x[j] >= 0.0f && x[j] < 1.0f)) { /* past a period, inf, NaN, or -tiny + 1 = 1 */
-            const float y = x[j] == 1.0f ? 0.0f : x[j] - floorf(x[j]);
-            x[j] = (y >= 0.0f && y < 1.0f) ? y : 0.0f;
-        }
+    for (; j < count; j++) x[j] = wrapped(x[j] + step[j]);
 }
 
 static void apply_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
@@ -406,33 +407,28 @@ static void apply_range(void *ctx, unsigned slot, size_t lo, size_t hi) {
         for (size_t d = 0; d < a->n; d++) {
             if (a->count[d] == 0.0f) continue;
             const float step = a->delta[i * a->n + d];
-            float y = a->x[i * a->n + d] + (a->count[d] == 1.0f ? step : step / a->count[d]);
-            /* y - floor(y), with the usual cases first (the same operations, so the same bits). */
-            if (y >= 1.0f && y < 2.0f) y -= 1.0f;
-            else if (y < 0.0f && y >= -1.0f) y += 1.0f;
-            else if (!(y >= 0.0f && y < 1.0f)) y -= floorf(y);
-            /* -tiny + 1 rounds to 1: map to 0. Overflow (inf/NaN, only from absurd kernels) also
-             * maps to 0, so every output and every cell index stays in range. */
-            a->x[i * a->n + d] = (y >= 0.0f && y < 1.0f) ? y : 0.0f;
+            a->x[i * a->n + d] = wrapped(a->x[i * a->n + d] + (a->count[d] == 1.0f ? step : step / a->count[d]));
         }
+    }
+}
+
+/* The rows, caller indices and cell ids in sorted order, into the _tmp arrays (n a constant where
+ * the caller specialises). */
+static inline __attribute__((always_inline)) void reorder_rows(workspace *ws, size_t n) {
+    for (size_t s = 0; s < ws->m; s++) {
+        const uint32_t i = ws->perm[s];
+        for (size_t d = 0; d < n; d++) ws->x_tmp[s * n + d] = ws->x[(size_t)i * n + d]; /* n is small: no memcpy call */
+        ws->order_tmp[s] = ws->order[i];
+        ws->cell_tmp[s] = ws->cell_of[i];
     }
 }
 
 /* Physically reorder the working points by the cell order sort_cells just computed; afterwards
  * the sorted order is the identity and the cell starts are unchanged. */
 static void reorder_points(workspace *ws) {
-    const size_t m = ws->m, n = ws->n;
-    for (size_t s = 0; s < m; s++) {
-        const uint32_t i = ws->perm[s];
-        if (n == 2) { /* the common case unrolled */
-            ws->x_tmp[2 * s] = ws->x[2 * (size_t)i];
-            ws->x_tmp[2 * s + 1] = ws->x[2 * (size_t)i + 1];
-        } else
-            for (size_t d = 0; d < n; d++)
-                ws->x_tmp[s * n + d] = ws->x[(size_t)i * n + d]; /* n is small: no memcpy call */
-        ws->order_tmp[s] = ws->order[i];
-        ws->cell_tmp[s] = ws->cell_of[i];
-    }
+    const size_t m = ws->m;
+    if (ws->n == 2) reorder_rows(ws, 2); /* the common case, unrolled */
+    else reorder_rows(ws, ws->n);
     for (size_t s = 0; s < m; s++) ws->perm[s] = (uint32_t)s;
     ws->lists.mask = 0; /* the lists hold working indices */
     float *xt = ws->x;
