@@ -16,7 +16,9 @@
  * the cells are exact binary fractions: the same order on every machine, and the float64
  * reference (tests/python/reference_cascade.py) computes it bit for bit. Each cell of the tree
  * holds the least energy among its points not yet picked; a pick updates the energies within R
- * (cells at least R wide, of the same tree) and the cells above the touched ones. */
+ * (found through a grid of cells at least R wide, apart from the tree, whose leaves hold about
+ * LEAF_POINTS or more and are wider) and the cells above the touched ones. The order in which a
+ * pick visits the points does not matter: each point takes one term per pick, in the picks' order. */
 #include "model/level_order.h"
 
 #include <math.h>
@@ -33,9 +35,9 @@
 typedef struct level {
     const float *x; /* the level's points, dims floats each */
     uint32_t dims;
-    double r2;              /* R^2 */
-    unsigned bits;          /* 2: a cell has 4 children (the first two coordinates halved); 1 in 1-D */
-    unsigned depth, search; /* the quota's depth; the depth whose cells the neighbour search visits */
+    double r2;      /* R^2 */
+    unsigned bits;  /* 2: a cell has 4 children (the first two coordinates halved); 1 in 1-D */
+    unsigned depth; /* the quota's depth */
     /* by sorted position s (the level's points by leaf, leaves in tree order): */
     uint32_t *pt;   /* the point's index in the level */
     uint32_t *leaf; /* its leaf */
@@ -49,6 +51,12 @@ typedef struct level {
     uint32_t *dirty; /* leaves whose energies changed since their minimum was taken */
     unsigned char *is_dirty;
     size_t n_dirty;
+    /* the neighbour search's grid over the first (two) coordinates: G cells per axis, each at
+     * least R wide; per cell its points' sorted positions and coordinates (dims floats each) */
+    uint32_t G;
+    uint32_t *grid_start; /* [G^bits + 1] */
+    uint32_t *grid_s;
+    float *grid_x;
 } level;
 
 /* R^2 for N points: N^(-1/dims) by 64 halvings of [0, 1] (powers by repeated products, so every
@@ -109,25 +117,31 @@ static int before(const level *L, double e, uint32_t s, double e2, uint32_t s2) 
     return e < e2 || (e == e2 && L->pt[s] < L->pt[s2]);
 }
 
-/* Add b(p, x) to the energy of every point not yet picked within R of p. */
+/* The search grid's cell of v on an axis of g cells: a point two cells away is farther than R. */
+static size_t grid_cell(float v, size_t g) {
+    const size_t c = (size_t)((double)v * (double)g);
+    return c < g ? c : g - 1;
+}
+
+/* Add b(p, x) to the energy of every point not yet picked within R of p. Energies only grow, so a
+ * leaf's least energy changes only where its least point's grows (or is picked): only that makes
+ * the leaf dirty. */
 static void spread(level *L, const float *p) {
-    const unsigned t = L->search;
-    const size_t g = (size_t)1 << t, shift = (size_t)L->bits * (L->depth - t);
-    const size_t cx = axis_cell(p[0], t), cy = L->bits == 2 ? axis_cell(p[1], t) : 0;
+    const size_t g = L->G, dims = L->dims, leaf0 = node_base(L, L->depth);
+    const size_t cx = grid_cell(p[0], g), cy = L->bits == 2 ? grid_cell(p[1], g) : 0;
     const size_t n0 = g < 3 ? g : 3, n1 = L->bits == 2 ? n0 : 1; /* distinct cells per axis */
-    for (size_t u = 0; u < n0; u++) {
-        const size_t ux = g < 3 ? u : (cx + g - 1 + u) % g;
-        for (size_t v = 0; v < n1; v++) {
-            const size_t vy = L->bits == 1 ? 0 : g < 3 ? v : (cy + g - 1 + v) % g;
-            const size_t cell = cell_from_xy(L, ux, vy, t);
-            const uint32_t lo = L->leaf_start[cell << shift], hi = L->leaf_start[(cell + 1) << shift];
-            for (uint32_t s = lo; s < hi; s++) {
+    for (size_t v = 0; v < n1; v++) {
+        const size_t vy = L->bits == 1 ? 0 : g < 3 ? v : (cy + g - 1 + v) % g;
+        for (size_t u = 0; u < n0; u++) {
+            const size_t ux = g < 3 ? u : (cx + g - 1 + u) % g, cell = vy * g + ux;
+            for (uint32_t k = L->grid_start[cell]; k < L->grid_start[cell + 1]; k++) {
+                const uint32_t s = L->grid_s[k];
                 if (L->picked[s]) continue;
-                const double b = bump(L, p, L->x + (size_t)L->pt[s] * L->dims);
+                const double b = bump(L, p, L->grid_x + (size_t)k * dims);
                 if (b == 0.0) continue;
                 L->e[s] += b;
                 const uint32_t f = L->leaf[s];
-                if (!L->is_dirty[f]) {
+                if (L->best_s[leaf0 + f] == s && !L->is_dirty[f]) {
                     L->is_dirty[f] = 1;
                     L->dirty[L->n_dirty++] = f;
                 }
@@ -189,6 +203,13 @@ static uint32_t next_pick(const level *L) {
     return L->best_s[node_base(L, L->depth) + c];
 }
 
+/* Cells per axis of the search grid for R^2 = r2: as many as leave each at least R wide (with a
+ * margin for the rounding of a point's cell and of its distance), at least 1. */
+static uint32_t grid_axis(double r2) {
+    const double g = floor(GRID_SLACK / sqrt(r2));
+    return g < 1.0 ? 1u : (uint32_t)g;
+}
+
 static unsigned depth_for(size_t a, unsigned bits) {
     unsigned d = 0;
     while (((size_t)LEAF_POINTS << (bits * (d + 1))) <= a) d++;
@@ -200,9 +221,7 @@ static unsigned depth_for(size_t a, unsigned bits) {
 static void order_level(level *L, float *sorted, float *x, size_t n, size_t a) {
     const uint32_t dims = L->dims;
     float *level_x = x + n * dims;
-    L->x = level_x, L->r2 = reach2(n + a, dims), L->depth = depth_for(a, L->bits), L->search = 0;
-    const double r = sqrt(L->r2); /* the search's cells: at least R wide (2^-t >= R / GRID_SLACK) */
-    while (L->search < L->depth && (double)((size_t)1 << (L->search + 1)) * r <= GRID_SLACK) L->search++;
+    L->x = level_x, L->r2 = reach2(n + a, dims), L->depth = depth_for(a, L->bits), L->G = grid_axis(L->r2);
     const size_t leaves = (size_t)1 << (L->bits * L->depth), nodes = node_base(L, L->depth) + leaves;
     memset(L->e, 0, a * sizeof *L->e);
     memset(L->picked, 0, a);
@@ -223,6 +242,21 @@ static void order_level(level *L, float *sorted, float *x, size_t n, size_t a) {
             L->count[node_base(L, t) + c] = L->leaf_start[(c + 1) << shift] - L->leaf_start[c << shift];
         }
     for (size_t k = 0; k < nodes; k++) L->best_e[k] = 0.0, L->best_s[k] = NONE;
+    const size_t g = L->G, grid_cells = L->bits == 2 ? g * g : g; /* the search grid: a counting sort */
+    memset(L->grid_start, 0, (grid_cells + 1) * sizeof *L->grid_start);
+    for (uint32_t s = 0; s < a; s++) {
+        const float *p = level_x + (size_t)L->pt[s] * dims;
+        L->grid_start[(L->bits == 2 ? grid_cell(p[1], g) * g : 0) + grid_cell(p[0], g) + 1]++;
+    }
+    for (size_t c = 0; c < grid_cells; c++) L->grid_start[c + 1] += L->grid_start[c];
+    for (uint32_t s = 0; s < a; s++) {
+        const float *p = level_x + (size_t)L->pt[s] * dims;
+        const uint32_t k = L->grid_start[(L->bits == 2 ? grid_cell(p[1], g) * g : 0) + grid_cell(p[0], g)]++;
+        L->grid_s[k] = s;
+        memcpy(L->grid_x + (size_t)k * dims, p, dims * sizeof *L->grid_x);
+    }
+    for (size_t c = grid_cells; c > 0; c--) L->grid_start[c] = L->grid_start[c - 1]; /* the cursors ran to each end */
+    L->grid_start[0] = 0;
     for (size_t j = 0; j < n; j++) spread(L, x + j * dims); /* the held points, in index order */
     for (size_t k = 0; k < L->n_dirty; k++) L->is_dirty[L->dirty[k]] = 0;
     L->n_dirty = 0;
@@ -265,9 +299,13 @@ dpc_status dpc_order_level_points(float *x, size_t m, uint32_t dims, size_t base
     L.best_s = malloc(nodes * sizeof *L.best_s);
     L.dirty = malloc(leaves * sizeof *L.dirty);
     L.is_dirty = calloc(leaves, 1);
+    const size_t g = grid_axis(reach2(m, dims)), grid_cells = L.bits == 2 ? g * g : g; /* the finest: N = m */
+    L.grid_start = malloc((grid_cells + 1) * sizeof *L.grid_start);
+    L.grid_s = malloc(largest * sizeof *L.grid_s);
+    L.grid_x = malloc(largest * dims * sizeof *L.grid_x);
     dpc_status st = DPC_OK;
     if (!sorted || !L.pt || !L.leaf || !L.e || !L.picked || !L.leaf_start || !L.count || !L.taken || !L.best_e ||
-        !L.best_s || !L.dirty || !L.is_dirty)
+        !L.best_s || !L.dirty || !L.is_dirty || !L.grid_start || !L.grid_s || !L.grid_x)
         st = dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory ordering levels of up to %zu points", largest);
     else {
         size_t n = dpc_first_level(m, base);
@@ -287,5 +325,8 @@ dpc_status dpc_order_level_points(float *x, size_t m, uint32_t dims, size_t base
     free(L.best_s);
     free(L.dirty);
     free(L.is_dirty);
+    free(L.grid_start);
+    free(L.grid_s);
+    free(L.grid_x);
     return st;
 }
