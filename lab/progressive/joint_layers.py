@@ -28,13 +28,10 @@ import numpy as np
 import torch
 
 import dpc
-from dpc.analysis.pcf import min_distance
-from dpc.analysis.spectrum import low_frequency_energy
-from lab.common import REPORTS, cpu_name, replace_section
+from lab.common import cpu_name
+from lab.progressive.trained_levels import PREFIXES, SETS, M, publish, quality, references
 
-DOC = REPORTS / "progressive.md"
-M, SETS, BATCH = 1024, 32, 4
-PREFIXES = [16 << k for k in range(7)]
+BATCH = 4
 RELAX_STEPS = (50, 100, 400)
 
 
@@ -112,9 +109,7 @@ def main() -> None:
             print(f"step {step}: energy {loss.item():.6f}", flush=True)
     seconds = time.perf_counter() - start
 
-    plain = dpc.load("bnot-2d-stratified", backend="cpu")
-    reference = {n: low_frequency_energy(plain.generate_batch(SETS, 1000, n).astype(np.float64), 0.5) for n in PREFIXES}
-    reference75 = low_frequency_energy(plain.generate_batch(SETS, 1000, M).astype(np.float64), 0.75)
+    reference, reference75 = references()
     inputs = base.generate_batch(SETS, 0, M).astype(np.float64)
     with torch.no_grad():
         learned = joint(torch.from_numpy(inputs), cascade.tables().double()).numpy()
@@ -142,14 +137,10 @@ def main() -> None:
         "|---" + "|---:" * (len(PREFIXES) + 2) + "|",
     ]
     for name, sets in rows:
-        sets = sets.astype(np.float64)
-        ratios = " | ".join(f"{low_frequency_energy(sets[:, :n], 0.5) / reference[n]:.2f}" for n in PREFIXES)
-        full = low_frequency_energy(sets, 0.75) / reference75
-        lines.append(f"| {name} | {ratios} | {full:.2f} | {min_distance(sets).mean_ratio:.3f} |")
-    body = "\n".join(lines)
-    print(body)
-    if not a.quick:
-        replace_section(DOC, "joint_layers", body)
+        q = quality(sets, reference, reference75)
+        ratios = " | ".join(f"{v:.2f}" for v in q["ratios"])
+        lines.append(f"| {name} | {ratios} | {q['full75']:.2f} | {q['dmin']:.3f} |")
+    publish(lines, "joint_layers", a.quick)
 
 
 if __name__ == "__main__":

@@ -124,8 +124,16 @@ def train(loss: str, steps: int, folder: Path) -> tuple[Path, float]:
     return out, seconds
 
 
-def measure(model, reference: dict[int, float], reference75: float) -> dict:
-    sets = dpc.load(model, backend="cpu").generate_batch(SETS, 0, M).astype(np.float64)
+def references() -> tuple[dict[int, float], float]:
+    """E_low nu<0.5 of SETS bnot-2d-stratified sets of each prefix size, and nu<0.75 of the full ones."""
+    plain = dpc.load("bnot-2d-stratified", backend="cpu")
+    reference = {n: low_frequency_energy(plain.generate_batch(SETS, 1000, n).astype(np.float64), 0.5) for n in PREFIXES}
+    return reference, low_frequency_energy(plain.generate_batch(SETS, 1000, M).astype(np.float64), 0.75)
+
+
+def quality(sets: np.ndarray, reference: dict[int, float], reference75: float) -> dict:
+    """Each prefix's E_low nu<0.5 over a set's, the full set's nu<0.75 over a set's, delta_min."""
+    sets = sets.astype(np.float64)
     return {
         "ratios": [low_frequency_energy(sets[:, :n], 0.5) / reference[n] for n in PREFIXES],
         "full75": low_frequency_energy(sets, 0.75) / reference75,
@@ -134,19 +142,29 @@ def measure(model, reference: dict[int, float], reference75: float) -> dict:
     }
 
 
+def publish(lines: list[str], section: str, quick: bool) -> None:
+    """Print a study's lines and, unless quick, write them to its section of the report."""
+    body = "\n".join(lines)
+    print(body)
+    if not quick:
+        replace_section(DOC, section, body)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--steps", type=int, default=500)
     ap.add_argument("--quick", action="store_true", help="prints, does not write docs/")
     a = ap.parse_args()
-    plain = dpc.load("bnot-2d-stratified", backend="cpu")
-    reference = {n: low_frequency_energy(plain.generate_batch(SETS, 1000, n).astype(np.float64), 0.5) for n in PREFIXES}
-    reference75 = low_frequency_energy(plain.generate_batch(SETS, 1000, M).astype(np.float64), 0.75)
-    rows = [("progressive-2d (hand-designed, 160 layers)", measure("progressive-2d", reference, reference75), None)]
+    reference, reference75 = references()
+
+    def measure(model) -> dict:
+        return quality(dpc.load(model, backend="cpu").generate_batch(SETS, 0, M), reference, reference75)
+
+    rows = [("progressive-2d (hand-designed, 160 layers)", measure("progressive-2d"), None)]
     with tempfile.TemporaryDirectory() as tmp:
         for loss in LOSSES:
             model, seconds = train(loss, a.steps, Path(tmp))
-            rows.append((f"trained, loss {loss}", measure(str(model), reference, reference75), seconds))
+            rows.append((f"trained, loss {loss}", measure(str(model)), seconds))
             print(rows[-1][0], rows[-1][1], flush=True)
     head = "| cascade | " + " | ".join(f"{n:,}" for n in PREFIXES) + " | full ν<0.75 | δ_min | δ_min of 64 | training |"
     lines = [
@@ -161,10 +179,7 @@ def main() -> None:
         cells = " | ".join(f"{v:.2f}" for v in r["ratios"])
         took = f"{seconds:.0f} s" if seconds is not None else "–"
         lines.append(f"| {name} | {cells} | {r['full75']:.2f} | {r['dmin']:.3f} | {r['dmin64']:.3f} | {took} |")
-    body = "\n".join(lines)
-    print(body)
-    if not a.quick:
-        replace_section(DOC, "trained_levels", body)
+    publish(lines, "trained_levels", a.quick)
 
 
 if __name__ == "__main__":
