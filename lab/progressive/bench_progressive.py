@@ -12,7 +12,8 @@ progressive model's first n points (progressive-2d, and progressive-2d-balanced:
 cascade with each level balanced, dpc.balance), a dpc set made for n points (bnot-2d-stratified, not
 progressive: the quality a prefix is held to), PMJ02BN and PMJ02 (dpc.baselines, from
 Christensen et al. 2018), scrambled Sobol' (scipy) and white noise; every set of a sampler is one
-seed. The goals of the progressive-dpc issue are checked and printed.
+seed. The goals of the progressive-dpc issue and of the trained progressive model are checked
+and printed.
 """
 
 from __future__ import annotations
@@ -121,9 +122,12 @@ def tradeoff(m: int, count: int, seed: int, model: str = PROGRESSIVE) -> dict[fl
 
 
 def prefix_goals(res: dict[int, dict], m: int, sampler: str, label: str) -> list[tuple[str, bool, str]]:
-    """The issue's four prefix goals for one sampler's sets of m points (label: the goals' prefix)."""
+    """The prefix goals for one sampler's sets of m points (label: the goals' prefix): the first four
+    from the progressive-dpc issue, the last two the trained progressive model's (every prefix from
+    64 points within 2x a dpc set's E_low nu<0.5, the full set within 10 %)."""
     ns = sorted(res)
     r_dpc = [res[n][sampler]["elow50"] / res[n]["dpc set"]["elow50"] for n in ns]
+    r_64 = [r for n, r in zip(ns, r_dpc) if n >= 64]
     r_pmj = [res[n][sampler]["elow50"] / res[n]["pmj02bn"]["elow50"] for n in ns]
     r_var = [res[n][sampler]["gauss"] / res[n]["pmj02bn"]["gauss"] for n in ns]
     r_full = {k: res[m][sampler][k] / res[m]["dpc set"][k] for k in ("elow50", "elow75")}
@@ -137,6 +141,12 @@ def prefix_goals(res: dict[int, dict], m: int, sampler: str, label: str) -> list
         (f"{label}every prefix's E_low nu<0.5 <= 0.1 x PMJ02BN's", max(r_pmj) <= 0.1, worst(r_pmj)),
         (f"{label}the full set within 1.2 x {SET_MODEL}'s E_low (both bands)", max(r_full.values()) <= 1.2, full),
         (f"{label}every prefix's Gaussian variance <= PMJ02BN's", max(r_var) <= 1.0, worst(r_var)),
+        (
+            f"{label}every prefix from 64 points: E_low nu<0.5 <= 2 x a dpc set's",
+            max(r_64) <= 2.0,
+            f"worst x{max(r_64):.2f} at n = {ns[len(ns) - len(r_64) + int(np.argmax(r_64))]}",
+        ),
+        (f"{label}the full set within 1.1 x {SET_MODEL}'s E_low (both bands)", max(r_full.values()) <= 1.1, full),
     ]
 
 
