@@ -262,7 +262,7 @@ PROGRESSIVE_GOAL = 1.5  # a progressive model's time over bnot-2d's
 
 def progressive_section(exe: Path, isa: str, bnot: list[dict]) -> tuple[list[str], list[tuple[str, str, bool]]]:
     """The progressive models' generation (levels, the order within them) against bnot-2d's,
-    measured in this run; progressive-2d-relaxed (about 1.4 s per 1,024 points) is left out."""
+    measured in this run; progressive-2d-relaxed (about 1.2 s per 1,024 points) is left out."""
     from dpc.model_file import read_model
 
     lines = [

@@ -127,13 +127,15 @@ def prefix_goals(res: dict[int, dict], m: int, sampler: str, label: str) -> list
     64 points within 2x a dpc set's E_low nu<0.5, the full set within 10 %)."""
     ns = sorted(res)
     r_dpc = [res[n][sampler]["elow50"] / res[n]["dpc set"]["elow50"] for n in ns]
-    r_64 = [r for n, r in zip(ns, r_dpc) if n >= 64]
     r_pmj = [res[n][sampler]["elow50"] / res[n]["pmj02bn"]["elow50"] for n in ns]
     r_var = [res[n][sampler]["gauss"] / res[n]["pmj02bn"]["gauss"] for n in ns]
     r_full = {k: res[m][sampler][k] / res[m]["dpc set"][k] for k in ("elow50", "elow75")}
 
-    def worst(r: list[float]) -> str:
-        return f"worst x{max(r):.2f} at n = {ns[int(np.argmax(r))]}"
+    def worst(r: list[float], sizes: list[int] = ns) -> str:
+        return f"worst x{max(r):.2f} at n = {sizes[int(np.argmax(r))]}"
+
+    n64 = [n for n in ns if n >= 64]
+    r_64 = r_dpc[len(ns) - len(n64) :]  # ns ascending
 
     full = f"x{r_full['elow50']:.2f} below nu = 0.5, x{r_full['elow75']:.2f} below 0.75"
     return [
@@ -144,7 +146,7 @@ def prefix_goals(res: dict[int, dict], m: int, sampler: str, label: str) -> list
         (
             f"{label}every prefix from 64 points: E_low nu<0.5 <= 2 x a dpc set's",
             max(r_64) <= 2.0,
-            f"worst x{max(r_64):.2f} at n = {ns[len(ns) - len(r_64) + int(np.argmax(r_64))]}",
+            worst(r_64, n64),
         ),
         (f"{label}the full set within 1.1 x {SET_MODEL}'s E_low (both bands)", max(r_full.values()) <= 1.1, full),
     ]

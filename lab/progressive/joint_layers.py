@@ -67,7 +67,7 @@ def relaxed_energy(x: torch.Tensor, sizes: list[int], qs: torch.Tensor) -> torch
 
 def main() -> None:
     from dpc_train.cascade import Cascade, CascadeSpec, progressive_levels
-    from dpc_train.filter import filter_layer
+    from dpc_train.filter import _wrap_points, filter_layer  # the filter's own wrap into [0, 1)
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--steps", type=int, default=300)
@@ -90,8 +90,7 @@ def main() -> None:
             for n in sizes:
                 moved = filter_layer(x[:, :n], table, spec.masks, spec.radius, spec.eps, 0, impl="c") - x[:, :n]
                 step[:, :n] += moved - torch.round(moved)  # the toroidal step
-            x = x + step
-            x = x - torch.floor(x)
+            x = _wrap_points(x + step)
         return x
 
     optimiser = torch.optim.Adam(cascade.parameters(), lr=1e-3)

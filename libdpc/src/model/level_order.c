@@ -26,6 +26,7 @@
 #include <string.h>
 
 #include "common/error.h"
+#include "cpu/cpu_grid.h"
 
 #define REACH 2.0        /* R in mean spacings N^(-1/dims) */
 #define LEAF_POINTS 8    /* the quota's finest cells hold at least this many points on average */
@@ -33,7 +34,6 @@
 #define NONE UINT32_MAX
 
 typedef struct level {
-    const float *x; /* the level's points, dims floats each */
     uint32_t dims;
     double r2;      /* R^2 */
     unsigned bits;  /* 2: a cell has 4 children (the first two coordinates halved); 1 in 1-D */
@@ -54,7 +54,8 @@ typedef struct level {
     /* the neighbour search's grid over the first (two) coordinates: G cells per axis, each at
      * least R wide; per cell its points' sorted positions and coordinates (dims floats each) */
     uint32_t G;
-    uint32_t *grid_start; /* [G^bits + 1] */
+    uint32_t *grid_cell_of; /* by sorted position: the point's grid cell */
+    uint32_t *grid_start;   /* [G^bits + 1] */
     uint32_t *grid_s;
     float *grid_x;
 } level;
@@ -221,7 +222,7 @@ static unsigned depth_for(size_t a, unsigned bits) {
 static void order_level(level *L, float *sorted, float *x, size_t n, size_t a) {
     const uint32_t dims = L->dims;
     float *level_x = x + n * dims;
-    L->x = level_x, L->r2 = reach2(n + a, dims), L->depth = depth_for(a, L->bits), L->G = grid_axis(L->r2);
+    L->r2 = reach2(n + a, dims), L->depth = depth_for(a, L->bits), L->G = grid_axis(L->r2);
     const size_t leaves = (size_t)1 << (L->bits * L->depth), nodes = node_base(L, L->depth) + leaves;
     memset(L->e, 0, a * sizeof *L->e);
     memset(L->picked, 0, a);
@@ -242,24 +243,16 @@ static void order_level(level *L, float *sorted, float *x, size_t n, size_t a) {
             L->count[node_base(L, t) + c] = L->leaf_start[(c + 1) << shift] - L->leaf_start[c << shift];
         }
     for (size_t k = 0; k < nodes; k++) L->best_e[k] = 0.0, L->best_s[k] = NONE;
-    const size_t g = L->G, grid_cells = L->bits == 2 ? g * g : g; /* the search grid: a counting sort */
-    memset(L->grid_start, 0, (grid_cells + 1) * sizeof *L->grid_start);
+    const size_t g = L->G, grid_cells = L->bits == 2 ? g * g : g; /* the search grid */
     for (uint32_t s = 0; s < a; s++) {
         const float *p = level_x + (size_t)L->pt[s] * dims;
-        L->grid_start[(L->bits == 2 ? grid_cell(p[1], g) * g : 0) + grid_cell(p[0], g) + 1]++;
+        L->grid_cell_of[s] = (uint32_t)((L->bits == 2 ? grid_cell(p[1], g) * g : 0) + grid_cell(p[0], g));
     }
-    for (size_t c = 0; c < grid_cells; c++) L->grid_start[c + 1] += L->grid_start[c];
-    for (uint32_t s = 0; s < a; s++) {
-        const float *p = level_x + (size_t)L->pt[s] * dims;
-        const uint32_t k = L->grid_start[(L->bits == 2 ? grid_cell(p[1], g) * g : 0) + grid_cell(p[0], g)]++;
-        L->grid_s[k] = s;
-        memcpy(L->grid_x + (size_t)k * dims, p, dims * sizeof *L->grid_x);
-    }
-    for (size_t c = grid_cells; c > 0; c--) L->grid_start[c] = L->grid_start[c - 1]; /* the cursors ran to each end */
-    L->grid_start[0] = 0;
-    for (size_t j = 0; j < n; j++) spread(L, x + j * dims); /* the held points, in index order */
-    for (size_t k = 0; k < L->n_dirty; k++) L->is_dirty[L->dirty[k]] = 0;
-    L->n_dirty = 0;
+    dpc_grid_sort(L->grid_cell_of, a, grid_cells, L->grid_start, L->grid_s);
+    for (size_t k = 0; k < a; k++)
+        memcpy(L->grid_x + k * dims, level_x + (size_t)L->pt[L->grid_s[k]] * dims, dims * sizeof *L->grid_x);
+    /* the held points, in index order (no leaf is dirty: best_s is NONE until the refresh) */
+    for (size_t j = 0; j < n; j++) spread(L, x + j * dims);
     for (size_t f = 0; f < leaves; f++) refresh(L, (uint32_t)f); /* every leaf, touched or not */
     for (size_t out = 0; out < a; out++) {
         const uint32_t s = next_pick(L);
@@ -300,12 +293,13 @@ dpc_status dpc_order_level_points(float *x, size_t m, uint32_t dims, size_t base
     L.dirty = malloc(leaves * sizeof *L.dirty);
     L.is_dirty = calloc(leaves, 1);
     const size_t g = grid_axis(reach2(m, dims)), grid_cells = L.bits == 2 ? g * g : g; /* the finest: N = m */
+    L.grid_cell_of = malloc(largest * sizeof *L.grid_cell_of);
     L.grid_start = malloc((grid_cells + 1) * sizeof *L.grid_start);
     L.grid_s = malloc(largest * sizeof *L.grid_s);
     L.grid_x = malloc(largest * dims * sizeof *L.grid_x);
     dpc_status st = DPC_OK;
     if (!sorted || !L.pt || !L.leaf || !L.e || !L.picked || !L.leaf_start || !L.count || !L.taken || !L.best_e ||
-        !L.best_s || !L.dirty || !L.is_dirty || !L.grid_start || !L.grid_s || !L.grid_x)
+        !L.best_s || !L.dirty || !L.is_dirty || !L.grid_cell_of || !L.grid_start || !L.grid_s || !L.grid_x)
         st = dpc_fail(DPC_ERROR_OUT_OF_MEMORY, "out of memory ordering levels of up to %zu points", largest);
     else {
         size_t n = dpc_first_level(m, base);
@@ -325,6 +319,7 @@ dpc_status dpc_order_level_points(float *x, size_t m, uint32_t dims, size_t base
     free(L.best_s);
     free(L.dirty);
     free(L.is_dirty);
+    free(L.grid_cell_of);
     free(L.grid_start);
     free(L.grid_s);
     free(L.grid_x);
